@@ -1,0 +1,91 @@
+//! Errors of constraint assembly and kinematic analysis. Each names the constraints at fault.
+
+use dalembert_kinematics::ModelError;
+use std::fmt;
+use thiserror::Error;
+
+/// One scalar equation of a named constraint.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct EquationRef {
+    /// Index of the constraint in the system.
+    pub constraint: usize,
+    /// Its name.
+    pub name: String,
+    /// Equation index within the constraint.
+    pub equation: usize,
+    /// Label of the equation (`x`, `y`, `angle`, …).
+    pub label: &'static str,
+}
+
+impl fmt::Display for EquationRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "'{}' ({})", self.name, self.label)
+    }
+}
+
+fn list(eqs: &[EquationRef]) -> String {
+    eqs.iter()
+        .map(|e| e.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn list_violated(v: &[(EquationRef, f64)]) -> String {
+    v.iter()
+        .map(|(e, r)| format!("{e} by {r:.3e}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// What can go wrong building a constraint system or analysing its kinematics.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ConstraintError {
+    /// A constraint's own data is invalid.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// A constraint connects a body to itself.
+    #[error("constraint '{name}': both ends are the same body")]
+    SameBody {
+        /// Constraint name.
+        name: String,
+    },
+    /// A constraint has an unsupported number of equations.
+    #[error("constraint '{name}': {count} equations (1 to 3 supported)")]
+    EquationCount {
+        /// Constraint name.
+        name: String,
+        /// Its count.
+        count: usize,
+    },
+    /// Newton–Raphson on `C(q, t) = 0` did not converge.
+    #[error("position analysis at t = {time}: not converged after {iterations} iterations; still violated: {}", list_violated(.violated))]
+    NotConverged {
+        /// Time of the analysis.
+        time: f64,
+        /// Iterations spent.
+        iterations: usize,
+        /// Equations still violated, with their residuals.
+        violated: Vec<(EquationRef, f64)>,
+    },
+    /// The constraint Jacobian lost rank where a unique solution is required, and the equations are
+    /// inconsistent there (a toggle or dead-centre position, or a locked mechanism).
+    #[error("singular constraint Jacobian at t = {time} (rank {rank} of {equations_count}); equations involved: {}", list(.involved))]
+    Singular {
+        /// Time of the analysis.
+        time: f64,
+        /// Numerical rank of `C_q`.
+        rank: usize,
+        /// Number of equations.
+        equations_count: usize,
+        /// Equations in the dependent set (left null space of `C_q`).
+        involved: Vec<EquationRef>,
+    },
+    /// The state or a constraint value is not finite.
+    #[error("non-finite value at t = {time}: {what}")]
+    NonFinite {
+        /// Time.
+        time: f64,
+        /// What was not finite.
+        what: String,
+    },
+}

@@ -1,0 +1,223 @@
+//! Kinematic analysis: position (Newton–Raphson), velocity and acceleration analysis
+//! (`FORMULATIONS.md` §2, §7).
+//!
+//! All three solve `C_q Δ = r` for the **minimum-norm** correction Δ over a maximal independent set
+//! of rows (QR of `C_q,Rᵀ`, so no normal equations are formed):
+//!
+//! * positions: `q ← q + Δ`, `C_q Δ = −C(q, t)`, repeated until `‖C‖∞ ≤ tolerance` — this assembles
+//!   a mechanism from an approximate configuration, moving it as little as possible;
+//! * velocities: `q̇ ← q̇ + Δ`, `C_q Δ = −C_t − C_q q̇` — exact for a fully driven system, the
+//!   least change that makes given velocities consistent otherwise;
+//! * accelerations: `q̈ ← q̈ + Δ`, `C_q Δ = Q_d − C_q q̈`.
+//!
+//! Redundant rows are left out of the solve and then checked: if the dropped equations are not
+//! satisfied (rank loss with inconsistent equations: a toggle, a dead centre, a locked mechanism) the
+//! analysis returns [`ConstraintError::Singular`] naming the equations involved.
+
+use crate::structure::column_rank;
+use crate::{ConstraintError, ConstraintSystem, ConstraintValues};
+use faer::Mat;
+
+/// Settings of the kinematic analyses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KinematicOptions {
+    /// Convergence of position analysis: `‖C‖∞` at most this (units of the constraints: m or rad).
+    pub tolerance: f64,
+    /// Newton iterations allowed.
+    pub max_iterations: usize,
+    /// Relative pivot threshold for the rank of `C_q` (see [`crate::structure`]).
+    pub rank_tolerance: f64,
+    /// Relative residual above which dropped (redundant) equations are inconsistent.
+    pub consistency_tolerance: f64,
+}
+
+impl Default for KinematicOptions {
+    fn default() -> Self {
+        KinematicOptions {
+            tolerance: 1e-12,
+            max_iterations: 50,
+            rank_tolerance: 1e-9,
+            consistency_tolerance: 1e-8,
+        }
+    }
+}
+
+/// What a position analysis did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KinematicReport {
+    /// Newton iterations taken.
+    pub iterations: usize,
+    /// Final `‖C‖∞`.
+    pub residual: f64,
+}
+
+fn inf_norm(x: &[f64]) -> f64 {
+    x.iter().fold(0.0, |a, v| a.max(v.abs()))
+}
+
+impl ConstraintSystem {
+    /// Minimum-norm `Δ` with `C_q Δ = rhs` on an independent row set; `Ok(residual on all rows)`.
+    fn min_norm_step(
+        &self,
+        values: &ConstraintValues,
+        rhs: &[f64],
+        delta: &mut [f64],
+        opts: &KinematicOptions,
+    ) -> Result<f64, (usize, Vec<usize>)> {
+        let a = self.jacobian_dense(values);
+        let (m, n) = (a.nrows(), a.ncols());
+        delta.iter_mut().for_each(|d| *d = 0.0);
+        if m == 0 {
+            return Ok(0.0);
+        }
+        let at = a.transpose().to_owned();
+        let (rank, order) = column_rank(at.as_ref(), opts.rank_tolerance);
+        let rows = &order[..rank];
+        // A_Rᵀ = Q R  (n × r);  A_R Δ = b_R  ⇒  Rᵀ z = b_R,  Δ = Q z.
+        let art = Mat::from_fn(n, rank, |i, j| at[(i, rows[j])]);
+        let qr = art.qr();
+        let r = qr.thin_R();
+        let q = qr.compute_thin_Q();
+        let mut z = vec![0.0; rank];
+        for i in 0..rank {
+            let mut s = rhs[rows[i]];
+            for k in 0..i {
+                s -= r[(k, i)] * z[k];
+            }
+            z[i] = s / r[(i, i)];
+        }
+        for i in 0..n {
+            delta[i] = (0..rank).map(|k| q[(i, k)] * z[k]).sum();
+        }
+        // Residual over every row, including the dropped ones.
+        let mut res = vec![0.0; m];
+        self.jacobian_mul(values, delta, &mut res);
+        let scale = inf_norm(rhs).max(1e-300);
+        let worst = res
+            .iter()
+            .zip(rhs)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if rank < m && worst > opts.consistency_tolerance * scale.max(1.0) {
+            return Err((rank, order));
+        }
+        Ok(worst)
+    }
+
+    fn singular(
+        &self,
+        t: f64,
+        values: &ConstraintValues,
+        rank: usize,
+        opts: &KinematicOptions,
+    ) -> ConstraintError {
+        ConstraintError::Singular {
+            time: t,
+            rank,
+            equations_count: self.num_equations(),
+            involved: self.dependent_equations(values, opts.rank_tolerance),
+        }
+    }
+
+    /// Position analysis: Newton–Raphson on `C(q, t) = 0` from the approximate `q`, with
+    /// minimum-norm steps. Errors name the equations still violated.
+    pub fn solve_positions(
+        &self,
+        t: f64,
+        q: &mut [f64],
+        opts: &KinematicOptions,
+    ) -> Result<KinematicReport, ConstraintError> {
+        if let Some(i) = q.iter().position(|v| !v.is_finite()) {
+            let (b, c) = self.coordinates().owner(i);
+            return Err(ConstraintError::NonFinite {
+                time: t,
+                what: format!("coordinate {c} of body #{}", b.0),
+            });
+        }
+        let mut values = self.values();
+        let mut delta = vec![0.0; q.len()];
+        let mut rhs = vec![0.0; self.num_equations()];
+        for it in 0..=opts.max_iterations {
+            self.evaluate(t, q, &[], &mut values);
+            let res = inf_norm(&values.c);
+            if !res.is_finite() {
+                return Err(ConstraintError::NonFinite {
+                    time: t,
+                    what: "constraint residual".into(),
+                });
+            }
+            if res <= opts.tolerance {
+                return Ok(KinematicReport {
+                    iterations: it,
+                    residual: res,
+                });
+            }
+            if it == opts.max_iterations {
+                break;
+            }
+            rhs.iter_mut().zip(&values.c).for_each(|(r, c)| *r = -c);
+            // Newton keeps going through redundant rows: consistency is judged by the final residual.
+            let relaxed = KinematicOptions {
+                consistency_tolerance: f64::INFINITY,
+                ..*opts
+            };
+            let _ = self.min_norm_step(&values, &rhs, &mut delta, &relaxed);
+            q.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
+        }
+        let violated = values
+            .c
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.abs() > opts.tolerance)
+            .map(|(r, c)| (self.equation(r), *c))
+            .collect();
+        Err(ConstraintError::NotConverged {
+            time: t,
+            iterations: opts.max_iterations,
+            violated,
+        })
+    }
+
+    /// Velocity analysis: the least change to `q̇` that satisfies `C_q q̇ = −C_t` at `(q, t)`.
+    pub fn solve_velocities(
+        &self,
+        t: f64,
+        q: &[f64],
+        qd: &mut [f64],
+        opts: &KinematicOptions,
+    ) -> Result<(), ConstraintError> {
+        let mut values = self.values();
+        self.evaluate(t, q, qd, &mut values);
+        let mut rhs = vec![0.0; self.num_equations()];
+        self.velocity_residual(&values, qd, &mut rhs);
+        rhs.iter_mut().for_each(|r| *r = -*r);
+        let mut delta = vec![0.0; q.len()];
+        self.min_norm_step(&values, &rhs, &mut delta, opts)
+            .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;
+        qd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
+        Ok(())
+    }
+
+    /// Acceleration analysis: the least change to `q̈` that satisfies `C_q q̈ = Q_d(q, q̇, t)`.
+    pub fn solve_accelerations(
+        &self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &mut [f64],
+        opts: &KinematicOptions,
+    ) -> Result<(), ConstraintError> {
+        let mut values = self.values();
+        self.evaluate(t, q, qd, &mut values);
+        let mut rhs = vec![0.0; self.num_equations()];
+        self.jacobian_mul(&values, qdd, &mut rhs);
+        rhs.iter_mut()
+            .zip(&values.gamma)
+            .for_each(|(r, g)| *r = g - *r);
+        let mut delta = vec![0.0; q.len()];
+        self.min_norm_step(&values, &rhs, &mut delta, opts)
+            .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;
+        qdd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
+        Ok(())
+    }
+}

@@ -1,0 +1,37 @@
+//! Joints, drivers and their assembly for dalembert (`FORMULATIONS.md` §2 and §7).
+//!
+//! A constraint touches at most two bodies and writes, per equation `k`:
+//!
+//! * the residual `C_k(q, t)`,
+//! * its Jacobian blocks on the two bodies (`∂C_k/∂[x, y, θ]` of each),
+//! * `C_t` (the partial time derivative, non-zero for drivers), and
+//! * `Q_d`, the right-hand side of the acceleration equation `C_q q̈ = Q_d`
+//!   (`Q_d = −(C_q q̇)_q q̇ − 2 C_qt q̇ − C_tt`, quadratic in the velocities).
+//!
+//! [`ConstraintSystem`] stacks them into the system vectors and a sparse `C_q` whose pattern is fixed
+//! at construction; [`structure`] finds the number of degrees of freedom and redundant equations from
+//! the rank of `C_q`; [`kinematics`] does position, velocity and acceleration analysis.
+//!
+//! Sign convention for reactions (stated once, in `docs/sign-conventions.md`): the generalized
+//! constraint force is `Q_c = −C_qᵀ λ`; a joint's reported reaction is the force (and torque, about
+//! the joint's reaction point) that its **second** body exerts on its **first**. A driver's effort is
+//! `−λ`, the generalized force the driver applies along the quantity it drives.
+
+pub mod constraint;
+pub mod drivers;
+pub mod error;
+pub mod joints;
+pub mod kinematics;
+pub mod primitives;
+pub mod reactions;
+pub mod structure;
+pub mod system;
+
+pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
+pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
+pub use error::{ConstraintError, EquationRef};
+pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
+pub use kinematics::{KinematicOptions, KinematicReport};
+pub use reactions::Reaction;
+pub use structure::StructureReport;
+pub use system::{ConstraintSystem, ConstraintValues};

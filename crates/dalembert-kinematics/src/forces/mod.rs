@@ -1,0 +1,82 @@
+//! Applied forces as generalized forces (`FORMULATIONS.md` §1).
+//!
+//! By virtual work, a global force `F` at local point `u` of body `i` contributes
+//! `Q_i = [F_x, F_y, (A_θ u)·F]` and a torque `T` contributes `[0, 0, T]`. Each element adds its
+//! contribution to the system vector `Q_e` and reports its potential energy where it has one.
+//!
+//! Users add their own forces by implementing [`ForceElement`].
+
+mod gravity;
+mod point_force;
+mod rotational_spring_damper;
+mod spring_damper;
+mod torque;
+
+pub use gravity::Gravity;
+pub use point_force::PointForce;
+pub use rotational_spring_damper::RotationalSpringDamper;
+pub use spring_damper::SpringDamper;
+pub use torque::Torque;
+
+use crate::{Body, BodyRef, PointState, Vec2};
+
+/// An applied force element.
+///
+/// Implementations must not allocate in [`ForceElement::add_generalized_force`]: it runs inside the
+/// stepping loop.
+pub trait ForceElement: Send + Sync + std::fmt::Debug {
+    /// Name used in messages and output.
+    fn name(&self) -> &str;
+
+    /// Adds this element's generalized force at `(t, q, q̇)` to `q_e` (length `3 × bodies`).
+    fn add_generalized_force(
+        &self,
+        t: f64,
+        bodies: &[Body],
+        q: &[f64],
+        qd: &[f64],
+        q_e: &mut [f64],
+    );
+
+    /// Potential energy at `(t, q)`, or `None` for a non-conservative element.
+    fn potential_energy(&self, _t: f64, _bodies: &[Body], _q: &[f64]) -> Option<f64> {
+        None
+    }
+
+    /// Checks that every body the element refers to exists in a model of `bodies` moving bodies.
+    fn validate(&self, _bodies: usize) -> Result<(), crate::ModelError> {
+        Ok(())
+    }
+}
+
+/// Adds the generalized force of global force `f` applied at point `p` of `body` to `q_e`.
+/// A point on the ground receives nothing.
+#[inline]
+pub fn add_point_force(body: BodyRef, p: &PointState, f: Vec2, q_e: &mut [f64]) {
+    if let BodyRef::Body(id) = body {
+        let k = id.offset();
+        q_e[k] += f.x;
+        q_e[k + 1] += f.y;
+        q_e[k + 2] += p.d_theta().dot(&f);
+    }
+}
+
+/// Adds torque `tau` on `body` to `q_e` (nothing for the ground).
+#[inline]
+pub fn add_torque(body: BodyRef, tau: f64, q_e: &mut [f64]) {
+    if let BodyRef::Body(id) = body {
+        q_e[id.offset() + 2] += tau;
+    }
+}
+
+/// Checks a body reference against the number of moving bodies.
+pub fn check_body(element: &str, body: BodyRef, count: usize) -> Result<(), crate::ModelError> {
+    match body {
+        BodyRef::Body(id) if id.0 >= count => Err(crate::ModelError::UnknownBody {
+            element: element.to_string(),
+            index: id.0,
+            count,
+        }),
+        _ => Ok(()),
+    }
+}

@@ -1,0 +1,83 @@
+use super::{add_point_force, check_body, ForceElement};
+use crate::{Body, BodyRef, BodyState, PointState, TimeFunction, Vec2};
+
+/// A translational spring–damper–actuator between point `P_i` on `bodies.0` and `P_j` on `bodies.1`.
+///
+/// With `d = r_j − r_i`, `L = |d|`, `e = d / L` and `L̇ = e·ḋ`, the tension is
+/// `f = k (L − L₀) + c L̇ + f_a(t)`; body i receives `+f e` at `P_i` and body j `−f e` at `P_j`
+/// (a stretched spring pulls the points together). Potential energy `½ k (L − L₀)²`.
+#[derive(Debug, Clone)]
+pub struct SpringDamper {
+    /// Element name.
+    pub name: String,
+    /// The two bodies (either may be the ground).
+    pub bodies: (BodyRef, BodyRef),
+    /// Local attachment points on each body.
+    pub points: (Vec2, Vec2),
+    /// Stiffness `k` (N/m).
+    pub stiffness: f64,
+    /// Damping `c` (N·s/m).
+    pub damping: f64,
+    /// Free length `L₀` (m).
+    pub free_length: f64,
+    /// Actuator tension `f_a(t)` (N), added to the spring and damper forces; `None` for none.
+    pub actuator: Option<TimeFunction>,
+}
+
+impl SpringDamper {
+    fn geometry(&self, q: &[f64], qd: &[f64]) -> (PointState, PointState, f64, Vec2, f64) {
+        let si = BodyState::of(self.bodies.0, q, qd);
+        let sj = BodyState::of(self.bodies.1, q, qd);
+        let pi = PointState::new(&si, self.points.0);
+        let pj = PointState::new(&sj, self.points.1);
+        let d = pj.position - pi.position;
+        let len = d.norm();
+        let e = if len > 0.0 { d / len } else { Vec2::zeros() };
+        let len_dot = e.dot(&(pj.velocity - pi.velocity));
+        (pi, pj, len, e, len_dot)
+    }
+
+    /// Current tension `f` (positive when pulling the points together).
+    pub fn tension(&self, t: f64, q: &[f64], qd: &[f64]) -> f64 {
+        let (_, _, len, _, len_dot) = self.geometry(q, qd);
+        let fa = self.actuator.as_ref().map_or(0.0, |f| f.value(t));
+        self.stiffness * (len - self.free_length) + self.damping * len_dot + fa
+    }
+}
+
+impl ForceElement for SpringDamper {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn add_generalized_force(&self, t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
+        let (pi, pj, len, e, len_dot) = self.geometry(q, qd);
+        let fa = self.actuator.as_ref().map_or(0.0, |f| f.value(t));
+        let f = self.stiffness * (len - self.free_length) + self.damping * len_dot + fa;
+        add_point_force(self.bodies.0, &pi, e * f, q_e);
+        add_point_force(self.bodies.1, &pj, -e * f, q_e);
+    }
+
+    fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
+        let (_, _, len, _, _) = self.geometry(q, &[]);
+        Some(0.5 * self.stiffness * (len - self.free_length).powi(2))
+    }
+
+    fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
+        check_body(&self.name, self.bodies.0, bodies)?;
+        check_body(&self.name, self.bodies.1, bodies)?;
+        let ok = [self.stiffness, self.damping, self.free_length]
+            .iter()
+            .all(|x| x.is_finite());
+        if !ok || self.stiffness < 0.0 || self.damping < 0.0 || self.free_length < 0.0 {
+            return Err(crate::ModelError::InvalidParameter {
+                element: self.name.clone(),
+                what: "stiffness, damping and free length must be finite and non-negative".into(),
+            });
+        }
+        if let Some(a) = &self.actuator {
+            a.validate(&self.name)?;
+        }
+        Ok(())
+    }
+}
