@@ -223,7 +223,7 @@ mod tests {
             TimeFunction::Constant(2.0),
             TimeFunction::Linear {
                 initial: 0.5,
-                rate: 6.283,
+                rate: 6.5,
             },
             TimeFunction::Polynomial(vec![1.0, -2.0, 0.5, 0.25]),
             TimeFunction::Harmonic {
