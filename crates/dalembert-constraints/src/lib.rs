@@ -20,8 +20,10 @@
 pub mod constraint;
 pub mod drivers;
 pub mod error;
+pub mod formulation;
 pub mod joints;
 pub mod kinematics;
+pub mod model;
 pub mod primitives;
 pub mod reactions;
 pub mod structure;
@@ -30,8 +32,12 @@ pub mod system;
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
 pub use error::{ConstraintError, EquationRef};
+pub use formulation::{
+    DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment, Stabilization,
+};
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use kinematics::{KinematicOptions, KinematicReport};
+pub use model::Model;
 pub use reactions::Reaction;
 pub use structure::StructureReport;
 pub use system::{ConstraintSystem, ConstraintValues};

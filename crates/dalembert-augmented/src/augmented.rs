@@ -1,0 +1,301 @@
+//! The augmented formulation type and its [`Formulation`] implementation.
+
+use crate::diagnosis::{diagnose, minimum_norm_solve};
+use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SparseKkt};
+use dalembert_constraints::{
+    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, RedundancyTreatment,
+    Stabilization,
+};
+use dalembert_kinematics::MassMatrix;
+use std::sync::Arc;
+
+/// Which linear-algebra back end solves the saddle-point system.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Backend {
+    /// Dense up to [`AugmentedOptions::dense_limit`] unknowns, sparse above.
+    #[default]
+    Auto,
+    /// Dense LU with partial pivoting.
+    Dense,
+    /// Sparse LU with a symbolic analysis reused across evaluations.
+    Sparse,
+}
+
+/// Settings of the augmented formulation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AugmentedOptions {
+    /// Back end.
+    pub backend: Backend,
+    /// With [`Backend::Auto`], the largest `n + m` solved densely. Default 120: past it the sparse
+    /// LU is faster on chains (see `benches/`).
+    pub dense_limit: usize,
+    /// What to do with redundant constraints.
+    pub redundancy: RedundancyTreatment,
+    /// Relative pivot threshold of the dense LU below which the matrix counts as singular.
+    pub pivot_tolerance: f64,
+    /// Relative residual `‖K x − b‖∞ / (‖b‖∞ + s ‖x‖∞)` above which a solve counts as failed
+    /// (`s` the largest matrix entry).
+    pub residual_tolerance: f64,
+}
+
+impl Default for AugmentedOptions {
+    fn default() -> Self {
+        AugmentedOptions {
+            backend: Backend::Auto,
+            dense_limit: 120,
+            redundancy: RedundancyTreatment::Error,
+            pivot_tolerance: 1e-13,
+            residual_tolerance: 1e-9,
+        }
+    }
+}
+
+/// The augmented (Lagrange multiplier) formulation of a model.
+pub struct Augmented {
+    model: Arc<Model>,
+    options: AugmentedOptions,
+    solver: KktSolver,
+    mass: MassMatrix,
+    values: ConstraintValues,
+    q_e: Vec<f64>,
+    cdot: Vec<f64>,
+    x: Vec<f64>,
+    b: Vec<f64>,
+    r: Vec<f64>,
+    stats: FormulationStats,
+}
+
+impl std::fmt::Debug for Augmented {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Augmented")
+            .field("backend", &self.solver.name())
+            .field("options", &self.options)
+            .finish()
+    }
+}
+
+impl Augmented {
+    /// Sets up the formulation: workspaces, and for the sparse back end the symbolic analysis.
+    pub fn new(model: Arc<Model>, options: AugmentedOptions) -> Result<Self, DynamicsError> {
+        let n = model.num_coordinates();
+        let m = model.num_equations();
+        let dense = match options.backend {
+            Backend::Dense => true,
+            Backend::Sparse => false,
+            Backend::Auto => n + m <= options.dense_limit,
+        };
+        let solver = if dense {
+            KktSolver::Dense(DenseKkt::new(n, m, options.pivot_tolerance))
+        } else {
+            KktSolver::Sparse(Box::new(
+                SparseKkt::new(model.constraints(), options.pivot_tolerance).map_err(|e| {
+                    DynamicsError::Factorization {
+                        time: 0.0,
+                        what: e.0,
+                    }
+                })?,
+            ))
+        };
+        let q0 = vec![0.0; n];
+        Ok(Augmented {
+            mass: model.mass_matrix(&q0),
+            values: model.constraints().values(),
+            q_e: vec![0.0; n],
+            cdot: vec![0.0; m],
+            x: vec![0.0; n + m],
+            b: vec![0.0; n + m],
+            r: vec![0.0; n + m],
+            solver,
+            options,
+            model,
+            stats: FormulationStats::default(),
+        })
+    }
+
+    /// With default options.
+    pub fn with_defaults(model: Arc<Model>) -> Result<Self, DynamicsError> {
+        Self::new(model, AugmentedOptions::default())
+    }
+
+    /// The back end in use: `"dense"` or `"sparse"`.
+    pub fn backend_name(&self) -> &'static str {
+        self.solver.name()
+    }
+
+    /// The constraint values of the last evaluation (`C`, `C_q`, `C_t`, `Q_d`).
+    pub fn values(&self) -> &ConstraintValues {
+        &self.values
+    }
+
+    /// Factors and solves `K x = b` (b in `self.b`), checking the residual. On success `self.x` holds
+    /// the solution.
+    fn factor_and_solve(&mut self, t: f64) -> Result<(), DynamicsError> {
+        let sys = self.model.constraints();
+        self.stats.factorizations += 1;
+        let factored = self.solver.factor(&self.mass, sys, &self.values);
+        if factored.is_ok() {
+            self.x.copy_from_slice(&self.b);
+            self.solver.solve(&mut self.x);
+            kkt_mul(&self.mass, sys, &self.values, &self.x, &mut self.r);
+            let scale = kkt_scale(&self.mass, &self.values);
+            let bn = self.b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let xn = self.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let res = self
+                .r
+                .iter()
+                .zip(&self.b)
+                .fold(0.0f64, |a, (r, b)| a.max((r - b).abs()));
+            if res.is_finite()
+                && xn.is_finite()
+                && res <= self.options.residual_tolerance * (bn + scale * xn).max(f64::MIN_POSITIVE)
+            {
+                return Ok(());
+            }
+        }
+        match self.options.redundancy {
+            RedundancyTreatment::MinimumNorm => {
+                let n = self.model.num_coordinates();
+                minimum_norm_solve(
+                    t,
+                    &self.model,
+                    &self.mass,
+                    &self.values,
+                    &self.b,
+                    &mut self.x,
+                    n,
+                )
+            }
+            RedundancyTreatment::Error => Err(diagnose(
+                t,
+                &self.model,
+                &self.values,
+                self.options.pivot_tolerance,
+            )),
+        }
+    }
+
+    /// Evaluates `M`, `Q_e` and the constraints at `(t, q, q̇)` into the workspaces.
+    fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
+        check_finite(t, self.model.as_ref(), q, "position")?;
+        check_finite(t, self.model.as_ref(), qd, "velocity")?;
+        self.mass.update(self.model.bodies(), q);
+        self.model.applied_forces(t, q, qd, &mut self.q_e);
+        self.model
+            .constraints()
+            .evaluate(t, q, qd, &mut self.values);
+        Ok(())
+    }
+}
+
+fn check_finite(t: f64, model: &Model, v: &[f64], what: &str) -> Result<(), DynamicsError> {
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        let coord = ["x", "y", "angle"][i % 3];
+        return Err(DynamicsError::NonFinite {
+            time: t,
+            what: format!("{what} {coord} of body '{}'", model.bodies()[i / 3].name),
+        });
+    }
+    Ok(())
+}
+
+impl Formulation for Augmented {
+    fn name(&self) -> &'static str {
+        "augmented"
+    }
+
+    fn model(&self) -> &Model {
+        &self.model
+    }
+
+    fn accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        stabilization: Stabilization,
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        self.stats.evaluations += 1;
+        self.load(t, q, qd)?;
+        let n = q.len();
+        let sys = self.model.constraints();
+        if stabilization != Stabilization::None {
+            sys.velocity_residual(&self.values, qd, &mut self.cdot);
+        }
+        let (bt, bb) = self.b.split_at_mut(n);
+        bt.copy_from_slice(&self.q_e);
+        stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, bb);
+        self.factor_and_solve(t)?;
+        qdd.copy_from_slice(&self.x[..n]);
+        lambda.copy_from_slice(&self.x[n..]);
+        if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
+            let what = format!("acceleration of body '{}'", self.model.bodies()[i / 3].name);
+            return Err(DynamicsError::NonFinite { time: t, what });
+        }
+        Ok(())
+    }
+
+    fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
+        let sys = self.model.constraints();
+        sys.evaluate(t, q, qd, &mut self.values);
+        c.copy_from_slice(&self.values.c);
+        sys.velocity_residual(&self.values, qd, cdot);
+    }
+
+    /// Mass-weighted projection with the same saddle-point matrix:
+    /// `[M C_qᵀ; C_q 0] [Δq; μ] = [0; −C]` repeated until `‖C‖∞ ≤ tolerance`, then
+    /// `[M C_qᵀ; C_q 0] [Δq̇; μ] = [0; −(C_q q̇ + C_t)]`.
+    fn project(
+        &mut self,
+        t: f64,
+        q: &mut [f64],
+        qd: &mut [f64],
+        tolerance: f64,
+    ) -> Result<usize, DynamicsError> {
+        const MAX_ITERATIONS: usize = 20;
+        let n = q.len();
+        let mut iterations = 0;
+        loop {
+            self.load(t, q, qd)?;
+            let res = self.values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if res <= tolerance {
+                break;
+            }
+            if iterations == MAX_ITERATIONS {
+                let sys = self.model.constraints();
+                let violated = (0..self.values.c.len())
+                    .filter(|&r| self.values.c[r].abs() > tolerance)
+                    .map(|r| (sys.equation(r), self.values.c[r]))
+                    .collect();
+                return Err(dalembert_constraints::ConstraintError::NotConverged {
+                    time: t,
+                    iterations,
+                    violated,
+                }
+                .into());
+            }
+            self.b[..n].iter_mut().for_each(|v| *v = 0.0);
+            for (bi, ci) in self.b[n..].iter_mut().zip(&self.values.c) {
+                *bi = -ci;
+            }
+            self.factor_and_solve(t)?;
+            q.iter_mut().zip(&self.x[..n]).for_each(|(a, d)| *a += d);
+            iterations += 1;
+        }
+        self.stats.newton_iterations += iterations as u64;
+        let sys = self.model.constraints();
+        sys.velocity_residual(&self.values, qd, &mut self.cdot);
+        self.b[..n].iter_mut().for_each(|v| *v = 0.0);
+        for (bi, ci) in self.b[n..].iter_mut().zip(&self.cdot) {
+            *bi = -ci;
+        }
+        self.factor_and_solve(t)?;
+        qd.iter_mut().zip(&self.x[..n]).for_each(|(a, d)| *a += d);
+        Ok(iterations)
+    }
+
+    fn stats(&self) -> FormulationStats {
+        self.stats
+    }
+}

@@ -1,0 +1,150 @@
+//! What went wrong when the saddle-point matrix is singular, and the minimum-norm treatment of
+//! redundant constraints.
+
+use dalembert_constraints::{ConstraintValues, DynamicsError, Model};
+use dalembert_kinematics::MassMatrix;
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+
+/// Rank threshold of `C_q` used in diagnosis (relative to the largest pivot).
+const RANK_TOLERANCE: f64 = 1e-9;
+
+/// Explains a singular KKT matrix: redundant constraints (rank-deficient `C_q`, naming the equations
+/// in the dependent set), a mass matrix singular on the admissible motions (naming massless bodies),
+/// or else a generic singular system.
+pub(crate) fn diagnose(
+    t: f64,
+    model: &Model,
+    vals: &ConstraintValues,
+    pivot_tolerance: f64,
+) -> DynamicsError {
+    let sys = model.constraints();
+    let s = sys.analyse_structure(vals, RANK_TOLERANCE);
+    if !s.is_full_rank() {
+        return DynamicsError::RedundantConstraints {
+            time: t,
+            rank: s.rank,
+            equations: s.equations,
+            involved: sys.dependent_equations(vals, RANK_TOLERANCE),
+        };
+    }
+    let light: Vec<String> = model
+        .bodies()
+        .iter()
+        .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
+        .map(|b| b.name.clone())
+        .collect();
+    if !light.is_empty() {
+        return DynamicsError::SingularMass {
+            time: t,
+            bodies: light,
+        };
+    }
+    DynamicsError::Singular {
+        time: t,
+        what: format!("saddle-point matrix singular (pivot tolerance {pivot_tolerance:e})"),
+    }
+}
+
+/// Solves with a maximal independent set of constraint rows, then returns in `x` the accelerations
+/// and the minimum-norm multipliers `λ = (C_qᵀ)⁺ (C_q,Rᵀ λ_R)`. Dense; allocates (a fallback path,
+/// taken only when the caller opted into it and the matrix is singular).
+pub(crate) fn minimum_norm_solve(
+    t: f64,
+    model: &Model,
+    mass: &MassMatrix,
+    vals: &ConstraintValues,
+    b: &[f64],
+    x: &mut [f64],
+    n: usize,
+) -> Result<(), DynamicsError> {
+    let sys = model.constraints();
+    let s = sys.analyse_structure(vals, RANK_TOLERANCE);
+    let rows = &s.independent_rows;
+    let r = rows.len();
+    let jac = sys.jacobian_dense(vals);
+    let mut k = Mat::<f64>::zeros(n + r, n + r);
+    for (i, blk) in mass.blocks().iter().enumerate() {
+        for a in 0..3 {
+            for c in 0..3 {
+                k[(3 * i + a, 3 * i + c)] = blk[(a, c)];
+            }
+        }
+    }
+    for (ii, &row) in rows.iter().enumerate() {
+        for c in 0..n {
+            k[(n + ii, c)] = jac[(row, c)];
+            k[(c, n + ii)] = jac[(row, c)];
+        }
+    }
+    let mut rhs = Mat::<f64>::zeros(n + r, 1);
+    for i in 0..n {
+        rhs[(i, 0)] = b[i];
+    }
+    for (ii, &row) in rows.iter().enumerate() {
+        rhs[(n + ii, 0)] = b[n + row];
+    }
+    let sol = k.partial_piv_lu().solve(&rhs);
+    // Residual check of the reduced system.
+    let res = &k * &sol - &rhs;
+    let scale = rhs.norm_max() + k.norm_max() * sol.norm_max();
+    let ok = res.norm_max() <= 1e-9 * scale.max(f64::MIN_POSITIVE);
+    if !ok {
+        return Err(diagnose_mass(t, model));
+    }
+    // Dropped rows must be consistent: C_q,dropped q̈ = rhs_dropped.
+    let m = sys.num_equations();
+    let mut f = Mat::<f64>::zeros(n, 1);
+    for (ii, &row) in rows.iter().enumerate() {
+        for c in 0..n {
+            f[(c, 0)] += jac[(row, c)] * sol[(n + ii, 0)];
+        }
+    }
+    for row in 0..m {
+        let lhs: f64 = (0..n).map(|c| jac[(row, c)] * sol[(c, 0)]).sum();
+        if (lhs - b[n + row]).abs() > 1e-8 * (1.0 + b[n + row].abs() + scale) {
+            return Err(DynamicsError::RedundantConstraints {
+                time: t,
+                rank: r,
+                equations: m,
+                involved: sys.dependent_equations(vals, RANK_TOLERANCE),
+            });
+        }
+    }
+    let jt = jac.transpose().to_owned();
+    let pinv = jt
+        .svd()
+        .map_err(|e| DynamicsError::Factorization {
+            time: t,
+            what: format!("SVD: {e:?}"),
+        })?
+        .pseudoinverse();
+    let lambda = &pinv * &f;
+    for i in 0..n {
+        x[i] = sol[(i, 0)];
+    }
+    for row in 0..m {
+        x[n + row] = lambda[(row, 0)];
+    }
+    Ok(())
+}
+
+fn diagnose_mass(t: f64, model: &Model) -> DynamicsError {
+    let light: Vec<String> = model
+        .bodies()
+        .iter()
+        .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
+        .map(|b| b.name.clone())
+        .collect();
+    if light.is_empty() {
+        DynamicsError::Singular {
+            time: t,
+            what: "reduced saddle-point matrix singular".into(),
+        }
+    } else {
+        DynamicsError::SingularMass {
+            time: t,
+            bodies: light,
+        }
+    }
+}

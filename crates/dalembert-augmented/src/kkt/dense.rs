@@ -1,0 +1,102 @@
+//! Dense back end: LU with partial pivoting of the assembled `(n+m)²` KKT matrix, factored in place
+//! in storage allocated once.
+
+use super::SingularKkt;
+use dalembert_constraints::{ConstraintSystem, ConstraintValues};
+use dalembert_kinematics::MassMatrix;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut, Par};
+
+pub(crate) struct DenseKkt {
+    n: usize,
+    a: Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    factor_buf: MemBuffer,
+    solve_buf: MemBuffer,
+    /// Pivots below `pivot_tolerance × largest pivot` mean a singular matrix.
+    pivot_tolerance: f64,
+}
+
+impl DenseKkt {
+    pub fn new(n: usize, m: usize, pivot_tolerance: f64) -> Self {
+        let k = n + m;
+        DenseKkt {
+            n,
+            a: Mat::zeros(k, k),
+            perm: vec![0; k],
+            perm_inv: vec![0; k],
+            factor_buf: MemBuffer::new(factor::lu_in_place_scratch::<usize, f64>(
+                k,
+                k,
+                Par::Seq,
+                Default::default(),
+            )),
+            solve_buf: MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(k, 1, Par::Seq)),
+            pivot_tolerance,
+        }
+    }
+
+    pub fn factor(
+        &mut self,
+        mass: &MassMatrix,
+        sys: &ConstraintSystem,
+        vals: &ConstraintValues,
+    ) -> Result<(), SingularKkt> {
+        let n = self.n;
+        let k = self.a.nrows();
+        self.a.fill(0.0);
+        for (i, b) in mass.blocks().iter().enumerate() {
+            for r in 0..3 {
+                for c in 0..3 {
+                    self.a[(3 * i + r, 3 * i + c)] = b[(r, c)];
+                }
+            }
+        }
+        for (&(r, c), &v) in sys.pattern().iter().zip(&vals.jacobian) {
+            self.a[(n + r, c)] += v;
+            self.a[(c, n + r)] += v;
+        }
+        factor::lu_in_place(
+            self.a.as_mut(),
+            &mut self.perm,
+            &mut self.perm_inv,
+            Par::Seq,
+            MemStack::new(&mut self.factor_buf),
+            Default::default(),
+        );
+        let mut largest = 0.0f64;
+        let mut smallest = f64::INFINITY;
+        for i in 0..k {
+            let p = self.a[(i, i)].abs();
+            largest = largest.max(p);
+            smallest = smallest.min(p);
+        }
+        if !(smallest.is_finite() && largest.is_finite())
+            || smallest <= self.pivot_tolerance * largest
+        {
+            return Err(SingularKkt(format!(
+                "LU pivot ratio {:.3e}",
+                smallest / largest
+            )));
+        }
+        Ok(())
+    }
+
+    pub fn solve(&mut self, x: &mut [f64]) {
+        let k = x.len();
+        let rhs = MatMut::from_column_major_slice_mut(x, k, 1);
+        // SAFETY-free: the permutation arrays were written by `lu_in_place` and are valid inverses.
+        let perm = PermRef::new_checked(&self.perm, &self.perm_inv, k);
+        solve::solve_in_place(
+            self.a.as_ref(),
+            self.a.as_ref(),
+            perm,
+            rhs,
+            Par::Seq,
+            MemStack::new(&mut self.solve_buf),
+        );
+    }
+}

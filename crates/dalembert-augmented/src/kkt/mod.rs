@@ -1,0 +1,79 @@
+//! Storage and factorization of the saddle-point ("KKT") matrix `[M C_qᵀ; C_q 0]`, and the same
+//! matrix with the Jacobian restricted to chosen rows.
+
+mod dense;
+mod sparse;
+
+pub(crate) use dense::DenseKkt;
+pub(crate) use sparse::SparseKkt;
+
+use dalembert_constraints::{ConstraintSystem, ConstraintValues};
+use dalembert_kinematics::MassMatrix;
+
+/// A factorization failed or a pivot vanished: the matrix is (numerically) singular.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct SingularKkt(pub String);
+
+/// A factorization of the KKT matrix, refactored in place each evaluation.
+pub(crate) enum KktSolver {
+    Dense(DenseKkt),
+    Sparse(Box<SparseKkt>),
+}
+
+impl KktSolver {
+    /// Factors `[M C_qᵀ; C_q 0]` for the current values.
+    pub fn factor(
+        &mut self,
+        mass: &MassMatrix,
+        sys: &ConstraintSystem,
+        vals: &ConstraintValues,
+    ) -> Result<(), SingularKkt> {
+        match self {
+            KktSolver::Dense(d) => d.factor(mass, sys, vals),
+            KktSolver::Sparse(s) => s.factor(mass, sys, vals),
+        }
+    }
+
+    /// Solves in place: `x` holds the right-hand side on entry, the solution on exit.
+    pub fn solve(&mut self, x: &mut [f64]) {
+        match self {
+            KktSolver::Dense(d) => d.solve(x),
+            KktSolver::Sparse(s) => s.solve(x),
+        }
+    }
+
+    /// Back end name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            KktSolver::Dense(_) => "dense",
+            KktSolver::Sparse(_) => "sparse",
+        }
+    }
+}
+
+/// `y = K x` computed from the blocks, without the assembled matrix (for residual checks).
+pub(crate) fn kkt_mul(
+    mass: &MassMatrix,
+    sys: &ConstraintSystem,
+    vals: &ConstraintValues,
+    x: &[f64],
+    y: &mut [f64],
+) {
+    let n = sys.num_coordinates();
+    let (xt, xb) = x.split_at(n);
+    let (yt, yb) = y.split_at_mut(n);
+    yt.iter_mut().for_each(|v| *v = 0.0);
+    mass.mul_add(1.0, xt, yt);
+    sys.jacobian_transpose_mul_add(vals, 1.0, xb, yt);
+    sys.jacobian_mul(vals, xt, yb);
+}
+
+/// Largest magnitude among the entries of `M` and `C_q` (scale of the residual check).
+pub(crate) fn kkt_scale(mass: &MassMatrix, vals: &ConstraintValues) -> f64 {
+    let m = mass
+        .blocks()
+        .iter()
+        .flat_map(|b| b.iter())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    vals.jacobian.iter().fold(m, |a, v| a.max(v.abs()))
+}

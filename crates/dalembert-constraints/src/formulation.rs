@@ -1,0 +1,200 @@
+//! The interface every formulation implements and every integrator consumes.
+//!
+//! A formulation turns `(t, q, q̇)` into accelerations `q̈` and multipliers `λ` (so that reactions
+//! follow from [`crate::ConstraintSystem::reactions`]); it reports the constraint residuals and the
+//! energy, offers a Baumgarte-stabilized right-hand side (`FORMULATIONS.md` §3), and projects a
+//! state back onto the constraint manifold. Implementations create their workspaces once, at
+//! construction: the methods allocate nothing.
+
+use crate::{EquationRef, Model};
+use thiserror::Error;
+
+/// How the acceleration-level constraint right-hand side is modified.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Stabilization {
+    /// `C_q q̈ = Q_d`: the violation drifts.
+    #[default]
+    None,
+    /// `C_q q̈ = Q_d − 2α Ċ − β² C`: the violation obeys `C̈ + 2α Ċ + β² C = 0`.
+    Baumgarte {
+        /// Damping gain α (1/s).
+        alpha: f64,
+        /// Stiffness gain β (1/s).
+        beta: f64,
+    },
+}
+
+impl Stabilization {
+    /// Baumgarte gains in physical terms: the violation behaves as an oscillator of natural
+    /// frequency `omega` (rad/s) and damping ratio `zeta`: `α = ζ ω`, `β = ω`.
+    pub fn from_frequency(omega: f64, zeta: f64) -> Self {
+        Stabilization::Baumgarte {
+            alpha: zeta * omega,
+            beta: omega,
+        }
+    }
+
+    /// A default for step size `h`: critically damped at `ω = 1 / (10 h)`, slow enough for an
+    /// explicit integrator to resolve (ωh = 0.1) and fast enough to remove drift within ≈ 30 steps.
+    pub fn for_step(h: f64) -> Self {
+        Self::from_frequency(0.1 / h, 1.0)
+    }
+
+    /// Writes `Q_d − 2α Ċ − β² C` (or `Q_d`) into `rhs`.
+    pub fn apply(&self, gamma: &[f64], c: &[f64], cdot: &[f64], rhs: &mut [f64]) {
+        match *self {
+            Stabilization::None => rhs.copy_from_slice(gamma),
+            Stabilization::Baumgarte { alpha, beta } => {
+                for i in 0..rhs.len() {
+                    rhs[i] = gamma[i] - 2.0 * alpha * cdot[i] - beta * beta * c[i];
+                }
+            }
+        }
+    }
+}
+
+/// Kinetic and potential energy of a state.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Energy {
+    /// `½ q̇ᵀ M q̇`.
+    pub kinetic: f64,
+    /// Gravity and springs.
+    pub potential: f64,
+}
+
+impl Energy {
+    /// `T + V`.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.potential
+    }
+}
+
+/// How a formulation treats redundant constraint equations.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RedundancyTreatment {
+    /// A rank-deficient `C_q` is an error naming the equations involved.
+    #[default]
+    Error,
+    /// Solve on a maximal independent set of equations and report the minimum-norm `λ` (one
+    /// admissible distribution of the reactions among redundant joints).
+    MinimumNorm,
+}
+
+/// Failure of a dynamics evaluation or projection. Every variant carries the time.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DynamicsError {
+    /// The constraint Jacobian is rank deficient (redundant constraints or a singular position).
+    #[error("t = {time}: constraint Jacobian is rank deficient (rank {rank} of {equations}); equations involved: {}", list(.involved))]
+    RedundantConstraints {
+        /// Time.
+        time: f64,
+        /// Numerical rank.
+        rank: usize,
+        /// Number of equations.
+        equations: usize,
+        /// The equations in the dependent set.
+        involved: Vec<EquationRef>,
+    },
+    /// The mass matrix is singular on the motions the constraints allow (a massless body or a
+    /// point mass whose rotation is free).
+    #[error("t = {time}: mass matrix singular on the admissible motions; bodies without mass or inertia: {}", .bodies.join(", "))]
+    SingularMass {
+        /// Time.
+        time: f64,
+        /// Bodies with zero mass or inertia.
+        bodies: Vec<String>,
+    },
+    /// A singular partition or factorization not explained by the two causes above.
+    #[error("t = {time}: singular system: {what}")]
+    Singular {
+        /// Time.
+        time: f64,
+        /// Description.
+        what: String,
+    },
+    /// A non-finite number in the state or the result.
+    #[error("t = {time}: non-finite {what}")]
+    NonFinite {
+        /// Time.
+        time: f64,
+        /// What was not finite.
+        what: String,
+    },
+    /// A kinematic analysis (projection, position recovery) failed.
+    #[error(transparent)]
+    Kinematics(#[from] crate::ConstraintError),
+    /// A factorization reported an error.
+    #[error("t = {time}: factorization failed: {what}")]
+    Factorization {
+        /// Time.
+        time: f64,
+        /// The solver's message.
+        what: String,
+    },
+}
+
+fn list(eqs: &[EquationRef]) -> String {
+    eqs.iter()
+        .map(|e| e.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Counters a formulation keeps (cumulative since construction).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FormulationStats {
+    /// Calls of [`Formulation::accelerations`].
+    pub evaluations: u64,
+    /// Numeric factorizations performed.
+    pub factorizations: u64,
+    /// Re-partitions of the coordinates (embedding formulations).
+    pub repartitions: u64,
+    /// Newton iterations spent in projections / position recovery.
+    pub newton_iterations: u64,
+}
+
+/// The forward-dynamics interface shared by all formulations.
+pub trait Formulation {
+    /// Short name, e.g. `"augmented"`.
+    fn name(&self) -> &'static str;
+
+    /// The model being solved.
+    fn model(&self) -> &Model;
+
+    /// Computes `q̈` and `λ` at `(t, q, q̇)` with the given stabilization of the constraint
+    /// right-hand side. `qdd` has length `n`, `lambda` length `m`.
+    fn accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        stabilization: Stabilization,
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), DynamicsError>;
+
+    /// Writes `C(q, t)` and `Ċ = C_q q̇ + C_t` (each length `m`).
+    fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]);
+
+    /// Kinetic and potential energy.
+    fn energy(&self, t: f64, q: &[f64], qd: &[f64]) -> Energy {
+        let m = self.model();
+        Energy {
+            kinetic: m.kinetic_energy(q, qd),
+            potential: m.potential_energy(t, q),
+        }
+    }
+
+    /// Projects `q` onto `C(q, t) = 0` (Newton, to `tolerance`) and then `q̇` onto
+    /// `C_q q̇ + C_t = 0`, each with the least mass-weighted change. Returns the Newton iterations.
+    fn project(
+        &mut self,
+        t: f64,
+        q: &mut [f64],
+        qd: &mut [f64],
+        tolerance: f64,
+    ) -> Result<usize, DynamicsError>;
+
+    /// Cumulative counters.
+    fn stats(&self) -> FormulationStats;
+}

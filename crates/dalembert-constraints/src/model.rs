@@ -1,0 +1,92 @@
+//! A complete multibody model: bodies, applied forces and constraints.
+
+use crate::{Constraint, ConstraintError, ConstraintSystem};
+use dalembert_kinematics::{Body, ForceElement, MassMatrix};
+
+/// Bodies, applied force elements and the assembled constraint system of one mechanism.
+#[derive(Debug)]
+pub struct Model {
+    bodies: Vec<Body>,
+    forces: Vec<Box<dyn ForceElement>>,
+    constraints: ConstraintSystem,
+}
+
+impl Model {
+    /// Validates and assembles a model. Errors name the element at fault.
+    pub fn new(
+        bodies: Vec<Body>,
+        forces: Vec<Box<dyn ForceElement>>,
+        constraints: Vec<Box<dyn Constraint>>,
+    ) -> Result<Self, ConstraintError> {
+        for f in &forces {
+            f.validate(bodies.len())?;
+        }
+        let constraints = ConstraintSystem::new(bodies.len(), constraints)?;
+        Ok(Model {
+            bodies,
+            forces,
+            constraints,
+        })
+    }
+
+    /// The moving bodies, in coordinate order.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// The applied force elements.
+    pub fn forces(&self) -> &[Box<dyn ForceElement>] {
+        &self.forces
+    }
+
+    /// The constraint system.
+    pub fn constraints(&self) -> &ConstraintSystem {
+        &self.constraints
+    }
+
+    /// Number of coordinates `n`.
+    pub fn num_coordinates(&self) -> usize {
+        3 * self.bodies.len()
+    }
+
+    /// Number of constraint equations `m`.
+    pub fn num_equations(&self) -> usize {
+        self.constraints.num_equations()
+    }
+
+    /// The mass matrix at `q`.
+    pub fn mass_matrix(&self, q: &[f64]) -> MassMatrix {
+        MassMatrix::new(&self.bodies, q)
+    }
+
+    /// `Q_e`: all applied generalized forces plus the quadratic-velocity force of offset centres of
+    /// mass, written (not added) into `q_e`. Allocates nothing.
+    pub fn applied_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &mut [f64]) {
+        q_e.iter_mut().for_each(|x| *x = 0.0);
+        for f in &self.forces {
+            f.add_generalized_force(t, &self.bodies, q, qd, q_e);
+        }
+        MassMatrix::add_quadratic_velocity_force(&self.bodies, q, qd, q_e);
+    }
+
+    /// Total potential energy of the conservative elements at `(t, q)`.
+    pub fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
+        self.forces
+            .iter()
+            .filter_map(|f| f.potential_energy(t, &self.bodies, q))
+            .sum()
+    }
+
+    /// Kinetic energy `½ q̇ᵀ M q̇`, computed body by body without building `M`.
+    pub fn kinetic_energy(&self, q: &[f64], qd: &[f64]) -> f64 {
+        self.bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let blk = MassMatrix::block(b, q[3 * i + 2]);
+                let v = nalgebra::Vector3::new(qd[3 * i], qd[3 * i + 1], qd[3 * i + 2]);
+                0.5 * v.dot(&(blk * v))
+            })
+            .sum()
+    }
+}

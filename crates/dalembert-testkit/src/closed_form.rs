@@ -1,0 +1,158 @@
+//! Independent minimal-coordinate solutions of the reference mechanisms.
+
+use crate::jet::Jet;
+use crate::mechanisms::G;
+
+/// Absolute-angle equations of motion of a two-rod chain (uniform rods, pinned at the origin,
+/// gravity −y), derived by Lagrange's equations in `θ₁, θ₂`:
+///
+/// ```text
+/// M₁₁ = m₁L₁²/4 + J₁ + m₂L₁²,  M₂₂ = m₂L₂²/4 + J₂,  M₁₂ = k cos(θ₁−θ₂),  k = m₂L₁L₂/2
+/// M₁₁θ̈₁ + M₁₂θ̈₂ + k sin(θ₁−θ₂) θ̇₂² = −g (m₁L₁/2 + m₂L₁) cos θ₁ + Q₁
+/// M₁₂θ̈₁ + M₂₂θ̈₂ − k sin(θ₁−θ₂) θ̇₁² = −g m₂L₂/2 cos θ₂ + Q₂
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DoublePendulum {
+    /// Masses.
+    pub m: [f64; 2],
+    /// Lengths.
+    pub l: [f64; 2],
+}
+
+impl DoublePendulum {
+    /// `(M, h)` with `M θ̈ = h`, `h` holding gravity, velocity terms and generalized forces `q_ext`.
+    pub fn system(&self, th: [f64; 2], w: [f64; 2], q_ext: [f64; 2]) -> ([[f64; 2]; 2], [f64; 2]) {
+        let [m1, m2] = self.m;
+        let [l1, l2] = self.l;
+        let (j1, j2) = (m1 * l1 * l1 / 12.0, m2 * l2 * l2 / 12.0);
+        let k = m2 * l1 * l2 / 2.0;
+        let d = th[0] - th[1];
+        let m11 = m1 * l1 * l1 / 4.0 + j1 + m2 * l1 * l1;
+        let m22 = m2 * l2 * l2 / 4.0 + j2;
+        let m12 = k * d.cos();
+        let h1 =
+            -G * (m1 * l1 / 2.0 + m2 * l1) * th[0].cos() - k * d.sin() * w[1] * w[1] + q_ext[0];
+        let h2 = -G * m2 * l2 / 2.0 * th[1].cos() + k * d.sin() * w[0] * w[0] + q_ext[1];
+        ([[m11, m12], [m12, m22]], [h1, h2])
+    }
+
+    /// Angular accelerations for absolute-angle generalized forces `q_ext`.
+    pub fn accelerations(&self, th: [f64; 2], w: [f64; 2], q_ext: [f64; 2]) -> [f64; 2] {
+        let (m, h) = self.system(th, w, q_ext);
+        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+        [
+            (m[1][1] * h[0] - m[0][1] * h[1]) / det,
+            (m[0][0] * h[1] - m[1][0] * h[0]) / det,
+        ]
+    }
+
+    /// Joint torques `[τ₁, τ₂]` of the two-link arm (τ₁ ground→link 1, τ₂ link 1→link 2) that
+    /// produce `θ̈`: `M θ̈ − h(τ = 0) = Q_abs`, and `τ₂ = Q_abs,2`, `τ₁ = Q_abs,1 + Q_abs,2`
+    /// (virtual work of the relative joint angle `θ₂ − θ₁`).
+    pub fn joint_torques(&self, th: [f64; 2], w: [f64; 2], acc: [f64; 2]) -> [f64; 2] {
+        let (m, h) = self.system(th, w, [0.0, 0.0]);
+        let q1 = m[0][0] * acc[0] + m[0][1] * acc[1] - h[0];
+        let q2 = m[1][0] * acc[0] + m[1][1] * acc[1] - h[1];
+        [q1 + q2, q2]
+    }
+}
+
+/// Closed-form kinematics of a four-bar (ground pivots (0,0) and (d,0), crank a, coupler b,
+/// rocker c, uniform rods of linear density 1 kg/m), as functions of the crank angle φ with exact
+/// first and second derivatives (via [`Jet`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FourBar {
+    /// Crank length.
+    pub a: f64,
+    /// Coupler length.
+    pub b: f64,
+    /// Rocker length.
+    pub c: f64,
+    /// Ground link length.
+    pub d: f64,
+    /// +1 or −1: which of the two assemblies (−1 is the anchors' elbow-down one).
+    pub branch: f64,
+}
+
+impl FourBar {
+    /// The four-bar of `shared/anchors`.
+    pub const ANCHOR: FourBar = FourBar {
+        a: 1.0,
+        b: 2.5,
+        c: 1.5,
+        d: 2.0,
+        branch: -1.0,
+    };
+
+    /// Body coordinates `[x, y, θ]` of crank, coupler, rocker (centres of mass) as jets in φ.
+    pub fn coordinates(&self, phi: Jet) -> [Jet; 9] {
+        let (a, b, c, d) = (
+            Jet::c(self.a),
+            Jet::c(self.b),
+            Jet::c(self.c),
+            Jet::c(self.d),
+        );
+        let bx = a * phi.cos();
+        let by = a * phi.sin();
+        let (ex, ey) = (d - bx, -by);
+        let dist = (ex * ex + ey * ey).sqrt();
+        let along = (b * b - c * c + dist * dist) / (dist * Jet::c(2.0));
+        let h = (b * b - along * along).sqrt() * self.branch;
+        let (ux, uy) = (ex / dist, ey / dist);
+        let cx = bx + ux * along - uy * h;
+        let cy = by + uy * along + ux * h;
+        let half = Jet::c(0.5);
+        [
+            bx * half,
+            by * half,
+            phi,
+            (bx + cx) * half,
+            (by + cy) * half,
+            (cy - by).atan2(cx - bx),
+            (d + cx) * half,
+            cy * half,
+            cy.atan2(cx - d),
+        ]
+    }
+
+    /// Consistent `(q, q̇)` at crank angle φ and rate φ̇.
+    pub fn state(&self, phi: f64, phi_dot: f64) -> (Vec<f64>, Vec<f64>) {
+        let x = self.coordinates(Jet::var(phi));
+        (
+            x.iter().map(|j| j.v).collect(),
+            x.iter().map(|j| j.d * phi_dot).collect(),
+        )
+    }
+
+    /// Masses and centroidal inertias of the three rods (1 kg/m).
+    fn inertia(&self) -> [(f64, f64); 3] {
+        [self.a, self.b, self.c].map(|l| (l, l * l * l / 12.0))
+    }
+
+    /// Crank angular acceleration under gravity and a crank torque `tau`, from Lagrange's equation
+    /// in φ: `(Σ Jᵀ M J) φ̈ + (Σ Jᵀ M H) φ̇² = Σ Jᵀ Q`, with `J = ∂x/∂φ`, `H = ∂²x/∂φ²`.
+    pub fn crank_acceleration(&self, phi: f64, phi_dot: f64, tau: f64) -> f64 {
+        let x = self.coordinates(Jet::var(phi));
+        let mut mass = 0.0;
+        let mut quad = 0.0;
+        let mut force = tau; // ∂θ_crank/∂φ = 1
+        for (k, (m, j)) in self.inertia().into_iter().enumerate() {
+            let w = [m, m, j];
+            for i in 0..3 {
+                let e = x[3 * k + i];
+                mass += w[i] * e.d * e.d;
+                quad += w[i] * e.d * e.dd;
+            }
+            force += -m * G * x[3 * k + 1].d;
+        }
+        (force - quad * phi_dot * phi_dot) / mass
+    }
+
+    /// All body accelerations `q̈ = J φ̈ + H φ̇²`.
+    pub fn accelerations(&self, phi: f64, phi_dot: f64, phi_ddot: f64) -> Vec<f64> {
+        self.coordinates(Jet::var(phi))
+            .iter()
+            .map(|j| j.d * phi_ddot + j.dd * phi_dot * phi_dot)
+            .collect()
+    }
+}

@@ -1,0 +1,10 @@
+//! Reference mechanisms and their independently derived solutions, shared by the tests and
+//! benchmarks of every dalembert crate. Not published; nothing here is part of the library's API.
+//!
+//! Every builder returns a [`Mechanism`]: the model and a consistent initial state.
+
+pub mod closed_form;
+pub mod jet;
+pub mod mechanisms;
+
+pub use mechanisms::Mechanism;
