@@ -120,6 +120,7 @@ impl Mul for Jet {
 }
 impl Div for Jet {
     type Output = Jet;
+    #[allow(clippy::suspicious_arithmetic_impl)] // a / b = a · (1/b), exact for jets
     fn div(self, o: Jet) -> Jet {
         self * o.recip()
     }
