@@ -260,7 +260,7 @@ fn projection_restores_the_constraints() {
         .collect();
     let mut qd: Vec<f64> = mech.qd.iter().map(|v| v + 0.01).collect();
     let it = f.project(0.0, &mut q, &mut qd, 1e-12).unwrap();
-    assert!(it >= 1 && it <= 6, "Newton iterations {it}");
+    assert!((1..=6).contains(&it), "Newton iterations {it}");
     let (mut c, mut cd) = (vec![0.0; 8], vec![0.0; 8]);
     f.residuals(0.0, &q, &qd, &mut c, &mut cd);
     assert!(
