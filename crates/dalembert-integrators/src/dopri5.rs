@@ -1,0 +1,207 @@
+//! Dormand–Prince 5(4) with first-same-as-last, a PI step-size controller and Hairer's
+//! fourth-order continuous extension for output between steps (Hairer, Nørsett & Wanner,
+//! *Solving ODEs I*, §II.5–II.6).
+
+use crate::explicit::derivative;
+use dalembert_constraints::{DynamicsError, Formulation, Stabilization};
+
+const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
+const A: [[f64; 6]; 7] = [
+    [0.0; 6],
+    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+    [
+        19372.0 / 6561.0,
+        -25360.0 / 2187.0,
+        64448.0 / 6561.0,
+        -212.0 / 729.0,
+        0.0,
+        0.0,
+    ],
+    [
+        9017.0 / 3168.0,
+        -355.0 / 33.0,
+        46732.0 / 5247.0,
+        49.0 / 176.0,
+        -5103.0 / 18656.0,
+        0.0,
+    ],
+    [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+    ],
+];
+/// Error coefficients `b − b̂`.
+const E: [f64; 7] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
+/// Dense-output coefficients.
+const D: [f64; 7] = [
+    -12715105075.0 / 11282082432.0,
+    0.0,
+    87487479700.0 / 32700410799.0,
+    -10690763975.0 / 1880347072.0,
+    701980252875.0 / 199316789632.0,
+    -1453857185.0 / 822651844.0,
+    69997945.0 / 29380423.0,
+];
+
+/// Storage and controller state of the Dormand–Prince method.
+pub(crate) struct Dopri5 {
+    k: [Vec<f64>; 7],
+    y_new: Vec<f64>,
+    y_tmp: Vec<f64>,
+    /// Continuous-extension coefficients of the last accepted step.
+    cont: [Vec<f64>; 5],
+    qdd: Vec<f64>,
+    lambda: Vec<f64>,
+    rtol: f64,
+    atol: f64,
+    previous_error: f64,
+    /// `k[0]` holds `f(t, y)` for the current `y` (first same as last).
+    fsal_valid: bool,
+}
+
+/// Outcome of one attempted step.
+pub(crate) struct Attempt {
+    /// Scaled error norm (accept when ≤ 1).
+    pub error: f64,
+    /// Proposed next step.
+    pub next_step: f64,
+}
+
+impl Dopri5 {
+    pub fn new(n: usize, m: usize, rtol: f64, atol: f64) -> Self {
+        Dopri5 {
+            k: std::array::from_fn(|_| vec![0.0; 2 * n]),
+            y_new: vec![0.0; 2 * n],
+            y_tmp: vec![0.0; 2 * n],
+            cont: std::array::from_fn(|_| vec![0.0; 2 * n]),
+            qdd: vec![0.0; n],
+            lambda: vec![0.0; m],
+            rtol,
+            atol,
+            previous_error: 1e-4,
+            fsal_valid: false,
+        }
+    }
+
+    /// Marks the stored derivative stale (after the state was changed from outside, e.g. projected).
+    pub fn invalidate(&mut self) {
+        self.fsal_valid = false;
+    }
+
+    /// Attempts a step of size `h` from `(t, y)`; the candidate is kept until [`Dopri5::accept`].
+    pub fn attempt<F: Formulation + ?Sized>(
+        &mut self,
+        f: &mut F,
+        t: f64,
+        h: f64,
+        y: &[f64],
+        stab: Stabilization,
+    ) -> Result<Attempt, DynamicsError> {
+        let len = y.len();
+        if !self.fsal_valid {
+            derivative(
+                f,
+                t,
+                y,
+                stab,
+                &mut self.qdd,
+                &mut self.lambda,
+                &mut self.k[0],
+            )?;
+            self.fsal_valid = true;
+        }
+        for s in 1..7 {
+            for i in 0..len {
+                let mut acc = 0.0;
+                for j in 0..s {
+                    acc += A[s][j] * self.k[j][i];
+                }
+                self.y_tmp[i] = y[i] + h * acc;
+            }
+            let (done, rest) = self.k.split_at_mut(s);
+            let _ = done;
+            derivative(
+                f,
+                t + C[s] * h,
+                &self.y_tmp,
+                stab,
+                &mut self.qdd,
+                &mut self.lambda,
+                &mut rest[0],
+            )?;
+            if s == 6 {
+                self.y_new.copy_from_slice(&self.y_tmp);
+            }
+        }
+        // Error estimate, scaled by atol + rtol·max(|y|, |y_new|), RMS norm.
+        let mut sum = 0.0;
+        for i in 0..len {
+            let mut e = 0.0;
+            for s in 0..7 {
+                e += E[s] * self.k[s][i];
+            }
+            let sc = self.atol + self.rtol * y[i].abs().max(self.y_new[i].abs());
+            sum += (h * e / sc).powi(2);
+        }
+        let error = (sum / len as f64).sqrt();
+        // PI controller (α = 0.7/5, β = 0.4/5), factors clamped to [0.2, 5].
+        let next_step = if error <= 1.0 {
+            let fac = 0.9 * error.max(1e-10).powf(-0.14) * self.previous_error.powf(0.08);
+            h * fac.clamp(0.2, 5.0)
+        } else {
+            h * (0.9 * error.powf(-0.2)).clamp(0.2, 1.0)
+        };
+        if !error.is_finite() {
+            return Ok(Attempt {
+                error: f64::INFINITY,
+                next_step: 0.2 * h,
+            });
+        }
+        Ok(Attempt { error, next_step })
+    }
+
+    /// Accepts the last attempt: prepares dense output over `[t, t + h]` and moves `y` forward.
+    pub fn accept(&mut self, h: f64, error: f64, y: &mut [f64]) {
+        let [c1, c2, c3, c4, c5] = &mut self.cont;
+        for i in 0..y.len() {
+            let diff = self.y_new[i] - y[i];
+            let bspl = h * self.k[0][i] - diff;
+            c1[i] = y[i];
+            c2[i] = diff;
+            c3[i] = bspl;
+            c4[i] = diff - h * self.k[6][i] - bspl;
+            let mut d = 0.0;
+            for s in 0..7 {
+                d += D[s] * self.k[s][i];
+            }
+            c5[i] = h * d;
+        }
+        y.copy_from_slice(&self.y_new);
+        // First same as last: the last stage is f at the new point.
+        self.k.swap(0, 6);
+        self.previous_error = error.max(1e-4);
+    }
+
+    /// Dense output at fraction `theta ∈ [0, 1]` of the last accepted step.
+    pub fn interpolate(&self, theta: f64, out: &mut [f64]) {
+        let t1 = 1.0 - theta;
+        let [c1, c2, c3, c4, c5] = &self.cont;
+        for i in 0..out.len() {
+            out[i] = c1[i] + theta * (c2[i] + t1 * (c3[i] + theta * (c4[i] + t1 * c5[i])));
+        }
+    }
+}

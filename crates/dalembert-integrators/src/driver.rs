@@ -1,0 +1,315 @@
+//! The integration loop: steps, output scheduling, monitoring and failure reporting.
+
+use crate::dopri5::Dopri5;
+use crate::explicit::{rk4_step, symplectic_euler_step, FixedWork};
+use crate::{
+    ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method,
+    Statistics,
+};
+use dalembert_constraints::{DynamicsError, Formulation, FormulationStats};
+use std::time::{Duration, Instant};
+
+/// One output sample handed to the observer.
+#[derive(Debug, Clone, Copy)]
+pub struct Sample<'a> {
+    /// Time.
+    pub t: f64,
+    /// Positions.
+    pub q: &'a [f64],
+    /// Velocities.
+    pub qd: &'a [f64],
+    /// Accelerations at this state.
+    pub qdd: &'a [f64],
+    /// Multipliers at this state.
+    pub lambda: &'a [f64],
+    /// `‖C‖∞` at this state.
+    pub constraint_violation: f64,
+    /// `‖Ċ‖∞` at this state.
+    pub velocity_violation: f64,
+    /// Total energy `T + V`.
+    pub energy: f64,
+}
+
+/// Monitors, output buffers and counters shared by all methods.
+struct Run<'o> {
+    n: usize,
+    stats: Statistics,
+    start: FormulationStats,
+    c: Vec<f64>,
+    cdot: Vec<f64>,
+    qdd: Vec<f64>,
+    lambda: Vec<f64>,
+    y_out: Vec<f64>,
+    energy0: f64,
+    scale0: f64,
+    divergence_factor: f64,
+    observer: &'o mut dyn FnMut(&Sample<'_>),
+    observer_time: Duration,
+}
+
+fn inf_norm(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+}
+
+impl Run<'_> {
+    /// Updates the monitors after an accepted step; fails on blow-up.
+    fn monitor<F: Formulation + ?Sized>(
+        &mut self,
+        f: &mut F,
+        t: f64,
+        y: &[f64],
+        h: f64,
+    ) -> Result<(), IntegrationError> {
+        let size = inf_norm(y);
+        if !size.is_finite() {
+            return Err(DynamicsError::NonFinite {
+                time: t,
+                what: "state after the step".into(),
+            }
+            .into());
+        }
+        if size > self.divergence_factor * self.scale0 {
+            return Err(IntegrationError::Diverged {
+                time: t,
+                what: format!("state magnitude {size:.3e} vs initial {:.3e}", self.scale0),
+                step: h,
+            });
+        }
+        let (q, qd) = y.split_at(self.n);
+        f.residuals(t, q, qd, &mut self.c, &mut self.cdot);
+        let s = &mut self.stats;
+        s.max_constraint_violation = s.max_constraint_violation.max(inf_norm(&self.c));
+        s.max_velocity_violation = s.max_velocity_violation.max(inf_norm(&self.cdot));
+        let e = f.energy(t, q, qd).total();
+        s.max_energy_change = s.max_energy_change.max((e - self.energy0).abs());
+        s.steps += 1;
+        s.min_step_taken = s.min_step_taken.min(h);
+        s.max_step_taken = s.max_step_taken.max(h);
+        Ok(())
+    }
+
+    /// Evaluates `q̈, λ` at an output state and hands the sample to the observer.
+    fn emit<F: Formulation + ?Sized>(
+        &mut self,
+        f: &mut F,
+        t: f64,
+        y: &[f64],
+        opts: &IntegratorOptions,
+    ) -> Result<(), IntegrationError> {
+        let (q, qd) = y.split_at(self.n);
+        f.accelerations(
+            t,
+            q,
+            qd,
+            opts.treatment.stabilization(),
+            &mut self.qdd,
+            &mut self.lambda,
+        )?;
+        f.residuals(t, q, qd, &mut self.c, &mut self.cdot);
+        let sample = Sample {
+            t,
+            q,
+            qd,
+            qdd: &self.qdd,
+            lambda: &self.lambda,
+            constraint_violation: inf_norm(&self.c),
+            velocity_violation: inf_norm(&self.cdot),
+            energy: f.energy(t, q, qd).total(),
+        };
+        let t0 = Instant::now();
+        (self.observer)(&sample);
+        self.observer_time += t0.elapsed();
+        Ok(())
+    }
+
+    fn finish<F: Formulation + ?Sized>(&mut self, f: &F, wall: Instant) {
+        let now = f.stats();
+        let s = &mut self.stats;
+        s.evaluations = now.evaluations - self.start.evaluations;
+        s.factorizations = now.factorizations - self.start.factorizations;
+        s.newton_iterations = now.newton_iterations - self.start.newton_iterations;
+        s.repartitions = now.repartitions - self.start.repartitions;
+        s.wall_time = wall.elapsed().saturating_sub(self.observer_time);
+        if s.steps == 0 {
+            s.min_step_taken = 0.0;
+        }
+    }
+}
+
+/// Projects `y` when the treatment asks for it; returns true if it did.
+fn project<F: Formulation + ?Sized>(
+    f: &mut F,
+    t: f64,
+    y: &mut [f64],
+    treatment: ConstraintTreatment,
+) -> Result<bool, DynamicsError> {
+    if let ConstraintTreatment::Projection { tolerance } = treatment {
+        let n = y.len() / 2;
+        let (q, qd) = y.split_at_mut(n);
+        f.project(t, q, qd, tolerance)?;
+        return Ok(true);
+    }
+    Ok(false)
+}
+
+/// Integrates from `(t0, q0, q̇0)` to `t_end`, calling `observer` at `t0` and every
+/// `opts.output_every` (and at `t_end`). The initial state should be consistent; with projection it
+/// is projected first.
+///
+/// Returns the run's statistics, or the failure with the statistics up to it (every sample before
+/// the failure has already been observed).
+pub fn integrate<F: Formulation + ?Sized>(
+    f: &mut F,
+    t0: f64,
+    t_end: f64,
+    q0: &[f64],
+    qd0: &[f64],
+    opts: &IntegratorOptions,
+    observer: &mut dyn FnMut(&Sample<'_>),
+) -> Result<Statistics, IntegrationFailure> {
+    let n = q0.len();
+    let m = f.model().num_equations();
+    let wall = Instant::now();
+    let mut y = [q0, qd0].concat();
+    let energy0 = f.energy(t0, q0, qd0).total();
+    let mut run = Run {
+        n,
+        stats: Statistics {
+            min_step_taken: f64::INFINITY,
+            ..Default::default()
+        },
+        start: f.stats(),
+        c: vec![0.0; m],
+        cdot: vec![0.0; m],
+        qdd: vec![0.0; n],
+        lambda: vec![0.0; m],
+        y_out: vec![0.0; 2 * n],
+        energy0,
+        scale0: 1.0 + inf_norm(&y),
+        divergence_factor: opts.divergence_factor,
+        observer,
+        observer_time: Duration::ZERO,
+    };
+    let result = run_loop(f, t0, t_end, &mut y, opts, &mut run);
+    run.finish(f, wall);
+    match result {
+        Ok(()) => Ok(run.stats),
+        Err(error) => Err(IntegrationFailure {
+            error,
+            statistics: run.stats,
+        }),
+    }
+}
+
+fn check_options(t0: f64, t_end: f64, opts: &IntegratorOptions) -> Result<(), IntegrationError> {
+    let bad = |s: &str| Err(IntegrationError::Options(s.to_string()));
+    if !(opts.step.is_finite() && opts.step > 0.0) {
+        return bad("step must be positive and finite");
+    }
+    if !(opts.output_every.is_finite() && opts.output_every > 0.0) {
+        return bad("output interval must be positive and finite");
+    }
+    if !(t_end.is_finite() && t0.is_finite() && t_end >= t0) {
+        return bad("end time must be finite and not before the start");
+    }
+    if let Method::DormandPrince { rtol, atol } = opts.method {
+        if !(rtol > 0.0 && atol > 0.0) {
+            return bad("rtol and atol must be positive");
+        }
+    }
+    Ok(())
+}
+
+fn run_loop<F: Formulation + ?Sized>(
+    f: &mut F,
+    t0: f64,
+    t_end: f64,
+    y: &mut [f64],
+    opts: &IntegratorOptions,
+    run: &mut Run<'_>,
+) -> Result<(), IntegrationError> {
+    check_options(t0, t_end, opts)?;
+    project(f, t0, y, opts.treatment)?;
+    run.emit(f, t0, y, opts)?;
+    let stab = opts.treatment.stabilization();
+    let n_out = ((t_end - t0) / opts.output_every - 1e-9).ceil().max(0.0) as u64;
+    let out_time = |k: u64| {
+        if k >= n_out {
+            t_end
+        } else {
+            t0 + k as f64 * opts.output_every
+        }
+    };
+    match opts.method {
+        Method::SymplecticEuler | Method::Rk4 => {
+            let mut work = FixedWork::new(run.n, run.lambda.len());
+            let mut t = t0;
+            for k in 1..=n_out {
+                let t_next = out_time(k);
+                let span = t_next - t;
+                let steps = (span / opts.step - 1e-9).ceil().max(1.0) as u64;
+                let h = span / steps as f64;
+                for s in 0..steps {
+                    let ts = t + s as f64 * h;
+                    match opts.method {
+                        Method::Rk4 => rk4_step(f, &mut work, ts, h, y, stab)?,
+                        _ => symplectic_euler_step(f, &mut work, ts, h, y, stab)?,
+                    }
+                    let t_after = if s + 1 == steps { t_next } else { ts + h };
+                    project(f, t_after, y, opts.treatment)?;
+                    run.monitor(f, t_after, y, h)?;
+                }
+                t = t_next;
+                run.emit(f, t, y, opts)?;
+            }
+        }
+        Method::DormandPrince { rtol, atol } => {
+            let mut dp = Dopri5::new(run.n, run.lambda.len(), rtol, atol);
+            let max_step = opts.max_step.min(t_end - t0).max(opts.min_step);
+            let mut h = opts.step.min(max_step);
+            let mut t = t0;
+            let mut k_out = 1;
+            while t < t_end && k_out <= n_out {
+                let last = t + h >= t_end - 1e-12 * (1.0 + t_end.abs());
+                if last {
+                    h = t_end - t;
+                }
+                let attempt = dp.attempt(f, t, h, y, stab)?;
+                if attempt.error > 1.0 {
+                    run.stats.rejected += 1;
+                    let next = attempt.next_step;
+                    if next < opts.min_step {
+                        return Err(IntegrationError::StepSizeTooSmall {
+                            time: t,
+                            step: next,
+                            min_step: opts.min_step,
+                            error: attempt.error,
+                        });
+                    }
+                    h = next;
+                    continue;
+                }
+                let t_new = if last { t_end } else { t + h };
+                dp.accept(h, attempt.error, y);
+                // Dense output at every output time inside (t, t_new].
+                while k_out <= n_out && out_time(k_out) <= t_new + 1e-12 * (1.0 + t_new.abs()) {
+                    let to = out_time(k_out);
+                    let mut y_out = std::mem::take(&mut run.y_out);
+                    dp.interpolate(((to - t) / h).clamp(0.0, 1.0), &mut y_out);
+                    project(f, to, &mut y_out, opts.treatment)?;
+                    let r = run.emit(f, to, &y_out, opts);
+                    run.y_out = y_out;
+                    r?;
+                    k_out += 1;
+                }
+                if project(f, t_new, y, opts.treatment)? {
+                    dp.invalidate();
+                }
+                run.monitor(f, t_new, y, h)?;
+                t = t_new;
+                h = attempt.next_step.min(max_step);
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,100 @@
+//! Fixed-step explicit methods on the first-order form `y = [q; q̇]`, `ẏ = [q̇; q̈(t, q, q̇)]`.
+
+use dalembert_constraints::{DynamicsError, Formulation, Stabilization};
+
+/// Preallocated storage for the fixed-step methods.
+pub(crate) struct FixedWork {
+    n: usize,
+    k: [Vec<f64>; 4],
+    y_tmp: Vec<f64>,
+    qdd: Vec<f64>,
+    lambda: Vec<f64>,
+}
+
+impl FixedWork {
+    pub fn new(n: usize, m: usize) -> Self {
+        FixedWork {
+            n,
+            k: std::array::from_fn(|_| vec![0.0; 2 * n]),
+            y_tmp: vec![0.0; 2 * n],
+            qdd: vec![0.0; n],
+            lambda: vec![0.0; m],
+        }
+    }
+}
+
+/// `out = [q̇; q̈]` at `(t, y)`.
+pub(crate) fn derivative<F: Formulation + ?Sized>(
+    f: &mut F,
+    t: f64,
+    y: &[f64],
+    stab: Stabilization,
+    qdd: &mut [f64],
+    lambda: &mut [f64],
+    out: &mut [f64],
+) -> Result<(), DynamicsError> {
+    let n = y.len() / 2;
+    let (q, qd) = y.split_at(n);
+    f.accelerations(t, q, qd, stab, qdd, lambda)?;
+    out[..n].copy_from_slice(qd);
+    out[n..].copy_from_slice(qdd);
+    Ok(())
+}
+
+/// One semi-implicit Euler step: `q̇ ← q̇ + h q̈(t, q, q̇)`, then `q ← q + h q̇`.
+pub(crate) fn symplectic_euler_step<F: Formulation + ?Sized>(
+    f: &mut F,
+    w: &mut FixedWork,
+    t: f64,
+    h: f64,
+    y: &mut [f64],
+    stab: Stabilization,
+) -> Result<(), DynamicsError> {
+    let n = w.n;
+    {
+        let (q, qd) = y.split_at(n);
+        f.accelerations(t, q, qd, stab, &mut w.qdd, &mut w.lambda)?;
+    }
+    let (q, qd) = y.split_at_mut(n);
+    for i in 0..n {
+        qd[i] += h * w.qdd[i];
+        q[i] += h * qd[i];
+    }
+    Ok(())
+}
+
+/// One classic Runge–Kutta step.
+pub(crate) fn rk4_step<F: Formulation + ?Sized>(
+    f: &mut F,
+    w: &mut FixedWork,
+    t: f64,
+    h: f64,
+    y: &mut [f64],
+    stab: Stabilization,
+) -> Result<(), DynamicsError> {
+    let FixedWork {
+        k,
+        y_tmp,
+        qdd,
+        lambda,
+        ..
+    } = w;
+    let [k1, k2, k3, k4] = k;
+    derivative(f, t, y, stab, qdd, lambda, k1)?;
+    for i in 0..y.len() {
+        y_tmp[i] = y[i] + 0.5 * h * k1[i];
+    }
+    derivative(f, t + 0.5 * h, y_tmp, stab, qdd, lambda, k2)?;
+    for i in 0..y.len() {
+        y_tmp[i] = y[i] + 0.5 * h * k2[i];
+    }
+    derivative(f, t + 0.5 * h, y_tmp, stab, qdd, lambda, k3)?;
+    for i in 0..y.len() {
+        y_tmp[i] = y[i] + h * k3[i];
+    }
+    derivative(f, t + h, y_tmp, stab, qdd, lambda, k4)?;
+    for i in 0..y.len() {
+        y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+    Ok(())
+}

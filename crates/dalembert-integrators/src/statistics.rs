@@ -1,0 +1,32 @@
+//! What a run spent and how far it drifted.
+
+use std::time::Duration;
+
+/// Counters and monitors of one integration run.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Statistics {
+    /// Accepted steps.
+    pub steps: u64,
+    /// Rejected steps (adaptive methods).
+    pub rejected: u64,
+    /// Right-hand-side evaluations (`q̈, λ` solves).
+    pub evaluations: u64,
+    /// Numeric factorizations performed by the formulation.
+    pub factorizations: u64,
+    /// Newton iterations (projection).
+    pub newton_iterations: u64,
+    /// Coordinate re-partitions.
+    pub repartitions: u64,
+    /// Wall time of the integration loop (excluding the observer's own time is not attempted).
+    pub wall_time: Duration,
+    /// Largest `‖C‖∞` after any accepted step.
+    pub max_constraint_violation: f64,
+    /// Largest `‖Ċ‖∞` after any accepted step.
+    pub max_velocity_violation: f64,
+    /// Largest `|E − E₀|` after any accepted step.
+    pub max_energy_change: f64,
+    /// Smallest accepted step.
+    pub min_step_taken: f64,
+    /// Largest accepted step.
+    pub max_step_taken: f64,
+}
