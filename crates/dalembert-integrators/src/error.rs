@@ -44,5 +44,5 @@ pub struct IntegrationFailure {
     /// The cause.
     pub error: IntegrationError,
     /// Statistics up to the failure.
-    pub statistics: Statistics,
+    pub statistics: Box<Statistics>,
 }
