@@ -196,7 +196,7 @@ pub fn integrate<F: Formulation + ?Sized>(
         Ok(()) => Ok(run.stats),
         Err(error) => Err(IntegrationFailure {
             error,
-            statistics: run.stats,
+            statistics: Box::new(run.stats),
         }),
     }
 }
