@@ -1,6 +1,25 @@
 //! dalembert: constrained planar multibody dynamics.
 //!
-//! This facade re-exports the workspace crates. See `README.md` and `docs/`.
+//! This facade re-exports the workspace crates and adds what ties them together: [`Simulation`]
+//! (a model, a formulation and an integrator, run to an end time) and [`CsvOutput`] (streamed
+//! results with reactions and driver efforts).
+//!
+//! | crate | holds |
+//! |---|---|
+//! | [`kinematics`] | bodies, coordinates, point kinematics, mass matrix, applied forces, time functions |
+//! | [`constraints`] | joints, drivers, `C`, `C_q`, `C_t`, `Q_d`, structure and kinematic analysis, the `Formulation` trait |
+//! | [`augmented`] | the augmented (Lagrange multiplier) formulation, reactions, inverse dynamics |
+//! | [`integrators`] | symplectic Euler, RK4, Dormand–Prince; Baumgarte and projection |
+//!
+//! The mathematics is in `docs/` and in each crate's documentation.
 
+pub mod output;
+pub mod simulation;
+
+pub use dalembert_augmented as augmented;
 pub use dalembert_constraints as constraints;
+pub use dalembert_integrators as integrators;
 pub use dalembert_kinematics as kinematics;
+
+pub use output::CsvOutput;
+pub use simulation::{FormulationKind, Simulation, SimulationError};

@@ -1,0 +1,96 @@
+//! A model, a formulation and an integrator, run together.
+
+use dalembert_augmented::{Augmented, AugmentedOptions};
+use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, Model};
+use dalembert_integrators::{integrate, IntegrationFailure, IntegratorOptions, Sample, Statistics};
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Which formulation of the equations of motion to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FormulationKind {
+    /// Lagrange multipliers, saddle-point system (`FORMULATIONS.md` §3).
+    #[default]
+    Augmented,
+}
+
+impl FormulationKind {
+    /// Name used in reports and scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            FormulationKind::Augmented => "augmented",
+        }
+    }
+}
+
+/// Why a simulation could not start or did not finish.
+#[derive(Debug, Error)]
+pub enum SimulationError {
+    /// The initial configuration could not be assembled or made consistent.
+    #[error("initial state: {0}")]
+    Assembly(#[from] ConstraintError),
+    /// The formulation could not be set up.
+    #[error("setup: {0}")]
+    Setup(#[from] DynamicsError),
+    /// The run stopped early (the statistics up to then are inside).
+    #[error("{0}")]
+    Integration(#[from] IntegrationFailure),
+}
+
+/// A model with an initial state and the settings of a run.
+#[derive(Debug, Clone)]
+pub struct Simulation {
+    /// The model.
+    pub model: Arc<Model>,
+    /// Initial positions (approximate is fine: [`Simulation::assemble`] fixes them).
+    pub q: Vec<f64>,
+    /// Initial velocities (made consistent by [`Simulation::assemble`]).
+    pub qd: Vec<f64>,
+    /// Start time.
+    pub start: f64,
+    /// End time.
+    pub end: f64,
+    /// Formulation.
+    pub formulation: FormulationKind,
+    /// Integrator settings.
+    pub integrator: IntegratorOptions,
+}
+
+impl Simulation {
+    /// Assembles the initial state: position analysis from the given `q` (least change), then the
+    /// least change to `q̇` that satisfies the velocity constraints.
+    pub fn assemble(&mut self) -> Result<(), SimulationError> {
+        let opts = KinematicOptions::default();
+        let sys = self.model.constraints();
+        sys.solve_positions(self.start, &mut self.q, &opts)?;
+        sys.solve_velocities(self.start, &self.q, &mut self.qd, &opts)?;
+        Ok(())
+    }
+
+    /// Builds the chosen formulation.
+    pub fn formulation(&self) -> Result<Box<dyn Formulation>, SimulationError> {
+        Ok(match self.formulation {
+            FormulationKind::Augmented => Box::new(Augmented::new(
+                self.model.clone(),
+                AugmentedOptions::default(),
+            )?),
+        })
+    }
+
+    /// Runs from the current initial state, handing every output sample to `observer`.
+    pub fn run(
+        &self,
+        observer: &mut dyn FnMut(&Sample<'_>),
+    ) -> Result<Statistics, SimulationError> {
+        let mut f = self.formulation()?;
+        Ok(integrate(
+            f.as_mut(),
+            self.start,
+            self.end,
+            &self.q,
+            &self.qd,
+            &self.integrator,
+            observer,
+        )?)
+    }
+}
