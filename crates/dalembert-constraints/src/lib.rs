@@ -24,6 +24,7 @@ pub mod formulation;
 pub mod joints;
 pub mod kinematics;
 pub mod model;
+pub mod partition;
 pub mod primitives;
 pub mod reactions;
 pub mod structure;
@@ -38,6 +39,7 @@ pub use formulation::{
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use model::Model;
+pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use reactions::Reaction;
 pub use structure::StructureReport;
 pub use system::{ConstraintSystem, ConstraintValues};

@@ -83,3 +83,19 @@ impl ConstraintSystem {
         }
     }
 }
+
+impl ConstraintSystem {
+    /// The minimum-norm multipliers `λ = (C_qᵀ)⁺ f` for a generalized constraint force `f` in the
+    /// range of `C_qᵀ` (dense SVD; for redundant constraints, one admissible distribution).
+    pub fn minimum_norm_multipliers(
+        &self,
+        values: &ConstraintValues,
+        f: &[f64],
+    ) -> Option<Vec<f64>> {
+        let jt = self.jacobian_dense(values).transpose().to_owned();
+        let pinv = jt.svd().ok()?.pseudoinverse();
+        let fm = faer::Mat::from_fn(f.len(), 1, |i, _| f[i]);
+        let lam = &pinv * &fm;
+        Some((0..lam.nrows()).map(|i| lam[(i, 0)]).collect())
+    }
+}
