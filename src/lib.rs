@@ -9,6 +9,8 @@
 //! | [`kinematics`] | bodies, coordinates, point kinematics, mass matrix, applied forces, time functions |
 //! | [`constraints`] | joints, drivers, `C`, `C_q`, `C_t`, `Q_d`, structure and kinematic analysis, the `Formulation` trait |
 //! | [`augmented`] | the augmented (Lagrange multiplier) formulation, reactions, inverse dynamics |
+//! | [`embedding`] | the embedding (velocity transformation) formulation, coordinate partitioning |
+//! | [`amalgamated`] | the amalgamated formulation |
 //! | [`integrators`] | symplectic Euler, RK4, Dormand–Prince; Baumgarte and projection |
 //!
 //! The mathematics is in `docs/` and in each crate's documentation.
@@ -16,8 +18,10 @@
 pub mod output;
 pub mod simulation;
 
+pub use dalembert_amalgamated as amalgamated;
 pub use dalembert_augmented as augmented;
 pub use dalembert_constraints as constraints;
+pub use dalembert_embedding as embedding;
 pub use dalembert_integrators as integrators;
 pub use dalembert_kinematics as kinematics;
 

@@ -1,7 +1,9 @@
 //! A model, a formulation and an integrator, run together.
 
+use dalembert_amalgamated::Amalgamated;
 use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, Model};
+use dalembert_embedding::Embedding;
 use dalembert_integrators::{integrate, IntegrationFailure, IntegratorOptions, Sample, Statistics};
 use std::sync::Arc;
 use thiserror::Error;
@@ -12,6 +14,11 @@ pub enum FormulationKind {
     /// Lagrange multipliers, saddle-point system (`FORMULATIONS.md` §3).
     #[default]
     Augmented,
+    /// Velocity transformation, one equation per degree of freedom (§4–§5); with projection it is
+    /// coordinate partitioning.
+    Embedding,
+    /// One symmetric system in accelerations, constraint forces and independent accelerations (§6).
+    Amalgamated,
 }
 
 impl FormulationKind {
@@ -19,6 +26,8 @@ impl FormulationKind {
     pub fn name(&self) -> &'static str {
         match self {
             FormulationKind::Augmented => "augmented",
+            FormulationKind::Embedding => "embedding",
+            FormulationKind::Amalgamated => "amalgamated",
         }
     }
 }
@@ -70,18 +79,14 @@ impl Simulation {
     /// Builds the chosen formulation.
     pub fn formulation(&self) -> Result<Box<dyn Formulation>, SimulationError> {
         Ok(match self.formulation {
-            FormulationKind::Augmented => Box::new(Augmented::new(
-                self.model.clone(),
-                AugmentedOptions::default(),
-            )?),
+            FormulationKind::Augmented => Box::new(Augmented::new(self.model.clone(), AugmentedOptions::default())?),
+            FormulationKind::Embedding => Box::new(Embedding::with_defaults(self.model.clone())),
+            FormulationKind::Amalgamated => Box::new(Amalgamated::with_defaults(self.model.clone())),
         })
     }
 
     /// Runs from the current initial state, handing every output sample to `observer`.
-    pub fn run(
-        &self,
-        observer: &mut dyn FnMut(&Sample<'_>),
-    ) -> Result<Statistics, SimulationError> {
+    pub fn run(&self, observer: &mut dyn FnMut(&Sample<'_>)) -> Result<Statistics, SimulationError> {
         let mut f = self.formulation()?;
         Ok(integrate(
             f.as_mut(),

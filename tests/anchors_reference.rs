@@ -66,11 +66,7 @@ const SLIDERCRANK: [[f64; 6]; 3] = [
     ],
 ];
 
-fn state_error(
-    mech: &dalembert_testkit::Mechanism,
-    reference: &[[f64; 6]; 3],
-    h: f64,
-) -> (f64, f64) {
+fn state_error(mech: &dalembert_testkit::Mechanism, reference: &[[f64; 6]; 3], h: f64) -> (f64, f64) {
     let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();
     let mut at_one = None;
     let stats = integrate(

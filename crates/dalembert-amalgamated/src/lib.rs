@@ -18,8 +18,8 @@
 //! structural pattern of `B_i` first (future work, noted in `docs/formulations.md`).
 
 use dalembert_constraints::{
-    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, PartitionTracker,
-    RedundancyTreatment, Stabilization,
+    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, PartitionTracker, RedundancyTreatment,
+    Stabilization,
 };
 use dalembert_kinematics::MassMatrix;
 use faer::linalg::solvers::Solve;
@@ -118,12 +118,7 @@ impl Formulation for Amalgamated {
         if stabilization != Stabilization::None {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }
-        stabilization.apply(
-            &self.values.gamma,
-            &self.values.c,
-            &self.cdot,
-            &mut self.rhs,
-        );
+        stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
         let (partition, vt) = match self.tracker.transform(t, sys, &self.values, &self.rhs) {
             Some((p, vt)) => (p.clone(), vt),
@@ -186,11 +181,7 @@ impl Formulation for Amalgamated {
             qdd[i] = sol[(i, 0)];
         }
         // λ on the independent rows from the dependent columns of Q_c = −C_qᵀ λ.
-        let mut y: Vec<f64> = partition
-            .dependent
-            .iter()
-            .map(|&d| -sol[(n + d, 0)])
-            .collect();
+        let mut y: Vec<f64> = partition.dependent.iter().map(|&d| -sol[(n + d, 0)]).collect();
         vt.solve_dependent_transpose(&mut y);
         lambda.iter_mut().for_each(|l| *l = 0.0);
         for (kk, &row) in partition.rows.iter().enumerate() {
@@ -198,12 +189,12 @@ impl Formulation for Amalgamated {
         }
         if redundant {
             let f: Vec<f64> = (0..n).map(|i| -sol[(n + i, 0)]).collect();
-            let mn = sys.minimum_norm_multipliers(&self.values, &f).ok_or(
-                DynamicsError::Factorization {
+            let mn = sys
+                .minimum_norm_multipliers(&self.values, &f)
+                .ok_or(DynamicsError::Factorization {
                     time: t,
                     what: "SVD of C_qᵀ failed".into(),
-                },
-            )?;
+                })?;
             lambda.copy_from_slice(&mn);
         }
         Ok(())
@@ -218,22 +209,11 @@ impl Formulation for Amalgamated {
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
     /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation.
-    fn project(
-        &mut self,
-        t: f64,
-        q: &mut [f64],
-        qd: &mut [f64],
-        tolerance: f64,
-    ) -> Result<usize, DynamicsError> {
+    fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
         let before = self.tracker.log.len();
-        let it = self.tracker.project(
-            t,
-            self.model.constraints(),
-            &mut self.values,
-            q,
-            qd,
-            tolerance,
-        )?;
+        let it = self
+            .tracker
+            .project(t, self.model.constraints(), &mut self.values, q, qd, tolerance)?;
         self.stats.repartitions += (self.tracker.log.len() - before) as u64;
         self.stats.newton_iterations += it as u64;
         Ok(it)

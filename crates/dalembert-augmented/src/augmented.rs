@@ -3,8 +3,7 @@
 use crate::diagnosis::{diagnose, minimum_norm_solve};
 use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SparseKkt};
 use dalembert_constraints::{
-    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, RedundancyTreatment,
-    Stabilization,
+    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, RedundancyTreatment, Stabilization,
 };
 use dalembert_kinematics::MassMatrix;
 use std::sync::Arc;
@@ -88,12 +87,8 @@ impl Augmented {
             KktSolver::Dense(DenseKkt::new(n, m, options.pivot_tolerance))
         } else {
             KktSolver::Sparse(Box::new(
-                SparseKkt::new(model.constraints(), options.pivot_tolerance).map_err(|e| {
-                    DynamicsError::Factorization {
-                        time: 0.0,
-                        what: e.0,
-                    }
-                })?,
+                SparseKkt::new(model.constraints(), options.pivot_tolerance)
+                    .map_err(|e| DynamicsError::Factorization { time: 0.0, what: e.0 })?,
             ))
         };
         let q0 = vec![0.0; n];
@@ -155,22 +150,9 @@ impl Augmented {
         match self.options.redundancy {
             RedundancyTreatment::MinimumNorm => {
                 let n = self.model.num_coordinates();
-                minimum_norm_solve(
-                    t,
-                    &self.model,
-                    &self.mass,
-                    &self.values,
-                    &self.b,
-                    &mut self.x,
-                    n,
-                )
+                minimum_norm_solve(t, &self.model, &self.mass, &self.values, &self.b, &mut self.x, n)
             }
-            RedundancyTreatment::Error => Err(diagnose(
-                t,
-                &self.model,
-                &self.values,
-                self.options.pivot_tolerance,
-            )),
+            RedundancyTreatment::Error => Err(diagnose(t, &self.model, &self.values, self.options.pivot_tolerance)),
         }
     }
 
@@ -180,9 +162,7 @@ impl Augmented {
         check_finite(t, self.model.as_ref(), qd, "velocity")?;
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
-        self.model
-            .constraints()
-            .evaluate(t, q, qd, &mut self.values);
+        self.model.constraints().evaluate(t, q, qd, &mut self.values);
         Ok(())
     }
 }
@@ -246,13 +226,7 @@ impl Formulation for Augmented {
     /// Mass-weighted projection with the same saddle-point matrix:
     /// `[M C_qᵀ; C_q 0] [Δq; μ] = [0; −C]` repeated until `‖C‖∞ ≤ tolerance`, then
     /// `[M C_qᵀ; C_q 0] [Δq̇; μ] = [0; −(C_q q̇ + C_t)]`.
-    fn project(
-        &mut self,
-        t: f64,
-        q: &mut [f64],
-        qd: &mut [f64],
-        tolerance: f64,
-    ) -> Result<usize, DynamicsError> {
+    fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
         const MAX_ITERATIONS: usize = 20;
         let n = q.len();
         let mut iterations = 0;

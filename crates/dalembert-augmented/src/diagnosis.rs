@@ -12,12 +12,7 @@ const RANK_TOLERANCE: f64 = 1e-9;
 /// Explains a singular KKT matrix: redundant constraints (rank-deficient `C_q`, naming the equations
 /// in the dependent set), a mass matrix singular on the admissible motions (naming massless bodies),
 /// or else a generic singular system.
-pub(crate) fn diagnose(
-    t: f64,
-    model: &Model,
-    vals: &ConstraintValues,
-    pivot_tolerance: f64,
-) -> DynamicsError {
+pub(crate) fn diagnose(t: f64, model: &Model, vals: &ConstraintValues, pivot_tolerance: f64) -> DynamicsError {
     let sys = model.constraints();
     let s = sys.analyse_structure(vals, RANK_TOLERANCE);
     if !s.is_full_rank() {
@@ -35,10 +30,7 @@ pub(crate) fn diagnose(
         .map(|b| b.name.clone())
         .collect();
     if !light.is_empty() {
-        return DynamicsError::SingularMass {
-            time: t,
-            bodies: light,
-        };
+        return DynamicsError::SingularMass { time: t, bodies: light };
     }
     DynamicsError::Singular {
         time: t,
@@ -142,9 +134,6 @@ fn diagnose_mass(t: f64, model: &Model) -> DynamicsError {
             what: "reduced saddle-point matrix singular".into(),
         }
     } else {
-        DynamicsError::SingularMass {
-            time: t,
-            bodies: light,
-        }
+        DynamicsError::SingularMass { time: t, bodies: light }
     }
 }

@@ -36,11 +36,7 @@ pub struct InverseDynamics {
 impl InverseDynamics {
     /// Checks that the model is fully driven at configuration `q` (approximate is fine: it is
     /// assembled first) and prepares the solver.
-    pub fn new(
-        model: Arc<Model>,
-        q: &[f64],
-        options: KinematicOptions,
-    ) -> Result<Self, DynamicsError> {
+    pub fn new(model: Arc<Model>, q: &[f64], options: KinematicOptions) -> Result<Self, DynamicsError> {
         let sys = model.constraints();
         let mut q = q.to_vec();
         sys.solve_positions(0.0, &mut q, &options)?;

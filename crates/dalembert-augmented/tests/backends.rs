@@ -20,11 +20,7 @@ fn run(model: &Arc<Model>, q: &[f64], qd: &[f64], backend: Backend) -> (Vec<f64>
     .unwrap();
     assert_eq!(
         f.backend_name(),
-        if backend == Backend::Dense {
-            "dense"
-        } else {
-            "sparse"
-        }
+        if backend == Backend::Dense { "dense" } else { "sparse" }
     );
     let (mut qdd, mut lam) = (vec![0.0; q.len()], vec![0.0; model.num_equations()]);
     f.accelerations(0.3, q, qd, Stabilization::None, &mut qdd, &mut lam)
@@ -38,23 +34,15 @@ fn run(model: &Arc<Model>, q: &[f64], qd: &[f64], backend: Backend) -> (Vec<f64>
 #[test]
 fn dense_and_sparse_agree_on_chains() {
     for &n in &[1usize, 2, 5, 20, 100, 500] {
-        let angles: Vec<f64> = (0..n)
-            .map(|k| -1.2 + 0.7 * ((k * 7 % 11) as f64 / 11.0))
-            .collect();
+        let angles: Vec<f64> = (0..n).map(|k| -1.2 + 0.7 * ((k * 7 % 11) as f64 / 11.0)).collect();
         let rates: Vec<f64> = (0..n).map(|k| 0.5 - ((k * 3 % 5) as f64) / 5.0).collect();
         let mech = mechanisms::chain(1.0, 1.0, &angles, &rates, &[]);
         let (a1, l1) = run(&mech.model, &mech.q, &mech.qd, Backend::Dense);
         let (a2, l2) = run(&mech.model, &mech.q, &mech.qd, Backend::Sparse);
         let sa = a1.iter().fold(1.0f64, |a, v| a.max(v.abs()));
         let sl = l1.iter().fold(1.0f64, |a, v| a.max(v.abs()));
-        let da = a1
-            .iter()
-            .zip(&a2)
-            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-        let dl = l1
-            .iter()
-            .zip(&l2)
-            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let da = a1.iter().zip(&a2).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let dl = l1.iter().zip(&l2).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
         assert!(
             da <= 1e-9 * sa && dl <= 1e-9 * sl,
             "n = {n}: Δq̈ {da:e} (scale {sa:e}), Δλ {dl:e} (scale {sl:e})"
@@ -111,12 +99,7 @@ fn parallelogram(phi: f64) -> (Arc<Model>, Vec<f64>, Vec<f64>) {
         Body::rod("crank2", 1.0, 1.0).unwrap(),
         Body::rod("crank3", 1.0, 1.0).unwrap(),
     ];
-    let model = Model::new(
-        bodies,
-        vec![Box::new(Gravity::new(Vec2::new(0.0, -9.81)))],
-        joints,
-    )
-    .unwrap();
+    let model = Model::new(bodies, vec![Box::new(Gravity::new(Vec2::new(0.0, -9.81)))], joints).unwrap();
     (Arc::new(model), q, qd)
 }
 
@@ -172,11 +155,7 @@ fn minimum_norm_treatment_gives_the_parallelogram_motion() {
     // circle of radius 1: inertia 3·(1/3) + 2·1² = 3, gravity moment g (3·0.5 + 2·1) cos φ.
     let alpha = -9.81 * (3.0 * 0.5 + 2.0) * phi.cos() / 3.0;
     for k in [2, 8, 11] {
-        assert!(
-            (qdd[k] - alpha).abs() < 1e-10 * 9.81,
-            "crank α {} vs {alpha}",
-            qdd[k]
-        );
+        assert!((qdd[k] - alpha).abs() < 1e-10 * 9.81, "crank α {} vs {alpha}", qdd[k]);
     }
     assert!(qdd[5].abs() < 1e-10);
     // Equilibrium of every body: C_qᵀ λ = Q_e − M q̈.
@@ -202,10 +181,7 @@ fn minimum_norm_treatment_gives_the_parallelogram_motion() {
     let u = svd.U();
     let null_col = 11; // smallest singular value last
     let proj: f64 = (0..12).map(|i| u[(i, null_col)] * lam[i]).sum();
-    assert!(
-        proj.abs() < 1e-9 * 30.0,
-        "λ has a self-stress component {proj}"
-    );
+    assert!(proj.abs() < 1e-9 * 30.0, "λ has a self-stress component {proj}");
 }
 
 #[test]

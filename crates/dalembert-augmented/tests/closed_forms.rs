@@ -19,15 +19,8 @@ fn solve(mech: &Mechanism, backend: Backend) -> (Vec<f64>, Vec<f64>) {
     let n = mech.q.len();
     let m = mech.model.num_equations();
     let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
-    f.accelerations(
-        0.0,
-        &mech.q,
-        &mech.qd,
-        Stabilization::None,
-        &mut qdd,
-        &mut lam,
-    )
-    .unwrap();
+    f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+        .unwrap();
     (qdd, lam)
 }
 
@@ -50,11 +43,7 @@ fn rod_pendulum_matches_closed_form() {
         for be in BACKENDS {
             let (qdd, _) = solve(&mech, be);
             let scale = G;
-            assert!(
-                rel(qdd[2], alpha, scale) < 1e-12,
-                "{be:?} α {} vs {alpha}",
-                qdd[2]
-            );
+            assert!(rel(qdd[2], alpha, scale) < 1e-12, "{be:?} α {} vs {alpha}", qdd[2]);
             assert!(
                 rel(qdd[0], ax, scale) < 1e-12 && rel(qdd[1], ay, scale) < 1e-12,
                 "{be:?}"
@@ -78,18 +67,8 @@ fn double_pendulum_matches_closed_form() {
         let acc = dp.accelerations(th, w, [0.0, 0.0]);
         for be in BACKENDS {
             let (qdd, _) = solve(&mech, be);
-            assert!(
-                rel(qdd[2], acc[0], 10.0) < 1e-12,
-                "{be:?} {} vs {}",
-                qdd[2],
-                acc[0]
-            );
-            assert!(
-                rel(qdd[5], acc[1], 10.0) < 1e-12,
-                "{be:?} {} vs {}",
-                qdd[5],
-                acc[1]
-            );
+            assert!(rel(qdd[2], acc[0], 10.0) < 1e-12, "{be:?} {} vs {}", qdd[2], acc[0]);
+            assert!(rel(qdd[5], acc[1], 10.0) < 1e-12, "{be:?} {} vs {}", qdd[5], acc[1]);
         }
     }
 }
@@ -123,11 +102,7 @@ fn rod_and_disk_matches_closed_form() {
         let alpha = -G * l * (mr / 2.0 + md) * th.cos() / (mr * l * l / 3.0 + md * l * l);
         for be in BACKENDS {
             let (qdd, _) = solve(&mech, be);
-            assert!(
-                rel(qdd[2], alpha, G) < 1e-12,
-                "{be:?} {} vs {alpha}",
-                qdd[2]
-            );
+            assert!(rel(qdd[2], alpha, G) < 1e-12, "{be:?} {} vs {alpha}", qdd[2]);
             assert!(qdd[5].abs() < 1e-12 * G, "disk α {}", qdd[5]);
             // Disk centre = rod tip: a = L(−sθ α − cθ ω², cθ α − sθ ω²).
             let (s, c) = th.sin_cos();
@@ -140,11 +115,7 @@ fn rod_and_disk_matches_closed_form() {
 #[test]
 fn four_bar_with_crank_torque_matches_minimal_coordinate_derivation() {
     let fb = FourBar::ANCHOR;
-    for &(phi, phi_dot, tau) in &[
-        (std::f64::consts::PI, 0.0, 0.0),
-        (2.5, 1.5, 20.0),
-        (4.0, -2.0, -5.0),
-    ] {
+    for &(phi, phi_dot, tau) in &[(std::f64::consts::PI, 0.0, 0.0), (2.5, 1.5, 20.0), (4.0, -2.0, -5.0)] {
         let mech = mechanisms::four_bar(phi, phi_dot, tau, false);
         let alpha = fb.crank_acceleration(phi, phi_dot, tau);
         let expected = fb.accelerations(phi, phi_dot, alpha);

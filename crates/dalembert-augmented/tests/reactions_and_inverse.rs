@@ -11,15 +11,8 @@ fn forward(mech: &Mechanism) -> (Vec<f64>, Vec<f64>, Vec<Reaction>) {
     let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();
     let (n, m) = (mech.q.len(), mech.model.num_equations());
     let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
-    f.accelerations(
-        0.0,
-        &mech.q,
-        &mech.qd,
-        Stabilization::None,
-        &mut qdd,
-        &mut lam,
-    )
-    .unwrap();
+    f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+        .unwrap();
     let sys = mech.model.constraints();
     let mut vals = sys.values();
     sys.evaluate(0.0, &mech.q, &mech.qd, &mut vals);
@@ -82,11 +75,9 @@ fn two_link_inverse_dynamics_matches_closed_form_torques() {
     let p1 = vec![0.3, 1.2, -0.5, 0.1];
     let p2 = vec![0.9, -0.7, 0.8];
     let mech = mechanisms::driven_two_link(m, l, p1.clone(), p2.clone());
-    let inv =
-        InverseDynamics::new(mech.model.clone(), &mech.q, KinematicOptions::default()).unwrap();
+    let inv = InverseDynamics::new(mech.model.clone(), &mech.q, KinematicOptions::default()).unwrap();
     let dp = DoublePendulum { m, l };
-    let poly =
-        |c: &[f64], t: f64| dalembert_kinematics::TimeFunction::Polynomial(c.to_vec()).eval(t);
+    let poly = |c: &[f64], t: f64| dalembert_kinematics::TimeFunction::Polynomial(c.to_vec()).eval(t);
     let mut q = mech.q.clone();
     for k in 0..=20 {
         let t = 0.1 * k as f64;
@@ -97,10 +88,7 @@ fn two_link_inverse_dynamics_matches_closed_form_torques() {
         let w = [a[1], a[1] + b[1]];
         let acc = [a[2], a[2] + b[2]];
         let tau = dp.joint_torques(th, w, acc);
-        let efforts = [
-            sol.reactions[2].effort.unwrap(),
-            sol.reactions[3].effort.unwrap(),
-        ];
+        let efforts = [sol.reactions[2].effort.unwrap(), sol.reactions[3].effort.unwrap()];
         for j in 0..2 {
             assert!(
                 (efforts[j] - tau[j]).abs() < 1e-10 * (1.0 + tau[j].abs()),
@@ -152,7 +140,6 @@ fn four_bar_inverse_dynamics_power_balance() {
 #[test]
 fn inverse_dynamics_refuses_an_underdriven_model() {
     let mech = mechanisms::four_bar(3.0, 0.0, 0.0, false);
-    let err =
-        InverseDynamics::new(mech.model.clone(), &mech.q, KinematicOptions::default()).unwrap_err();
+    let err = InverseDynamics::new(mech.model.clone(), &mech.q, KinematicOptions::default()).unwrap_err();
     assert!(err.to_string().contains("1 degrees of freedom"), "{err}");
 }

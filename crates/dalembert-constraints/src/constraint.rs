@@ -73,3 +73,31 @@ pub trait Constraint: Send + Sync + std::fmt::Debug {
         Ok(())
     }
 }
+
+/// A shared constraint is a constraint: lets one definition be used in several systems.
+impl<C: Constraint + ?Sized> Constraint for std::sync::Arc<C> {
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+    fn bodies(&self) -> [BodyRef; 2] {
+        (**self).bodies()
+    }
+    fn num_equations(&self) -> usize {
+        (**self).num_equations()
+    }
+    fn role(&self) -> ConstraintRole {
+        (**self).role()
+    }
+    fn equation_label(&self, k: usize) -> &'static str {
+        (**self).equation_label(k)
+    }
+    fn evaluate(&self, t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
+        (**self).evaluate(t, first, second, out)
+    }
+    fn reaction_point(&self, first: &BodyState, second: &BodyState) -> Vec2 {
+        (**self).reaction_point(first, second)
+    }
+    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+        (**self).validate()
+    }
+}

@@ -24,10 +24,7 @@ impl fmt::Display for EquationRef {
 }
 
 fn list(eqs: &[EquationRef]) -> String {
-    eqs.iter()
-        .map(|e| e.to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
+    eqs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
 }
 
 fn list_violated(v: &[(EquationRef, f64)]) -> String {

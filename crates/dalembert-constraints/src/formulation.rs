@@ -134,10 +134,7 @@ pub enum DynamicsError {
 }
 
 fn list(eqs: &[EquationRef]) -> String {
-    eqs.iter()
-        .map(|e| e.to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
+    eqs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
 }
 
 /// Counters a formulation keeps (cumulative since construction).
@@ -187,13 +184,7 @@ pub trait Formulation {
 
     /// Projects `q` onto `C(q, t) = 0` (Newton, to `tolerance`) and then `q̇` onto
     /// `C_q q̇ + C_t = 0`, each with the least mass-weighted change. Returns the Newton iterations.
-    fn project(
-        &mut self,
-        t: f64,
-        q: &mut [f64],
-        qd: &mut [f64],
-        tolerance: f64,
-    ) -> Result<usize, DynamicsError>;
+    fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError>;
 
     /// Cumulative counters.
     fn stats(&self) -> FormulationStats;

@@ -93,24 +93,14 @@ impl ConstraintSystem {
         let mut res = vec![0.0; m];
         self.jacobian_mul(values, delta, &mut res);
         let scale = inf_norm(rhs).max(1e-300);
-        let worst = res
-            .iter()
-            .zip(rhs)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let worst = res.iter().zip(rhs).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         if rank < m && worst > opts.consistency_tolerance * scale.max(1.0) {
             return Err((rank, order));
         }
         Ok(worst)
     }
 
-    fn singular(
-        &self,
-        t: f64,
-        values: &ConstraintValues,
-        rank: usize,
-        opts: &KinematicOptions,
-    ) -> ConstraintError {
+    fn singular(&self, t: f64, values: &ConstraintValues, rank: usize, opts: &KinematicOptions) -> ConstraintError {
         ConstraintError::Singular {
             time: t,
             rank,
@@ -211,9 +201,7 @@ impl ConstraintSystem {
         self.evaluate(t, q, qd, &mut values);
         let mut rhs = vec![0.0; self.num_equations()];
         self.jacobian_mul(&values, qdd, &mut rhs);
-        rhs.iter_mut()
-            .zip(&values.gamma)
-            .for_each(|(r, g)| *r = g - *r);
+        rhs.iter_mut().zip(&values.gamma).for_each(|(r, g)| *r = g - *r);
         let mut delta = vec![0.0; q.len()];
         self.min_norm_step(&values, &rhs, &mut delta, opts)
             .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;

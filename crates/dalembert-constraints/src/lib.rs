@@ -33,9 +33,7 @@ pub mod system;
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
 pub use error::{ConstraintError, EquationRef};
-pub use formulation::{
-    DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment, Stabilization,
-};
+pub use formulation::{DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment, Stabilization};
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use model::Model;

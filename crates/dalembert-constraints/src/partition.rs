@@ -32,11 +32,7 @@ pub struct Partition {
 impl Partition {
     /// Chooses the partition by LU with full pivoting of `C_q` (rows) and of the selected rows'
     /// columns: the pivot columns become the dependent coordinates.
-    pub fn choose(
-        sys: &ConstraintSystem,
-        values: &ConstraintValues,
-        rank_tolerance: f64,
-    ) -> Partition {
+    pub fn choose(sys: &ConstraintSystem, values: &ConstraintValues, rank_tolerance: f64) -> Partition {
         let jac = sys.jacobian_dense(values);
         let n = jac.ncols();
         // Independent rows: pivot columns of C_qᵀ.
@@ -78,18 +74,11 @@ pub struct VelocityTransform {
 impl VelocityTransform {
     /// Computes `B_i` and `γ_i` for the acceleration right-hand side `rhs` (length `m`: `Q_d`, or
     /// its Baumgarte-modified form). Returns `None` if `C_qd` is singular.
-    pub fn new(
-        partition: &Partition,
-        sys: &ConstraintSystem,
-        values: &ConstraintValues,
-        rhs: &[f64],
-    ) -> Option<Self> {
+    pub fn new(partition: &Partition, sys: &ConstraintSystem, values: &ConstraintValues, rhs: &[f64]) -> Option<Self> {
         let jac = sys.jacobian_dense(values);
         let n = jac.ncols();
         let r = partition.rows.len();
-        let cqd = Mat::from_fn(r, r, |i, j| {
-            jac[(partition.rows[i], partition.dependent[j])]
-        });
+        let cqd = Mat::from_fn(r, r, |i, j| jac[(partition.rows[i], partition.dependent[j])]);
         let lu = cqd.partial_piv_lu();
         let u = lu.U();
         let (mut big, mut small) = (0.0f64, f64::INFINITY);
@@ -102,9 +91,7 @@ impl VelocityTransform {
             return None;
         }
         let ni = partition.independent.len();
-        let cqi = Mat::from_fn(r, ni, |i, j| {
-            jac[(partition.rows[i], partition.independent[j])]
-        });
+        let cqi = Mat::from_fn(r, ni, |i, j| jac[(partition.rows[i], partition.independent[j])]);
         let x = lu.solve(&cqi);
         let mut b = Mat::zeros(n, ni);
         for (k, &dep) in partition.dependent.iter().enumerate() {

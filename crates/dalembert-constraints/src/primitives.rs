@@ -78,13 +78,7 @@ pub fn point_coincidence(first: &BodyState, u_i: Vec2, second: &BodyState, u_j: 
 /// ```
 ///
 /// The returned row has `first` = the line body and `second` = the other body.
-pub fn line_coordinate(
-    line: &BodyState,
-    u_l: Vec2,
-    w_local: Vec2,
-    other: &BodyState,
-    u_o: Vec2,
-) -> Row {
+pub fn line_coordinate(line: &BodyState, u_l: Vec2, w_local: Vec2, other: &BodyState, u_o: Vec2) -> Row {
     let pl = PointState::new(line, u_l);
     let po = PointState::new(other, u_o);
     let w = rotation(line.angle) * w_local;

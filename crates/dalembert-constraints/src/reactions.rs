@@ -36,13 +36,7 @@ impl Reaction {
 impl ConstraintSystem {
     /// Reactions of every constraint for multipliers `lambda` at configuration `q`, into `out`
     /// (length: number of constraints). `values` must hold the Jacobian at `q`.
-    pub fn reactions(
-        &self,
-        q: &[f64],
-        values: &ConstraintValues,
-        lambda: &[f64],
-        out: &mut [Reaction],
-    ) {
+    pub fn reactions(&self, q: &[f64], values: &ConstraintValues, lambda: &[f64], out: &mut [Reaction]) {
         for (k, c) in self.constraints().iter().enumerate() {
             let [a, b] = c.bodies();
             let sa = BodyState::of(a, q, &[]);
@@ -87,11 +81,7 @@ impl ConstraintSystem {
 impl ConstraintSystem {
     /// The minimum-norm multipliers `λ = (C_qᵀ)⁺ f` for a generalized constraint force `f` in the
     /// range of `C_qᵀ` (dense SVD; for redundant constraints, one admissible distribution).
-    pub fn minimum_norm_multipliers(
-        &self,
-        values: &ConstraintValues,
-        f: &[f64],
-    ) -> Option<Vec<f64>> {
+    pub fn minimum_norm_multipliers(&self, values: &ConstraintValues, f: &[f64]) -> Option<Vec<f64>> {
         let jt = self.jacobian_dense(values).transpose().to_owned();
         let pinv = jt.svd().ok()?.pseudoinverse();
         let fm = faer::Mat::from_fn(f.len(), 1, |i, _| f[i]);

@@ -54,11 +54,7 @@ pub fn column_rank(a: faer::MatRef<'_, f64>, rank_tolerance: f64) -> (usize, Vec
 
 impl ConstraintSystem {
     /// Rank, degrees of freedom and redundant equations of `C_q` held in `values`.
-    pub fn analyse_structure(
-        &self,
-        values: &ConstraintValues,
-        rank_tolerance: f64,
-    ) -> StructureReport {
+    pub fn analyse_structure(&self, values: &ConstraintValues, rank_tolerance: f64) -> StructureReport {
         let n = self.num_coordinates();
         let m = self.num_equations();
         let jt = self.jacobian_dense(values).transpose().to_owned();
@@ -73,21 +69,14 @@ impl ConstraintSystem {
             rank,
             degrees_of_freedom: n - rank,
             independent_rows,
-            redundant: redundant_rows
-                .into_iter()
-                .map(|r| self.equation(r))
-                .collect(),
+            redundant: redundant_rows.into_iter().map(|r| self.equation(r)).collect(),
         }
     }
 
     /// Equations involved in a rank loss: the rows with a significant component in the left null
     /// space of `C_q` (from an SVD; systems above 600 equations fall back to the redundant set of
     /// [`ConstraintSystem::analyse_structure`]).
-    pub fn dependent_equations(
-        &self,
-        values: &ConstraintValues,
-        rank_tolerance: f64,
-    ) -> Vec<EquationRef> {
+    pub fn dependent_equations(&self, values: &ConstraintValues, rank_tolerance: f64) -> Vec<EquationRef> {
         let m = self.num_equations();
         if m > 600 {
             return self.analyse_structure(values, rank_tolerance).redundant;
@@ -98,9 +87,7 @@ impl ConstraintSystem {
         };
         let s = svd.S().column_vector();
         let largest = (0..s.nrows()).map(|i| s[i]).fold(0.0, f64::max);
-        let rank = (0..s.nrows())
-            .filter(|&i| s[i] > rank_tolerance * largest)
-            .count();
+        let rank = (0..s.nrows()).filter(|&i| s[i] > rank_tolerance * largest).count();
         let u = svd.U();
         (0..m)
             .filter(|&r| (rank..m).any(|j| u[(r, j)].abs() > 1e-6))

@@ -32,10 +32,7 @@ pub struct ConstraintValues {
 
 impl ConstraintSystem {
     /// Builds the system for `bodies` moving bodies; validates every constraint.
-    pub fn new(
-        bodies: usize,
-        constraints: Vec<Box<dyn Constraint>>,
-    ) -> Result<Self, ConstraintError> {
+    pub fn new(bodies: usize, constraints: Vec<Box<dyn Constraint>>) -> Result<Self, ConstraintError> {
         let mut row_offsets = vec![0];
         let mut entry_offsets = vec![0];
         let mut pattern = Vec::new();
@@ -51,11 +48,7 @@ impl ConstraintSystem {
                 return Err(ConstraintError::SameBody { name });
             }
             for body in [a, b] {
-                dalembert_kinematics::forces::check_body(
-                    &format!("constraint '{name}'"),
-                    body,
-                    bodies,
-                )?;
+                dalembert_kinematics::forces::check_body(&format!("constraint '{name}'"), body, bodies)?;
             }
             let r0 = *row_offsets.last().unwrap_or(&0);
             for body in [a, b] {
@@ -187,13 +180,7 @@ impl ConstraintSystem {
     }
 
     /// `y ← y + α C_qᵀ λ`.
-    pub fn jacobian_transpose_mul_add(
-        &self,
-        values: &ConstraintValues,
-        alpha: f64,
-        lambda: &[f64],
-        y: &mut [f64],
-    ) {
+    pub fn jacobian_transpose_mul_add(&self, values: &ConstraintValues, alpha: f64, lambda: &[f64], y: &mut [f64]) {
         for (&(r, c), &v) in self.pattern.iter().zip(&values.jacobian) {
             y[c] += alpha * v * lambda[r];
         }

@@ -106,13 +106,7 @@ fn constraints(first: BodyRef, p: &[f64; 8]) -> Vec<Box<dyn Constraint>> {
     ]
 }
 
-fn check(
-    sys: &ConstraintSystem,
-    t: f64,
-    q: &[f64],
-    v: &[f64],
-    a: &[f64],
-) -> Result<(), TestCaseError> {
+fn check(sys: &ConstraintSystem, t: f64, q: &[f64], v: &[f64], a: &[f64]) -> Result<(), TestCaseError> {
     let m = sys.num_equations();
     let n = q.len();
     let mut vals = sys.values();
@@ -152,9 +146,7 @@ fn check(
     // Q_d from the derivative of the exact velocity residual along a trajectory.
     let hs = 1e-5;
     let cdot = |s: f64| -> Vec<f64> {
-        let qs: Vec<f64> = (0..n)
-            .map(|k| q[k] + v[k] * s + 0.5 * a[k] * s * s)
-            .collect();
+        let qs: Vec<f64> = (0..n).map(|k| q[k] + v[k] * s + 0.5 * a[k] * s * s).collect();
         let vs: Vec<f64> = (0..n).map(|k| v[k] + a[k] * s).collect();
         let mut vv = sys.values();
         sys.evaluate(t + s, &qs, &vs, &mut vv);
@@ -208,11 +200,7 @@ fn bad_constraints_are_rejected_by_name() {
     let same = Revolute::new("self-pin", [b(0), b(0)], [Vec2::zeros(), Vec2::zeros()]);
     let err = ConstraintSystem::new(1, vec![Box::new(same)]).unwrap_err();
     assert!(err.to_string().contains("self-pin"), "{err}");
-    let missing = Revolute::new(
-        "far",
-        [BodyRef::Ground, b(5)],
-        [Vec2::zeros(), Vec2::zeros()],
-    );
+    let missing = Revolute::new("far", [BodyRef::Ground, b(5)], [Vec2::zeros(), Vec2::zeros()]);
     let err = ConstraintSystem::new(2, vec![Box::new(missing)]).unwrap_err();
     assert!(err.to_string().contains("far"), "{err}");
     let zero_axis = Prismatic {

@@ -45,12 +45,7 @@ fn slider_crank(
             rate: omega,
         },
     );
-    let mut all: Vec<Box<dyn Constraint>> = vec![
-        Box::new(o),
-        Box::new(pin_b),
-        Box::new(pin_c),
-        Box::new(guide),
-    ];
+    let mut all: Vec<Box<dyn Constraint>> = vec![Box::new(o), Box::new(pin_b), Box::new(pin_c), Box::new(guide)];
     // The crank motor, or another driver in its place.
     all.push(extra.unwrap_or(Box::new(motor)));
     (ConstraintSystem::new(3, all).unwrap(), q)
@@ -79,8 +74,7 @@ fn slider_crank_matches_closed_form() {
         let mut qd = vec![0.0; 9];
         sys.solve_velocities(t, &q, &mut qd, &opts).unwrap();
         let mut qdd = vec![0.0; 9];
-        sys.solve_accelerations(t, &q, &qd, &mut qdd, &opts)
-            .unwrap();
+        sys.solve_accelerations(t, &q, &qd, &mut qdd, &opts).unwrap();
 
         let phi = phi0 + omega * t;
         let (s, c) = phi.sin_cos();
@@ -267,8 +261,7 @@ fn parallelogram_with_redundant_bar_reports_dof_and_redundant_equation() {
     let mut qd = vec![0.0; 12];
     sys.solve_velocities(0.0, &q, &mut qd, &opts).unwrap();
     let mut qdd = vec![0.0; 12];
-    sys.solve_accelerations(0.0, &q, &qd, &mut qdd, &opts)
-        .unwrap();
+    sys.solve_accelerations(0.0, &q, &qd, &mut qdd, &opts).unwrap();
     for k in [2, 8, 11] {
         assert!((qd[k] - 2.0).abs() < 1e-12, "crank ω {}", qd[k]);
         assert!(qdd[k].abs() < 1e-10, "crank α {}", qdd[k]);

@@ -20,8 +20,8 @@
 
 use dalembert_constraints::partition::Repartition;
 use dalembert_constraints::{
-    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, PartitionTracker,
-    RedundancyTreatment, Stabilization,
+    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, PartitionTracker, RedundancyTreatment,
+    Stabilization,
 };
 use dalembert_kinematics::MassMatrix;
 use faer::linalg::solvers::Solve;
@@ -144,9 +144,7 @@ impl Embedding {
         }
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
-        self.model
-            .constraints()
-            .evaluate(t, q, qd, &mut self.values);
+        self.model.constraints().evaluate(t, q, qd, &mut self.values);
         Ok(())
     }
 }
@@ -185,12 +183,7 @@ impl Formulation for Embedding {
         if stabilization != Stabilization::None {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }
-        stabilization.apply(
-            &self.values.gamma,
-            &self.values.c,
-            &self.cdot,
-            &mut self.rhs,
-        );
+        stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
         let (partition, vt) = match self.tracker.transform(t, sys, &self.values, &self.rhs) {
             Some((p, vt)) => (p.clone(), vt),
@@ -280,12 +273,12 @@ impl Formulation for Embedding {
         if redundant {
             let mut f = vec![0.0; n];
             sys.jacobian_transpose_mul_add(&self.values, 1.0, lambda, &mut f);
-            let mn = sys.minimum_norm_multipliers(&self.values, &f).ok_or(
-                DynamicsError::Factorization {
+            let mn = sys
+                .minimum_norm_multipliers(&self.values, &f)
+                .ok_or(DynamicsError::Factorization {
                     time: t,
                     what: "SVD of C_qᵀ failed".into(),
-                },
-            )?;
+                })?;
             lambda.copy_from_slice(&mn);
         }
         if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
@@ -304,22 +297,11 @@ impl Formulation for Embedding {
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
     /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation.
-    fn project(
-        &mut self,
-        t: f64,
-        q: &mut [f64],
-        qd: &mut [f64],
-        tolerance: f64,
-    ) -> Result<usize, DynamicsError> {
+    fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
         let before = self.tracker.log.len();
-        let it = self.tracker.project(
-            t,
-            self.model.constraints(),
-            &mut self.values,
-            q,
-            qd,
-            tolerance,
-        )?;
+        let it = self
+            .tracker
+            .project(t, self.model.constraints(), &mut self.values, q, qd, tolerance)?;
         self.stats.repartitions += (self.tracker.log.len() - before) as u64;
         self.stats.newton_iterations += it as u64;
         Ok(it)

@@ -113,15 +113,7 @@ impl Dopri5 {
     ) -> Result<Attempt, DynamicsError> {
         let len = y.len();
         if !self.fsal_valid {
-            derivative(
-                f,
-                t,
-                y,
-                stab,
-                &mut self.qdd,
-                &mut self.lambda,
-                &mut self.k[0],
-            )?;
+            derivative(f, t, y, stab, &mut self.qdd, &mut self.lambda, &mut self.k[0])?;
             self.fsal_valid = true;
         }
         for s in 1..7 {

@@ -2,10 +2,7 @@
 
 use crate::dopri5::Dopri5;
 use crate::explicit::{rk4_step, symplectic_euler_step, FixedWork};
-use crate::{
-    ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method,
-    Statistics,
-};
+use crate::{ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method, Statistics};
 use dalembert_constraints::{DynamicsError, Formulation, FormulationStats};
 use std::time::{Duration, Instant};
 

@@ -73,11 +73,7 @@ pub(crate) fn rk4_step<F: Formulation + ?Sized>(
     stab: Stabilization,
 ) -> Result<(), DynamicsError> {
     let FixedWork {
-        k,
-        y_tmp,
-        qdd,
-        lambda,
-        ..
+        k, y_tmp, qdd, lambda, ..
     } = w;
     let [k1, k2, k3, k4] = k;
     derivative(f, t, y, stab, qdd, lambda, k1)?;

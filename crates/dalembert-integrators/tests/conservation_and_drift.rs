@@ -6,9 +6,7 @@ use common::run;
 
 use dalembert_augmented::Augmented;
 use dalembert_constraints::{Constraint, Model, Prismatic, Stabilization};
-use dalembert_integrators::{
-    integrate, ConstraintTreatment, IntegrationError, IntegratorOptions, Method,
-};
+use dalembert_integrators::{integrate, ConstraintTreatment, IntegrationError, IntegratorOptions, Method};
 use dalembert_kinematics::{Body, BodyId, BodyRef, SpringDamper, Vec2};
 use dalembert_testkit::closed_form::pendulum_angle;
 use dalembert_testkit::mechanisms::{self, G};
@@ -144,10 +142,7 @@ fn explicit_step_beyond_stability_limit_is_an_error() {
         },
     )
     .unwrap_err();
-    assert!(
-        matches!(err.error, IntegrationError::Diverged { .. }),
-        "{err}"
-    );
+    assert!(matches!(err.error, IntegrationError::Diverged { .. }), "{err}");
     assert!(all_finite);
     assert!(err.statistics.steps > 0);
     // A step well inside the limit (hω = 0.1) runs; RK4 then loses ≈ (hω)⁶/144 ≈ 7e-9 of the
@@ -162,9 +157,5 @@ fn explicit_step_beyond_stability_limit_is_an_error() {
         &mut |_| {},
     )
     .unwrap();
-    assert!(
-        ok.max_energy_change < 1e-4 * 50.0,
-        "{}",
-        ok.max_energy_change
-    );
+    assert!(ok.max_energy_change < 1e-4 * 50.0, "{}", ok.max_energy_change);
 }

@@ -25,12 +25,7 @@ fn mech() -> dalembert_testkit::Mechanism {
 }
 
 fn reference() -> Vec<f64> {
-    let (q, qd, _) = run(
-        &mech(),
-        1.0,
-        &IntegratorOptions::fixed(Method::Rk4, 1.0 / 8000.0, 1.0),
-    )
-    .unwrap();
+    let (q, qd, _) = run(&mech(), 1.0, &IntegratorOptions::fixed(Method::Rk4, 1.0 / 8000.0, 1.0)).unwrap();
     [q, qd].concat()
 }
 
@@ -68,10 +63,7 @@ fn fixed_step_methods_converge_at_their_order() {
         &[1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0],
         &reference,
     );
-    assert!(
-        (p_rk4 - 4.0).abs() <= 0.3,
-        "RK4 slope {p_rk4} (errors {e4:?})"
-    );
+    assert!((p_rk4 - 4.0).abs() <= 0.3, "RK4 slope {p_rk4} (errors {e4:?})");
 }
 
 /// Dormand–Prince: the error at t = 1 s follows the tolerance (within a factor 100 of rtol for the
@@ -81,21 +73,11 @@ fn dormand_prince_meets_its_tolerance() {
     let reference = reference();
     let mut last = f64::INFINITY;
     for &tol in &[1e-6, 1e-9] {
-        let opts = IntegratorOptions::fixed(
-            Method::DormandPrince {
-                rtol: tol,
-                atol: tol,
-            },
-            1e-3,
-            0.1,
-        );
+        let opts = IntegratorOptions::fixed(Method::DormandPrince { rtol: tol, atol: tol }, 1e-3, 0.1);
         let (q, qd, stats) = run(&mech(), 1.0, &opts).unwrap();
         let err = max_diff(&[q, qd].concat(), &reference);
         assert!(err < 100.0 * tol, "tol {tol}: error {err}");
-        assert!(
-            err < last / 10.0,
-            "tol {tol}: error {err} did not shrink from {last}"
-        );
+        assert!(err < last / 10.0, "tol {tol}: error {err} did not shrink from {last}");
         assert!(stats.steps > 5 && stats.evaluations >= 6 * stats.steps);
         last = err;
     }
@@ -117,14 +99,7 @@ fn dormand_prince_dense_output_is_accurate() {
     };
     let coarse = collect(IntegratorOptions {
         max_step: 0.5,
-        ..IntegratorOptions::fixed(
-            Method::DormandPrince {
-                rtol: 1e-8,
-                atol: 1e-8,
-            },
-            1e-2,
-            0.01,
-        )
+        ..IntegratorOptions::fixed(Method::DormandPrince { rtol: 1e-8, atol: 1e-8 }, 1e-2, 0.01)
     });
     let fine = collect(IntegratorOptions::fixed(Method::Rk4, 1e-4, 0.01));
     assert_eq!(coarse.len(), fine.len());

@@ -25,9 +25,7 @@ pub struct MassMatrix {
 impl MassMatrix {
     /// Builds the blocks for `bodies` at the angles in `q` (angles only matter for offset centres of mass).
     pub fn new(bodies: &[Body], q: &[f64]) -> Self {
-        let configuration_dependent = bodies
-            .iter()
-            .any(|b| b.center_of_mass != crate::Vec2::zeros());
+        let configuration_dependent = bodies.iter().any(|b| b.center_of_mass != crate::Vec2::zeros());
         let mut m = MassMatrix {
             blocks: vec![Matrix3::zeros(); bodies.len()],
             configuration_dependent,
@@ -42,17 +40,7 @@ impl MassMatrix {
     pub fn block(b: &Body, theta: f64) -> Matrix3<f64> {
         let m = b.mass;
         let cp = perp(rotation(theta) * b.center_of_mass) * m;
-        Matrix3::new(
-            m,
-            0.0,
-            cp.x,
-            0.0,
-            m,
-            cp.y,
-            cp.x,
-            cp.y,
-            b.inertia_about_reference(),
-        )
+        Matrix3::new(m, 0.0, cp.x, 0.0, m, cp.y, cp.x, cp.y, b.inertia_about_reference())
     }
 
     /// Refreshes the blocks for a new configuration. Free when every body's reference point is its
@@ -88,8 +76,7 @@ impl MassMatrix {
         for (i, b) in self.blocks.iter().enumerate() {
             let k = 3 * i;
             for r in 0..3 {
-                y[k + r] +=
-                    alpha * (b[(r, 0)] * x[k] + b[(r, 1)] * x[k + 1] + b[(r, 2)] * x[k + 2]);
+                y[k + r] += alpha * (b[(r, 0)] * x[k] + b[(r, 1)] * x[k + 1] + b[(r, 2)] * x[k + 2]);
             }
         }
     }

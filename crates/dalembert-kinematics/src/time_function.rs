@@ -59,10 +59,7 @@ impl fmt::Debug for TimeFunction {
                 frequency,
                 phase,
             } => {
-                write!(
-                    f,
-                    "Harmonic({offset} + {amplitude} sin(2π {frequency} t + {phase}))"
-                )
+                write!(f, "Harmonic({offset} + {amplitude} sin(2π {frequency} t + {phase}))")
             }
             TimeFunction::SmoothStep { t0, t1, from, to } => {
                 write!(f, "SmoothStep({from} at {t0} → {to} at {t1})")
@@ -107,11 +104,7 @@ impl TimeFunction {
             } => {
                 let w = 2.0 * std::f64::consts::PI * frequency;
                 let (s, c) = (w * t + phase).sin_cos();
-                [
-                    offset + amplitude * s,
-                    amplitude * w * c,
-                    -amplitude * w * w * s,
-                ]
+                [offset + amplitude * s, amplitude * w * c, -amplitude * w * w * s]
             }
             TimeFunction::SmoothStep { t0, t1, from, to } => {
                 let d = t1 - t0;
@@ -186,17 +179,13 @@ impl TimeFunction {
             TimeFunction::Linear { initial, rate } if !finite(&[*initial, *rate]) => {
                 bad("linear function parameters must be finite")
             }
-            TimeFunction::Polynomial(c) if !finite(c) => {
-                bad("polynomial coefficients must be finite")
-            }
+            TimeFunction::Polynomial(c) if !finite(c) => bad("polynomial coefficients must be finite"),
             TimeFunction::Harmonic {
                 offset,
                 amplitude,
                 frequency,
                 phase,
-            } if !finite(&[*offset, *amplitude, *frequency, *phase]) => {
-                bad("harmonic parameters must be finite")
-            }
+            } if !finite(&[*offset, *amplitude, *frequency, *phase]) => bad("harmonic parameters must be finite"),
             TimeFunction::SmoothStep { t0, t1, from, to } => {
                 if !finite(&[*t0, *t1, *from, *to]) {
                     bad("smooth-step parameters must be finite")

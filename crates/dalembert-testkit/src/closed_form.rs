@@ -30,8 +30,7 @@ impl DoublePendulum {
         let m11 = m1 * l1 * l1 / 4.0 + j1 + m2 * l1 * l1;
         let m22 = m2 * l2 * l2 / 4.0 + j2;
         let m12 = k * d.cos();
-        let h1 =
-            -G * (m1 * l1 / 2.0 + m2 * l1) * th[0].cos() - k * d.sin() * w[1] * w[1] + q_ext[0];
+        let h1 = -G * (m1 * l1 / 2.0 + m2 * l1) * th[0].cos() - k * d.sin() * w[1] * w[1] + q_ext[0];
         let h2 = -G * m2 * l2 / 2.0 * th[1].cos() + k * d.sin() * w[0] * w[0] + q_ext[1];
         ([[m11, m12], [m12, m22]], [h1, h2])
     }
@@ -86,12 +85,7 @@ impl FourBar {
 
     /// Body coordinates `[x, y, θ]` of crank, coupler, rocker (centres of mass) as jets in φ.
     pub fn coordinates(&self, phi: Jet) -> [Jet; 9] {
-        let (a, b, c, d) = (
-            Jet::c(self.a),
-            Jet::c(self.b),
-            Jet::c(self.c),
-            Jet::c(self.d),
-        );
+        let (a, b, c, d) = (Jet::c(self.a), Jet::c(self.b), Jet::c(self.c), Jet::c(self.d));
         let bx = a * phi.cos();
         let by = a * phi.sin();
         let (ex, ey) = (d - bx, -by);

@@ -18,19 +18,11 @@ pub struct Jet {
 impl Jet {
     /// The independent variable at `x`.
     pub fn var(x: f64) -> Jet {
-        Jet {
-            v: x,
-            d: 1.0,
-            dd: 0.0,
-        }
+        Jet { v: x, d: 1.0, dd: 0.0 }
     }
     /// A constant.
     pub fn c(x: f64) -> Jet {
-        Jet {
-            v: x,
-            d: 0.0,
-            dd: 0.0,
-        }
+        Jet { v: x, d: 0.0, dd: 0.0 }
     }
     /// Applies `g` with derivatives `g0, g1, g2` at `self.v` (chain rule to second order).
     fn chain(self, g0: f64, g1: f64, g2: f64) -> Jet {

@@ -4,6 +4,7 @@
 //! Every builder returns a [`Mechanism`]: the model and a consistent initial state.
 
 pub mod closed_form;
+pub mod generator;
 pub mod jet;
 pub mod mechanisms;
 

@@ -1,9 +1,7 @@
 //! Builders of reference mechanisms. Angles are absolute, from the global +x axis; gravity −y.
 
 use dalembert_constraints::{Constraint, JointAngle, Model, Prismatic, Revolute};
-use dalembert_kinematics::{
-    Body, BodyId, BodyRef, ForceElement, Gravity, TimeFunction, Torque, Vec2,
-};
+use dalembert_kinematics::{Body, BodyId, BodyRef, ForceElement, Gravity, TimeFunction, Torque, Vec2};
 use std::sync::Arc;
 
 /// Standard gravity used by every reference mechanism (m/s²).
@@ -59,11 +57,7 @@ pub fn chain(m: f64, l: f64, angles: &[f64], rates: &[f64], torques: &[f64]) -> 
     let mut joints: Vec<Box<dyn Constraint>> = Vec::new();
     for k in 0..n {
         let first = if k == 0 { BodyRef::Ground } else { b(k - 1) };
-        let p_first = if k == 0 {
-            Vec2::zeros()
-        } else {
-            Vec2::new(l / 2.0, 0.0)
-        };
+        let p_first = if k == 0 { Vec2::zeros() } else { Vec2::new(l / 2.0, 0.0) };
         joints.push(Box::new(Revolute::new(
             format!("J{k}"),
             [first, b(k)],
@@ -89,12 +83,7 @@ pub fn chain(m: f64, l: f64, angles: &[f64], rates: &[f64], torques: &[f64]) -> 
 
 /// Two-link arm whose joint angles are prescribed: `θ₁(t)` absolute for the first link and
 /// `θ₂(t)` relative (second link to first), as polynomials `coefficients` in `t`.
-pub fn driven_two_link(
-    m: [f64; 2],
-    l: [f64; 2],
-    theta1: Vec<f64>,
-    theta2_rel: Vec<f64>,
-) -> Mechanism {
+pub fn driven_two_link(m: [f64; 2], l: [f64; 2], theta1: Vec<f64>, theta2_rel: Vec<f64>) -> Mechanism {
     let th1 = TimeFunction::Polynomial(theta1.clone()).eval(0.0);
     let th2 = TimeFunction::Polynomial(theta2_rel.clone()).eval(0.0);
     let (x1, v1) = rod_from_pin(Vec2::zeros(), Vec2::zeros(), l[0], th1[0], th1[1]);
@@ -118,8 +107,7 @@ pub fn driven_two_link(
     );
     let d0 = JointAngle::on("motor0", &j0, TimeFunction::Polynomial(theta1));
     let d1 = JointAngle::on("motor1", &j1, TimeFunction::Polynomial(theta2_rel));
-    let cons: Vec<Box<dyn Constraint>> =
-        vec![Box::new(j0), Box::new(j1), Box::new(d0), Box::new(d1)];
+    let cons: Vec<Box<dyn Constraint>> = vec![Box::new(j0), Box::new(j1), Box::new(d0), Box::new(d1)];
     let model = Arc::new(Model::new(bodies, vec![gravity()], cons).expect("valid arm"));
     Mechanism {
         model,
@@ -130,15 +118,7 @@ pub fn driven_two_link(
 
 /// Rod-and-disk: a uniform rod (mass `mr`, length `l`) pinned to the ground at one end, and a
 /// uniform disk (mass `md`, radius `r`) pinned at its centre to the rod's other end.
-pub fn rod_and_disk(
-    mr: f64,
-    l: f64,
-    md: f64,
-    r: f64,
-    theta: f64,
-    omega: f64,
-    disk_omega: f64,
-) -> Mechanism {
+pub fn rod_and_disk(mr: f64, l: f64, md: f64, r: f64, theta: f64, omega: f64, disk_omega: f64) -> Mechanism {
     let (x1, v1) = rod_from_pin(Vec2::zeros(), Vec2::zeros(), l, theta, omega);
     let (s, c) = theta.sin_cos();
     let tip = Vec2::new(c, s) * l;
@@ -321,12 +301,7 @@ pub fn slider_crank(phi: f64, phi_dot: f64) -> Mechanism {
 
 /// A double pendulum of two uniform rods with `dp`'s masses and lengths, absolute angles `th`,
 /// rates `w`, and joint torques `tau` (τ₁ ground→link 1, τ₂ link 1→link 2).
-pub fn double_pendulum(
-    dp: crate::closed_form::DoublePendulum,
-    th: [f64; 2],
-    w: [f64; 2],
-    tau: [f64; 2],
-) -> Mechanism {
+pub fn double_pendulum(dp: crate::closed_form::DoublePendulum, th: [f64; 2], w: [f64; 2], tau: [f64; 2]) -> Mechanism {
     let [l1, l2] = dp.l;
     let (s1, c1) = th[0].sin_cos();
     let (s2, c2) = th[1].sin_cos();

@@ -74,13 +74,8 @@ impl DenseKkt {
             largest = largest.max(p);
             smallest = smallest.min(p);
         }
-        if !(smallest.is_finite() && largest.is_finite())
-            || smallest <= self.pivot_tolerance * largest
-        {
-            return Err(SingularKkt(format!(
-                "LU pivot ratio {:.3e}",
-                smallest / largest
-            )));
+        if !(smallest.is_finite() && largest.is_finite()) || smallest <= self.pivot_tolerance * largest {
+            return Err(SingularKkt(format!("LU pivot ratio {:.3e}", smallest / largest)));
         }
         Ok(())
     }

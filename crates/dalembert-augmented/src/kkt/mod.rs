@@ -52,13 +52,7 @@ impl KktSolver {
 }
 
 /// `y = K x` computed from the blocks, without the assembled matrix (for residual checks).
-pub(crate) fn kkt_mul(
-    mass: &MassMatrix,
-    sys: &ConstraintSystem,
-    vals: &ConstraintValues,
-    x: &[f64],
-    y: &mut [f64],
-) {
+pub(crate) fn kkt_mul(mass: &MassMatrix, sys: &ConstraintSystem, vals: &ConstraintValues, x: &[f64], y: &mut [f64]) {
     let n = sys.num_coordinates();
     let (xt, xb) = x.split_at(n);
     let (yt, yb) = y.split_at_mut(n);

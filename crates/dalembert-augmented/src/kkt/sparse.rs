@@ -58,12 +58,7 @@ impl SparseKkt {
             row_idx.extend_from_slice(col);
             col_ptr.push(row_idx.len());
         }
-        let pos = |r: usize, c: usize| {
-            col_ptr[c]
-                + row_idx[col_ptr[c]..col_ptr[c + 1]]
-                    .binary_search(&r)
-                    .unwrap_or(0)
-        };
+        let pos = |r: usize, c: usize| col_ptr[c] + row_idx[col_ptr[c]..col_ptr[c + 1]].binary_search(&r).unwrap_or(0);
         let mass_map = (0..n / 3)
             .flat_map(|b| (0..9).map(move |k| (3 * b + k / 3, 3 * b + k % 3)))
             .map(|(r, c)| pos(r, c))
@@ -75,12 +70,9 @@ impl SparseKkt {
             .collect();
         let symbolic = {
             let s = SymbolicSparseColMatRef::new_checked(dim, dim, &col_ptr, None, &row_idx);
-            factorize_symbolic_lu(s, Default::default())
-                .map_err(|e| SingularKkt(format!("symbolic LU: {e:?}")))?
+            factorize_symbolic_lu(s, Default::default()).map_err(|e| SingularKkt(format!("symbolic LU: {e:?}")))?
         };
-        let factor_buf = MemBuffer::new(
-            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
-        );
+        let factor_buf = MemBuffer::new(symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()));
         let solve_buf = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         let values = vec![0.0; row_idx.len()];
         Ok(SparseKkt {
@@ -115,13 +107,7 @@ impl SparseKkt {
             self.values[p] += v;
             self.values[pt] += v;
         }
-        let s = SymbolicSparseColMatRef::new_checked(
-            self.dim,
-            self.dim,
-            &self.col_ptr,
-            None,
-            &self.row_idx,
-        );
+        let s = SymbolicSparseColMatRef::new_checked(self.dim, self.dim, &self.col_ptr, None, &self.row_idx);
         let a = SparseColMatRef::new(s, &self.values);
         self.symbolic
             .factorize_numeric_lu(
@@ -139,13 +125,10 @@ impl SparseKkt {
         }
         let mut probe = std::mem::take(&mut self.probe);
         self.solve(&mut probe);
-        let growth =
-            probe.iter().fold(0.0f64, |a, v| a.max(v.abs())) * super::kkt_scale(mass, vals);
+        let growth = probe.iter().fold(0.0f64, |a, v| a.max(v.abs())) * super::kkt_scale(mass, vals);
         self.probe = probe;
         if !(growth.is_finite() && growth * self.pivot_tolerance < 1.0) {
-            return Err(SingularKkt(format!(
-                "estimated condition number {growth:.3e}"
-            )));
+            return Err(SingularKkt(format!("estimated condition number {growth:.3e}")));
         }
         Ok(())
     }

@@ -45,10 +45,7 @@ impl Constraint for JointAngle {
         "angle"
     }
     fn evaluate(&self, t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
-        out.set_row(
-            0,
-            &relative_angle(first, second, 1.0).drive(self.function.eval(t)),
-        );
+        out.set_row(0, &relative_angle(first, second, 1.0).drive(self.function.eval(t)));
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         dalembert_kinematics::PointState::new(first, self.pin).position

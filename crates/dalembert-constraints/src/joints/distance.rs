@@ -19,13 +19,7 @@ pub struct Distance {
 impl Distance {
     /// A rod between global points `a` (on the first body) and `b` (on the second) of configuration
     /// `q`, with the length they have there.
-    pub fn between(
-        name: impl Into<String>,
-        bodies: [BodyRef; 2],
-        a: Vec2,
-        b: Vec2,
-        q: &[f64],
-    ) -> Self {
+    pub fn between(name: impl Into<String>, bodies: [BodyRef; 2], a: Vec2, b: Vec2, q: &[f64]) -> Self {
         Distance {
             name: name.into(),
             points: [
@@ -49,9 +43,7 @@ impl Constraint for Distance {
         1
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: false,
-        }
+        ConstraintRole::Joint { carries_torque: false }
     }
     fn equation_label(&self, _k: usize) -> &'static str {
         "length"

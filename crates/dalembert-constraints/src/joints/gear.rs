@@ -42,19 +42,14 @@ impl Constraint for Gear {
         1
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: true,
-        }
+        ConstraintRole::Joint { carries_torque: true }
     }
     fn equation_label(&self, _k: usize) -> &'static str {
         "mesh"
     }
     fn evaluate(&self, _t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
         let offset = self.reference_angles[1] - self.ratio * self.reference_angles[0];
-        out.set_row(
-            0,
-            &relative_angle(first, second, self.ratio).drive([offset, 0.0, 0.0]),
-        );
+        out.set_row(0, &relative_angle(first, second, self.ratio).drive([offset, 0.0, 0.0]));
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         first.position

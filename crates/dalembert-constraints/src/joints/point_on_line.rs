@@ -20,13 +20,7 @@ pub struct PointOnLine {
 
 impl PointOnLine {
     /// A point-on-line joint through global point `p` with global direction `dir`, in configuration `q`.
-    pub fn at(
-        name: impl Into<String>,
-        bodies: [BodyRef; 2],
-        p: Vec2,
-        dir: Vec2,
-        q: &[f64],
-    ) -> Self {
+    pub fn at(name: impl Into<String>, bodies: [BodyRef; 2], p: Vec2, dir: Vec2, q: &[f64]) -> Self {
         PointOnLine {
             name: name.into(),
             points: [
@@ -50,19 +44,14 @@ impl Constraint for PointOnLine {
         1
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: false,
-        }
+        ConstraintRole::Joint { carries_torque: false }
     }
     fn equation_label(&self, _k: usize) -> &'static str {
         "normal"
     }
     fn evaluate(&self, _t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
         let n = perp(unit(self.direction).unwrap_or(Vec2::x()));
-        out.set_row(
-            0,
-            &line_coordinate(first, self.points[0], n, second, self.points[1]),
-        );
+        out.set_row(0, &line_coordinate(first, self.points[0], n, second, self.points[1]));
     }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position

@@ -28,13 +28,7 @@ pub struct Prismatic {
 
 impl Prismatic {
     /// A prismatic joint through global point `p` along global direction `axis`, in configuration `q`.
-    pub fn at(
-        name: impl Into<String>,
-        bodies: [BodyRef; 2],
-        p: Vec2,
-        axis: Vec2,
-        q: &[f64],
-    ) -> Self {
+    pub fn at(name: impl Into<String>, bodies: [BodyRef; 2], p: Vec2, axis: Vec2, q: &[f64]) -> Self {
         let si = BodyState::of(bodies[0], q, &[]);
         let sj = BodyState::of(bodies[1], q, &[]);
         Prismatic {
@@ -66,23 +60,15 @@ impl Constraint for Prismatic {
         2
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: true,
-        }
+        ConstraintRole::Joint { carries_torque: true }
     }
     fn equation_label(&self, k: usize) -> &'static str {
         ["normal", "angle"][k]
     }
     fn evaluate(&self, _t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
         let n = perp(self.unit_axis());
-        out.set_row(
-            0,
-            &line_coordinate(first, self.points[0], n, second, self.points[1]),
-        );
-        out.set_row(
-            1,
-            &relative_angle(first, second, 1.0).drive([self.angle, 0.0, 0.0]),
-        );
+        out.set_row(0, &line_coordinate(first, self.points[0], n, second, self.points[1]));
+        out.set_row(1, &relative_angle(first, second, 1.0).drive([self.angle, 0.0, 0.0]));
     }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position

@@ -31,13 +31,7 @@ pub struct RackPinion {
 impl RackPinion {
     /// A rack and pinion meshing at configuration `q`: pinion centre at its reference point
     /// (`u_i = 0`), rack axis `axis` (global) through the rack's reference point.
-    pub fn new(
-        name: impl Into<String>,
-        bodies: [BodyRef; 2],
-        axis: Vec2,
-        radius: f64,
-        q: &[f64],
-    ) -> Self {
+    pub fn new(name: impl Into<String>, bodies: [BodyRef; 2], axis: Vec2, radius: f64, q: &[f64]) -> Self {
         let mut j = RackPinion {
             name: name.into(),
             points: [Vec2::zeros(), Vec2::zeros()],
@@ -69,9 +63,7 @@ impl Constraint for RackPinion {
         1
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: true,
-        }
+        ConstraintRole::Joint { carries_torque: true }
     }
     fn equation_label(&self, _k: usize) -> &'static str {
         "rolling"

@@ -46,9 +46,7 @@ impl Constraint for Revolute {
         2
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: false,
-        }
+        ConstraintRole::Joint { carries_torque: false }
     }
     fn equation_label(&self, k: usize) -> &'static str {
         ["x", "y"][k]

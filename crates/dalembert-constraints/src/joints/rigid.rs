@@ -55,9 +55,7 @@ impl Constraint for Rigid {
         3
     }
     fn role(&self) -> ConstraintRole {
-        ConstraintRole::Joint {
-            carries_torque: true,
-        }
+        ConstraintRole::Joint { carries_torque: true }
     }
     fn equation_label(&self, k: usize) -> &'static str {
         ["x", "y", "angle"][k]
@@ -66,10 +64,7 @@ impl Constraint for Rigid {
         let rows = point_coincidence(first, self.points[0], second, self.points[1]);
         out.set_row(0, &rows[0]);
         out.set_row(1, &rows[1]);
-        out.set_row(
-            2,
-            &relative_angle(first, second, 1.0).drive([self.angle, 0.0, 0.0]),
-        );
+        out.set_row(2, &relative_angle(first, second, 1.0).drive([self.angle, 0.0, 0.0]));
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position

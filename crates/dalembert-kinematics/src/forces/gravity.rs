@@ -21,14 +21,7 @@ impl ForceElement for Gravity {
         "gravity"
     }
 
-    fn add_generalized_force(
-        &self,
-        _t: f64,
-        bodies: &[Body],
-        q: &[f64],
-        _qd: &[f64],
-        q_e: &mut [f64],
-    ) {
+    fn add_generalized_force(&self, _t: f64, bodies: &[Body], q: &[f64], _qd: &[f64], q_e: &mut [f64]) {
         for (i, b) in bodies.iter().enumerate() {
             let f = self.g * b.mass;
             let k = 3 * i;

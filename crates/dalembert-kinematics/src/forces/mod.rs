@@ -29,14 +29,7 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
     fn name(&self) -> &str;
 
     /// Adds this element's generalized force at `(t, q, q̇)` to `q_e` (length `3 × bodies`).
-    fn add_generalized_force(
-        &self,
-        t: f64,
-        bodies: &[Body],
-        q: &[f64],
-        qd: &[f64],
-        q_e: &mut [f64],
-    );
+    fn add_generalized_force(&self, t: f64, bodies: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]);
 
     /// Potential energy at `(t, q)`, or `None` for a non-conservative element.
     fn potential_energy(&self, _t: f64, _bodies: &[Body], _q: &[f64]) -> Option<f64> {

@@ -35,22 +35,10 @@ impl ForceElement for PointForce {
         &self.name
     }
 
-    fn add_generalized_force(
-        &self,
-        t: f64,
-        _bodies: &[Body],
-        q: &[f64],
-        qd: &[f64],
-        q_e: &mut [f64],
-    ) {
+    fn add_generalized_force(&self, t: f64, _bodies: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
         let s = BodyState::of(self.body, q, qd);
         let p = PointState::new(&s, self.point);
-        add_point_force(
-            self.body,
-            &p,
-            Vec2::new(self.fx.value(t), self.fy.value(t)),
-            q_e,
-        );
+        add_point_force(self.body, &p, Vec2::new(self.fx.value(t), self.fy.value(t)), q_e);
     }
 
     fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
