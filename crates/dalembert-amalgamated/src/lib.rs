@@ -58,7 +58,7 @@ impl Amalgamated {
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
             rhs: vec![0.0; m],
-            tracker: PartitionTracker::new(1e6),
+            tracker: PartitionTracker::new(1e3),
             redundancy,
             model,
             stats: FormulationStats::default(),

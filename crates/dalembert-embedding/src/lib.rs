@@ -45,7 +45,9 @@ pub struct EmbeddingOptions {
     pub multipliers: Multipliers,
     /// What to do with redundant constraints.
     pub redundancy: RedundancyTreatment,
-    /// Condition estimate of `C_qd` above which the coordinates are re-partitioned.
+    /// Condition estimate of `C_qd` (pivot ratio of its LU) above which the coordinates are
+    /// re-partitioned. Default 1e3: passing a singular partition with a step of 1e-3 gives ratios
+    /// of only ≈ 1e2–1e3, so a higher threshold would ride through it with digits lost.
     pub repartition_threshold: f64,
     /// User-chosen independent coordinates (indices into `q`), used while `C_qd` stays regular.
     pub independent: Option<Vec<usize>>,
@@ -56,7 +58,7 @@ impl Default for EmbeddingOptions {
         EmbeddingOptions {
             multipliers: Multipliers::AfterTheFact,
             redundancy: RedundancyTreatment::Error,
-            repartition_threshold: 1e6,
+            repartition_threshold: 1e3,
             independent: None,
         }
     }
