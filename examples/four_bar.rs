@@ -81,6 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         end: 10.0,
         formulation: FormulationKind::Augmented,
         integrator: IntegratorOptions::fixed(Method::Rk4, h, 0.5).with_treatment(ConstraintTreatment::None),
+        velocity_weights: None,
     };
     sim.assemble()?;
 

@@ -16,6 +16,7 @@
 //! The mathematics is in `docs/` and in each crate's documentation.
 
 pub mod output;
+pub mod scene;
 pub mod simulation;
 
 pub use dalembert_amalgamated as amalgamated;
@@ -26,4 +27,5 @@ pub use dalembert_integrators as integrators;
 pub use dalembert_kinematics as kinematics;
 
 pub use output::CsvOutput;
+pub use scene::{Scene, SceneError};
 pub use simulation::{FormulationKind, Simulation, SimulationError};

@@ -63,16 +63,25 @@ pub struct Simulation {
     pub formulation: FormulationKind,
     /// Integrator settings.
     pub integrator: IntegratorOptions,
+    /// Weights of the initial velocities in [`Simulation::assemble`]: a coordinate whose velocity
+    /// was given explicitly gets a large weight so that it changes least. `None`: all equal.
+    pub velocity_weights: Option<Vec<f64>>,
 }
 
 impl Simulation {
     /// Assembles the initial state: position analysis from the given `q` (least change), then the
-    /// least change to `q̇` that satisfies the velocity constraints.
+    /// least (weighted) change to `q̇` that satisfies the velocity constraints.
     pub fn assemble(&mut self) -> Result<(), SimulationError> {
         let opts = KinematicOptions::default();
         let sys = self.model.constraints();
         sys.solve_positions(self.start, &mut self.q, &opts)?;
-        sys.solve_velocities(self.start, &self.q, &mut self.qd, &opts)?;
+        sys.solve_velocities_weighted(
+            self.start,
+            &self.q,
+            &mut self.qd,
+            self.velocity_weights.as_deref(),
+            &opts,
+        )?;
         Ok(())
     }
 

@@ -57,14 +57,23 @@ fn inf_norm(x: &[f64]) -> f64 {
 
 impl ConstraintSystem {
     /// Minimum-norm `Δ` with `C_q Δ = rhs` on an independent row set; `Ok(residual on all rows)`.
+    /// With `scale`, the step minimises `Σ (Δ_i / s_i)²` instead (columns scaled by `s`).
     fn min_norm_step(
         &self,
         values: &ConstraintValues,
         rhs: &[f64],
         delta: &mut [f64],
         opts: &KinematicOptions,
+        scale: Option<&[f64]>,
     ) -> Result<f64, (usize, Vec<usize>)> {
-        let a = self.jacobian_dense(values);
+        let mut a = self.jacobian_dense(values);
+        if let Some(s) = scale {
+            for j in 0..a.ncols() {
+                for i in 0..a.nrows() {
+                    a[(i, j)] *= s[j];
+                }
+            }
+        }
         let (m, n) = (a.nrows(), a.ncols());
         delta.iter_mut().for_each(|d| *d = 0.0);
         if m == 0 {
@@ -87,7 +96,7 @@ impl ConstraintSystem {
             z[i] = s / r[(i, i)];
         }
         for i in 0..n {
-            delta[i] = (0..rank).map(|k| q[(i, k)] * z[k]).sum();
+            delta[i] = (0..rank).map(|k| q[(i, k)] * z[k]).sum::<f64>() * scale.map_or(1.0, |s| s[i]);
         }
         // Residual over every row, including the dropped ones.
         let mut res = vec![0.0; m];
@@ -151,7 +160,7 @@ impl ConstraintSystem {
                 consistency_tolerance: f64::INFINITY,
                 ..*opts
             };
-            let _ = self.min_norm_step(&values, &rhs, &mut delta, &relaxed);
+            let _ = self.min_norm_step(&values, &rhs, &mut delta, &relaxed, None);
             q.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
         }
         let violated = values
@@ -176,13 +185,28 @@ impl ConstraintSystem {
         qd: &mut [f64],
         opts: &KinematicOptions,
     ) -> Result<(), ConstraintError> {
+        self.solve_velocities_weighted(t, q, qd, None, opts)
+    }
+
+    /// Velocity analysis minimising the weighted change `Σ w_i Δq̇_i²`: coordinates with a large
+    /// weight (velocities the user gave) change least. `None` weighs all equally.
+    pub fn solve_velocities_weighted(
+        &self,
+        t: f64,
+        q: &[f64],
+        qd: &mut [f64],
+        weights: Option<&[f64]>,
+        opts: &KinematicOptions,
+    ) -> Result<(), ConstraintError> {
+        let scale: Option<Vec<f64>> =
+            weights.map(|w| w.iter().map(|w| 1.0 / w.max(f64::MIN_POSITIVE).sqrt()).collect());
         let mut values = self.values();
         self.evaluate(t, q, qd, &mut values);
         let mut rhs = vec![0.0; self.num_equations()];
         self.velocity_residual(&values, qd, &mut rhs);
         rhs.iter_mut().for_each(|r| *r = -*r);
         let mut delta = vec![0.0; q.len()];
-        self.min_norm_step(&values, &rhs, &mut delta, opts)
+        self.min_norm_step(&values, &rhs, &mut delta, opts, scale.as_deref())
             .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;
         qd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
         Ok(())
@@ -203,7 +227,7 @@ impl ConstraintSystem {
         self.jacobian_mul(&values, qdd, &mut rhs);
         rhs.iter_mut().zip(&values.gamma).for_each(|(r, g)| *r = g - *r);
         let mut delta = vec![0.0; q.len()];
-        self.min_norm_step(&values, &rhs, &mut delta, opts)
+        self.min_norm_step(&values, &rhs, &mut delta, opts, None)
             .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;
         qdd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
         Ok(())

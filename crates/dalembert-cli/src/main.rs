@@ -1,0 +1,79 @@
+//! The `dalembert` command. See `dalembert --help` and `docs/scenes.md`.
+
+/// `println!` that ends the program quietly when stdout is closed (e.g. piped into `head`).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($arg)*) {
+            $crate::stdout_failed(e);
+        }
+    }};
+}
+
+/// `print!` with the same behaviour as [`outln!`].
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = write!(std::io::stdout(), $($arg)*) {
+            $crate::stdout_failed(e);
+        }
+    }};
+}
+
+/// A closed pipe ends the program successfully; any other write error is reported.
+fn stdout_failed(e: std::io::Error) -> ! {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(0);
+    }
+    eprintln!("error: writing to stdout: {e}");
+    std::process::exit(1);
+}
+
+mod check;
+mod inverse;
+mod plot;
+mod simulate;
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// Constrained planar multibody dynamics from scene files.
+#[derive(Parser)]
+#[command(name = "dalembert", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scene and print a summary (and write a CSV with --output).
+    Simulate(simulate::Args),
+    /// Parse and assemble a scene; report degrees of freedom, redundancy, initial accelerations and reactions.
+    Check {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+    /// Inverse dynamics of a fully driven scene: driver efforts and reactions over time.
+    Inverse(inverse::Args),
+    /// Plot columns of a result CSV against time as an SVG.
+    Plot(plot::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate(a) => simulate::run(a),
+        Command::Check { scene } => check::run(&scene),
+        Command::Inverse(a) => inverse::run(a),
+        Command::Plot(a) => plot::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,218 @@
+//! `dalembert simulate`.
+
+use dalembert::constraints::Formulation;
+use dalembert::integrators::Sample;
+use dalembert::scene::{IntegratorKind, StabilizationKind};
+use dalembert::{CsvOutput, FormulationKind, Scene};
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `simulate`; flags override the scene's `[simulation]` table.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// augmented | embedding | amalgamated
+    #[arg(long)]
+    formulation: Option<String>,
+    /// symplectic-euler | rk4 | dopri5
+    #[arg(long)]
+    integrator: Option<String>,
+    /// Fixed step, or initial step of dopri5 (s).
+    #[arg(long)]
+    step: Option<f64>,
+    /// Relative tolerance (dopri5).
+    #[arg(long)]
+    rtol: Option<f64>,
+    /// Absolute tolerance (dopri5).
+    #[arg(long)]
+    atol: Option<f64>,
+    /// End time (s).
+    #[arg(long)]
+    end: Option<f64>,
+    /// Output interval (s).
+    #[arg(long)]
+    every: Option<f64>,
+    /// none | baumgarte | projection
+    #[arg(long)]
+    stabilization: Option<String>,
+    /// Write the results as CSV (streamed: rows before a failure are kept).
+    #[arg(long)]
+    output: Option<PathBuf>,
+}
+
+/// Loads the scene and applies the command-line overrides.
+fn load(a: &Args) -> Result<Scene, String> {
+    let mut scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    let s = &mut scene.settings;
+    if let Some(f) = &a.formulation {
+        s.formulation = FormulationKind::parse(f).ok_or(format!("unknown formulation '{f}'"))?;
+    }
+    if let Some(i) = &a.integrator {
+        s.integrator = IntegratorKind::parse(i).ok_or(format!("unknown integrator '{i}'"))?;
+    }
+    if let Some(st) = &a.stabilization {
+        s.stabilization = StabilizationKind::parse(st).ok_or(format!("unknown stabilization '{st}'"))?;
+    }
+    for (dst, src, what) in [
+        (&mut s.step, a.step, "--step"),
+        (&mut s.rtol, a.rtol, "--rtol"),
+        (&mut s.atol, a.atol, "--atol"),
+        (&mut s.end, a.end, "--end"),
+        (&mut s.output_every, a.every, "--every"),
+    ] {
+        if let Some(v) = src {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{what} must be positive, got {v}"));
+            }
+            *dst = v;
+        }
+    }
+    Ok(scene)
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let scene = load(&a)?;
+    let sim = scene.simulation();
+    let model = scene.model.clone();
+    let s = &scene.settings;
+    let dof = {
+        let sys = model.constraints();
+        let mut v = sys.values();
+        sys.evaluate(0.0, &scene.q, &[], &mut v);
+        sys.analyse_structure(&v, 1e-9).degrees_of_freedom
+    };
+    let method = match s.integrator {
+        IntegratorKind::Dopri5 => format!(
+            "dopri5 (rtol {:e}, atol {:e}, initial step {:e} s)",
+            s.rtol, s.atol, s.step
+        ),
+        IntegratorKind::Rk4 => format!("rk4, step {:e} s", s.step),
+        IntegratorKind::SymplecticEuler => format!("symplectic-euler, step {:e} s", s.step),
+    };
+    outln!("scene        {}", scene.name);
+    outln!(
+        "model        {} bodies, {} coordinates, {} constraint equations, {} degree(s) of freedom",
+        model.bodies().len(),
+        model.num_coordinates(),
+        model.num_equations(),
+        dof
+    );
+    outln!(
+        "method       {} formulation, {}, constraints: {}",
+        s.formulation.name(),
+        method,
+        s.stabilization.name()
+    );
+    let mut csv = match &a.output {
+        Some(p) => {
+            let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            Some(CsvOutput::new(&model, std::io::BufWriter::new(f)).map_err(|e| e.to_string())?)
+        }
+        None => None,
+    };
+    // A few rows for the screen: about ten evenly spaced samples.
+    let every_row = (s.end / s.output_every / 10.0).ceil().max(1.0) as u64;
+    let mut rows: Vec<(f64, Vec<f64>, f64, f64)> = Vec::new();
+    let mut k = 0u64;
+    let start = Instant::now();
+    let tty = std::io::stderr().is_terminal();
+    let mut last_bar = Instant::now();
+    let end = s.end;
+    let mut observer = |smp: &Sample<'_>| {
+        if let Some(c) = csv.as_mut() {
+            c.write(&model, smp);
+        }
+        if k.is_multiple_of(every_row) || (smp.t - end).abs() < 1e-12 {
+            let angles = (0..smp.q.len() / 3).map(|i| smp.q[3 * i + 2]).collect();
+            rows.push((smp.t, angles, smp.energy, smp.constraint_violation));
+        }
+        k += 1;
+        if tty && start.elapsed().as_secs_f64() > 1.0 && last_bar.elapsed().as_millis() > 200 {
+            last_bar = Instant::now();
+            let frac = (smp.t / end).clamp(0.0, 1.0);
+            let filled = (frac * 40.0) as usize;
+            eprint!(
+                "\r[{}{}] {:5.1}%  t = {:.3} s",
+                "#".repeat(filled),
+                ".".repeat(40 - filled),
+                100.0 * frac,
+                smp.t
+            );
+            let _ = std::io::stderr().flush();
+        }
+    };
+    let result = sim.run(&mut observer);
+    if tty && start.elapsed().as_secs_f64() > 1.0 {
+        eprintln!();
+    }
+    print_rows(&model, &rows);
+    let stats = match result {
+        Ok(stats) => stats,
+        Err(e) => {
+            if let Some(c) = csv {
+                let _ = c.finish();
+            }
+            return Err(format!("{e}"));
+        }
+    };
+    if let Some(c) = csv {
+        c.finish().map_err(|e| format!("writing CSV: {e}"))?;
+        outln!(
+            "output       {}",
+            a.output.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
+        );
+    }
+    outln!(
+        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions",
+        stats.steps, stats.rejected, stats.evaluations, stats.factorizations, stats.newton_iterations, stats.repartitions
+    );
+    outln!(
+        "time         {:.3} ms in the integration loop ({:.2} µs per step)",
+        stats.wall_time.as_secs_f64() * 1e3,
+        stats.wall_time.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
+    );
+    outln!(
+        "accuracy     largest |C| = {:.2e}, largest |Ċ| = {:.2e}, largest energy change = {:.2e} J",
+        stats.max_constraint_violation,
+        stats.max_velocity_violation,
+        stats.max_energy_change
+    );
+    Ok(())
+}
+
+fn print_rows(model: &dalembert::constraints::Model, rows: &[(f64, Vec<f64>, f64, f64)]) {
+    let names: Vec<String> = model
+        .bodies()
+        .iter()
+        .take(6)
+        .map(|b| format!("{}.angle", b.name))
+        .collect();
+    out!("\n{:>9}", "t [s]");
+    for n in &names {
+        out!(" {:>14}", truncate(n, 14));
+    }
+    outln!(" {:>15} {:>10}", "energy [J]", "|C|");
+    for (t, angles, e, c) in rows {
+        out!("{t:9.4}");
+        for a in angles.iter().take(6) {
+            out!(" {a:14.6}");
+        }
+        outln!(" {e:15.8} {c:10.2e}");
+    }
+    outln!();
+}
+
+fn truncate(s: &str, n: usize) -> String {
+    if s.chars().count() <= n {
+        s.to_string()
+    } else {
+        s.chars().take(n - 1).collect::<String>() + "…"
+    }
+}
+
+/// A formulation for `check` and `inverse`.
+pub fn formulation(scene: &Scene) -> Result<Box<dyn Formulation>, String> {
+    scene.simulation().formulation().map_err(|e| e.to_string())
+}

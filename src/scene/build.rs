@@ -1,0 +1,550 @@
+//! From the parsed file to an assembled model.
+
+use super::error::SceneError;
+use super::format::{BodyDef, DriverDef, ForceDef, JointDef, Points, SceneFile, SimDef, ValueDef};
+use super::functions::time_function;
+use super::{IntegratorKind, RunSettings, Scene, StabilizationKind};
+use crate::simulation::{FormulationKind, Simulation};
+use dalembert_constraints::joints::{local_direction_of, local_point_of};
+use dalembert_constraints::{
+    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Gear, JointAngle, JointDisplacement, Model,
+    PointOnLine, Prismatic, RackPinion, Revolute, Rigid,
+};
+use dalembert_kinematics::{
+    Body, BodyId, BodyRef, BodyState, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper,
+    TimeFunction, Torque, Vec2,
+};
+use std::collections::HashMap;
+use std::ops::Range;
+use std::sync::Arc;
+use toml::Spanned;
+
+/// Weight of a velocity given in the file in the initial velocity analysis (others weigh 1): the
+/// given values change by about 1e-6 of what unconstrained ones would.
+const GIVEN_VELOCITY_WEIGHT: f64 = 1e6;
+
+/// Context for errors: file name, text, and the span of the element being built.
+struct Ctx<'a> {
+    file: &'a str,
+    text: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, span: Option<Range<usize>>, msg: impl Into<String>) -> SceneError {
+        SceneError::at(self.file, self.text, span, msg)
+    }
+}
+
+fn v2(p: [f64; 2]) -> Vec2 {
+    Vec2::new(p[0], p[1])
+}
+
+/// What a joint name refers to, for drivers and torques.
+enum JointInfo {
+    Revolute(Revolute),
+    Prismatic(Prismatic),
+    Other([BodyRef; 2]),
+}
+
+impl JointInfo {
+    fn bodies(&self) -> [BodyRef; 2] {
+        match self {
+            JointInfo::Revolute(r) => r.bodies,
+            JointInfo::Prismatic(p) => p.bodies,
+            JointInfo::Other(b) => *b,
+        }
+    }
+}
+
+struct Builder<'a> {
+    ctx: Ctx<'a>,
+    names: HashMap<String, BodyRef>,
+    q: Vec<f64>,
+    element_names: HashMap<String, Range<usize>>,
+}
+
+impl Builder<'_> {
+    fn body(&self, name: &str, span: &Range<usize>, owner: &str) -> Result<BodyRef, SceneError> {
+        self.names.get(name).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = self.names.keys().map(|s| s.as_str()).collect();
+            known.sort_unstable();
+            self.ctx.err(
+                Some(span.clone()),
+                format!("{owner}: unknown body '{name}' (bodies: {})", known.join(", ")),
+            )
+        })
+    }
+
+    fn unique(&mut self, name: &str, span: &Range<usize>, what: &str) -> Result<(), SceneError> {
+        if name == "ground" && what == "body" {
+            return Err(self.ctx.err(
+                Some(span.clone()),
+                "body 'ground': the name is reserved for the fixed frame",
+            ));
+        }
+        if self.element_names.insert(name.to_string(), span.clone()).is_some() {
+            return Err(self
+                .ctx
+                .err(Some(span.clone()), format!("{what} '{name}': the name is used twice")));
+        }
+        Ok(())
+    }
+
+    fn local_points(&self, def: &JointDef, pair: [BodyRef; 2], span: &Range<usize>) -> Result<[Vec2; 2], SceneError> {
+        match (&def.at, &def.points) {
+            (Some(Points::One(p)), None) => Ok([
+                local_point_of(pair[0], &self.q, v2(*p)),
+                local_point_of(pair[1], &self.q, v2(*p)),
+            ]),
+            (Some(Points::Two([a, b])), None) => Ok([
+                local_point_of(pair[0], &self.q, v2(*a)),
+                local_point_of(pair[1], &self.q, v2(*b)),
+            ]),
+            (None, Some([a, b])) => Ok([v2(*a), v2(*b)]),
+            (None, None) => Err(self.ctx.err(
+                Some(span.clone()),
+                format!("joint '{}': give 'at' (global) or 'points' (local)", def.name),
+            )),
+            (Some(_), Some(_)) => Err(self.ctx.err(
+                Some(span.clone()),
+                format!("joint '{}': give 'at' or 'points', not both", def.name),
+            )),
+        }
+    }
+
+    fn angle(&self, b: BodyRef) -> f64 {
+        BodyState::of(b, &self.q, &[]).angle
+    }
+}
+
+fn inertia(def: &BodyDef) -> Result<f64, String> {
+    let m = def.mass;
+    match (def.inertia, &def.shape) {
+        (Some(j), None) => Ok(j),
+        (None, Some(s)) => match (s.rod, s.disk, s.rectangle) {
+            (Some(l), None, None) => Ok(m * l * l / 12.0),
+            (None, Some(r), None) => Ok(0.5 * m * r * r),
+            (None, None, Some([w, h])) => Ok(m * (w * w + h * h) / 12.0),
+            _ => Err("shape takes exactly one of rod = L, disk = r, rectangle = [w, h]".into()),
+        },
+        (Some(_), Some(_)) => Err("give 'inertia' or 'shape', not both".into()),
+        (None, None) => Err("give 'inertia' (kg·m² about the centre of mass) or 'shape'".into()),
+    }
+}
+
+pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
+    let ctx = Ctx { file: origin, text };
+    let mut b = Builder {
+        ctx,
+        names: HashMap::new(),
+        q: Vec::new(),
+        element_names: HashMap::new(),
+    };
+    b.names.insert("ground".into(), BodyRef::Ground);
+    if file.bodies.is_empty() {
+        return Err(b.ctx.err(None, "the scene has no [[bodies]]"));
+    }
+    // Bodies.
+    let mut bodies = Vec::new();
+    let mut qd = Vec::new();
+    let mut weights = Vec::new();
+    for (i, sb) in file.bodies.iter().enumerate() {
+        let span = sb.span();
+        let d = sb.get_ref();
+        b.unique(&d.name, &span, "body")?;
+        let j = inertia(d).map_err(|m| b.ctx.err(Some(span.clone()), format!("body '{}': {m}", d.name)))?;
+        let body = Body::new(d.name.clone(), d.mass, j).map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
+        let finite = d
+            .position
+            .iter()
+            .chain(d.velocity.iter().flatten())
+            .chain([&d.angle, &d.angular_velocity.unwrap_or(0.0)])
+            .all(|x| x.is_finite());
+        if !finite {
+            return Err(b.ctx.err(
+                Some(span.clone()),
+                format!("body '{}': position, angle and velocities must be finite", d.name),
+            ));
+        }
+        bodies.push(body);
+        b.names.insert(d.name.clone(), BodyRef::Body(BodyId(i)));
+        b.q.extend_from_slice(&[d.position[0], d.position[1], d.angle]);
+        let v = d.velocity.unwrap_or([0.0, 0.0]);
+        qd.extend_from_slice(&[v[0], v[1], d.angular_velocity.unwrap_or(0.0)]);
+        // Velocities given in the file are kept as far as the constraints allow.
+        let w = |given: bool| if given { GIVEN_VELOCITY_WEIGHT } else { 1.0 };
+        weights.extend_from_slice(&[
+            w(d.velocity.is_some()),
+            w(d.velocity.is_some()),
+            w(d.angular_velocity.is_some()),
+        ]);
+    }
+    // Joints.
+    let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
+    let mut joints: HashMap<String, JointInfo> = HashMap::new();
+    for sj in &file.joints {
+        let span = sj.span();
+        let d = sj.get_ref();
+        b.unique(&d.name, &span, "joint")?;
+        let owner = format!("joint '{}'", d.name);
+        let pair = [
+            b.body(&d.bodies[0], &span, &owner)?,
+            b.body(&d.bodies[1], &span, &owner)?,
+        ];
+        if pair[0] == pair[1] {
+            return Err(b.ctx.err(
+                Some(span.clone()),
+                format!("{owner}: both bodies are '{}'", d.bodies[0]),
+            ));
+        }
+        let name = d.name.clone();
+        let axis_global = v2(d.axis.unwrap_or([1.0, 0.0]));
+        let (c, info): (Box<dyn Constraint>, JointInfo) = match d.kind.as_str() {
+            "revolute" => {
+                let r = Revolute::new(name, pair, b.local_points(d, pair, &span)?);
+                (Box::new(r.clone()), JointInfo::Revolute(r))
+            }
+            "prismatic" => {
+                let p = Prismatic {
+                    name,
+                    bodies: pair,
+                    points: b.local_points(d, pair, &span)?,
+                    axis: local_direction_of(pair[0], &b.q, axis_global),
+                    angle: b.angle(pair[1]) - b.angle(pair[0]),
+                };
+                (Box::new(p.clone()), JointInfo::Prismatic(p))
+            }
+            "rigid" => {
+                let points = if d.at.is_none() && d.points.is_none() {
+                    let p = BodyState::of(pair[1], &b.q, &[]).position;
+                    [local_point_of(pair[0], &b.q, p), Vec2::zeros()]
+                } else {
+                    b.local_points(d, pair, &span)?
+                };
+                let angle = b.angle(pair[1]) - b.angle(pair[0]);
+                (Box::new(Rigid { name, bodies: pair, points, angle }), JointInfo::Other(pair))
+            }
+            "distance" => {
+                let points = b.local_points(d, pair, &span)?;
+                let si = BodyState::of(pair[0], &b.q, &[]);
+                let sj = BodyState::of(pair[1], &b.q, &[]);
+                let now = (dalembert_kinematics::point::global_point(sj.position, sj.angle, points[1])
+                    - dalembert_kinematics::point::global_point(si.position, si.angle, points[0]))
+                .norm();
+                let length = d.length.unwrap_or(now);
+                (Box::new(Distance { name, bodies: pair, points, length }), JointInfo::Other(pair))
+            }
+            "point-on-line" => {
+                let points = b.local_points(d, pair, &span)?;
+                let direction = local_direction_of(pair[0], &b.q, axis_global);
+                (Box::new(PointOnLine { name, bodies: pair, points, direction }), JointInfo::Other(pair))
+            }
+            "gear" => {
+                let ratio = d.ratio.ok_or_else(|| b.ctx.err(Some(span.clone()), format!("{owner}: a gear needs 'ratio'")))?;
+                (Box::new(Gear::new(name, pair, ratio, &b.q)), JointInfo::Other(pair))
+            }
+            "rack-pinion" => {
+                let radius =
+                    d.radius.ok_or_else(|| b.ctx.err(Some(span.clone()), format!("{owner}: a rack and pinion needs 'radius'")))?;
+                (Box::new(RackPinion::new(name, pair, axis_global, radius, &b.q)), JointInfo::Other(pair))
+            }
+            other => {
+                return Err(b.ctx.err(
+                    Some(span.clone()),
+                    format!("{owner}: unknown type '{other}' (expected revolute, prismatic, rigid, distance, point-on-line, gear, rack-pinion)"),
+                ))
+            }
+        };
+        c.validate().map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
+        constraints.push(c);
+        joints.insert(d.name.clone(), info);
+    }
+    // Drivers.
+    for sd in &file.drivers {
+        let span = sd.span();
+        let d = sd.get_ref();
+        b.unique(&d.name, &span, "driver")?;
+        constraints.push(driver(&b, d, &span, &joints)?);
+    }
+    // Forces.
+    let mut forces: Vec<Box<dyn ForceElement>> = Vec::new();
+    if let Some(g) = file.scene.as_ref().and_then(|s| s.gravity) {
+        forces.push(Box::new(Gravity::new(v2(g))));
+    }
+    for sf in &file.forces {
+        let span = sf.span();
+        let d = sf.get_ref();
+        b.unique(&d.name, &span, "force")?;
+        forces.push(force(&b, d, &span, &joints)?);
+    }
+    let model = Model::new(bodies, forces, constraints).map_err(|e| b.ctx.err(None, e.to_string()))?;
+    let settings = settings(&b, file.simulation.as_ref())?;
+    let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
+    let mut sim = Simulation {
+        model: Arc::new(model),
+        q: b.q.clone(),
+        qd,
+        start: 0.0,
+        end: settings.end,
+        formulation: settings.formulation,
+        integrator: settings.integrator_options(),
+        velocity_weights: Some(weights),
+    };
+    sim.assemble()
+        .map_err(|e| b.ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
+    Ok(Scene {
+        name,
+        model: sim.model,
+        q: sim.q,
+        qd: sim.qd,
+        settings,
+    })
+}
+
+fn driver(
+    b: &Builder<'_>,
+    d: &DriverDef,
+    span: &Range<usize>,
+    joints: &HashMap<String, JointInfo>,
+) -> Result<Box<dyn Constraint>, SceneError> {
+    let owner = format!("driver '{}'", d.name);
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let func = |v0: f64| time_function(&d.function, Some(v0)).map_err(err);
+    let joint = |kind: &str| -> Result<&JointInfo, SceneError> {
+        let name = d
+            .joint
+            .as_deref()
+            .ok_or_else(|| err(format!("a {kind} driver needs 'joint'")))?;
+        joints.get(name).ok_or_else(|| err(format!("unknown joint '{name}'")))
+    };
+    Ok(match d.kind.as_str() {
+        "body-coordinate" => {
+            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+            let body = b.body(name, span, &owner)?;
+            let BodyRef::Body(id) = body else {
+                return Err(err("cannot drive the ground".into()));
+            };
+            let coordinate = match d.coordinate.as_deref() {
+                Some("x") => Coordinate::X,
+                Some("y") => Coordinate::Y,
+                Some("angle") => Coordinate::Angle,
+                other => {
+                    return Err(err(format!(
+                        "coordinate must be \"x\", \"y\" or \"angle\", got {other:?}"
+                    )))
+                }
+            };
+            let v0 = b.q[id.offset() + coordinate.index()];
+            Box::new(BodyCoordinate {
+                name: d.name.clone(),
+                body: id,
+                coordinate,
+                function: func(v0)?,
+            })
+        }
+        "joint-angle" => match joint("joint-angle")? {
+            JointInfo::Revolute(r) => {
+                let v0 = b.angle(r.bodies[1]) - b.angle(r.bodies[0]);
+                Box::new(JointAngle::on(d.name.clone(), r, func(v0)?))
+            }
+            _ => return Err(err("'joint-angle' drives a revolute joint".into())),
+        },
+        "joint-displacement" => match joint("joint-displacement")? {
+            JointInfo::Prismatic(p) => {
+                let si = BodyState::of(p.bodies[0], &b.q, &[]);
+                let sj = BodyState::of(p.bodies[1], &b.q, &[]);
+                let row = dalembert_constraints::primitives::line_coordinate(
+                    &si,
+                    p.points[0],
+                    p.unit_axis(),
+                    &sj,
+                    p.points[1],
+                );
+                Box::new(JointDisplacement::on(d.name.clone(), p, func(row.c)?))
+            }
+            _ => return Err(err("'joint-displacement' drives a prismatic joint".into())),
+        },
+        "distance" => {
+            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
+            let pair = [b.body(n0, span, &owner)?, b.body(n1, span, &owner)?];
+            let Some(Points::Two([p0, p1])) = d.at else {
+                return Err(err("needs 'at = [[x1, y1], [x2, y2]]' (global points)".into()));
+            };
+            let points = [
+                local_point_of(pair[0], &b.q, v2(p0)),
+                local_point_of(pair[1], &b.q, v2(p1)),
+            ];
+            let v0 = (v2(p1) - v2(p0)).norm();
+            Box::new(DistanceDriver {
+                name: d.name.clone(),
+                bodies: pair,
+                points,
+                function: func(v0)?,
+            })
+        }
+        other => {
+            return Err(err(format!(
+                "unknown type '{other}' (expected body-coordinate, joint-angle, joint-displacement, distance)"
+            )))
+        }
+    })
+}
+
+fn value_function(v: &ValueDef) -> Result<TimeFunction, String> {
+    match v {
+        ValueDef::Number(x) => Ok(TimeFunction::Constant(*x)),
+        ValueDef::Function(f) => time_function(f, None),
+        ValueDef::Vector(_) => Err("expected a number or a function, got a vector".into()),
+    }
+}
+
+fn force(
+    b: &Builder<'_>,
+    d: &ForceDef,
+    span: &Range<usize>,
+    joints: &HashMap<String, JointInfo>,
+) -> Result<Box<dyn ForceElement>, SceneError> {
+    let owner = format!("force '{}'", d.name);
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let pair = || -> Result<[BodyRef; 2], SceneError> {
+        let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
+        Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
+    };
+    let element: Box<dyn ForceElement> = match d.kind.as_str() {
+        "force" => {
+            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+            let body = b.body(name, span, &owner)?;
+            let point = match (d.at, d.point) {
+                (Some(Points::One(p)), None) => local_point_of(body, &b.q, v2(p)),
+                (None, Some(u)) => v2(u),
+                (None, None) => Vec2::zeros(),
+                _ => return Err(err("give 'at' (one global point) or 'point' (local)".into())),
+            };
+            let (fx, fy) = match (&d.value, &d.fx, &d.fy) {
+                (Some(ValueDef::Vector([x, y])), None, None) => {
+                    (TimeFunction::Constant(*x), TimeFunction::Constant(*y))
+                }
+                (None, fx, fy) if fx.is_some() || fy.is_some() => (
+                    fx.as_ref()
+                        .map_or(Ok(TimeFunction::Constant(0.0)), |f| time_function(f, None))
+                        .map_err(err)?,
+                    fy.as_ref()
+                        .map_or(Ok(TimeFunction::Constant(0.0)), |f| time_function(f, None))
+                        .map_err(err)?,
+                ),
+                _ => return Err(err("give 'value = [fx, fy]' or functions 'fx' / 'fy'".into())),
+            };
+            Box::new(PointForce {
+                name: d.name.clone(),
+                body,
+                point,
+                fx,
+                fy,
+            })
+        }
+        "torque" => {
+            let value = value_function(d.value.as_ref().ok_or_else(|| err("needs 'value'".into()))?).map_err(err)?;
+            let (body, reaction_body) = match (&d.body, &d.joint) {
+                (Some(n), None) => (b.body(n, span, &owner)?, BodyRef::Ground),
+                (None, Some(j)) => {
+                    let info = joints.get(j).ok_or_else(|| err(format!("unknown joint '{j}'")))?;
+                    let [first, second] = info.bodies();
+                    (second, first)
+                }
+                _ => return Err(err("give 'body' or 'joint' (torque between the joint's bodies)".into())),
+            };
+            Box::new(Torque {
+                name: d.name.clone(),
+                body,
+                reaction_body,
+                value,
+            })
+        }
+        "spring-damper" => {
+            let pr = pair()?;
+            let Some(Points::Two([p0, p1])) = d.at else {
+                return Err(err(
+                    "needs 'at = [[x1, y1], [x2, y2]]' (global attachment points)".into()
+                ));
+            };
+            let actuator = d
+                .actuator
+                .as_ref()
+                .map(|f| time_function(f, None))
+                .transpose()
+                .map_err(err)?;
+            Box::new(SpringDamper {
+                name: d.name.clone(),
+                bodies: (pr[0], pr[1]),
+                points: (local_point_of(pr[0], &b.q, v2(p0)), local_point_of(pr[1], &b.q, v2(p1))),
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'".into()))?,
+                damping: d.damping.unwrap_or(0.0),
+                free_length: d.free_length.unwrap_or((v2(p1) - v2(p0)).norm()),
+                actuator,
+            })
+        }
+        "rotational-spring-damper" => {
+            let pr = pair()?;
+            Box::new(RotationalSpringDamper {
+                name: d.name.clone(),
+                bodies: (pr[0], pr[1]),
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'".into()))?,
+                damping: d.damping.unwrap_or(0.0),
+                free_angle: d.free_angle.unwrap_or(b.angle(pr[1]) - b.angle(pr[0])),
+            })
+        }
+        other => {
+            return Err(err(format!(
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper)"
+            )))
+        }
+    };
+    element.validate(b.q.len() / 3).map_err(|e| err(e.to_string()))?;
+    Ok(element)
+}
+
+fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSettings, SceneError> {
+    let mut s = RunSettings {
+        end: 1.0,
+        formulation: FormulationKind::Augmented,
+        integrator: IntegratorKind::Rk4,
+        step: 1e-3,
+        output_every: 1e-2,
+        stabilization: StabilizationKind::Projection,
+        rtol: 1e-8,
+        atol: 1e-10,
+    };
+    let Some(sim) = sim else { return Ok(s) };
+    let span = sim.span();
+    let d = sim.get_ref();
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("[simulation]: {m}"));
+    if let Some(f) = &d.formulation {
+        s.formulation = FormulationKind::parse(f)
+            .ok_or_else(|| err(format!("unknown formulation '{f}' (augmented, embedding, amalgamated)")))?;
+    }
+    if let Some(i) = &d.integrator {
+        s.integrator = IntegratorKind::parse(i)
+            .ok_or_else(|| err(format!("unknown integrator '{i}' (symplectic-euler, rk4, dopri5)")))?;
+    }
+    if let Some(st) = &d.stabilization {
+        s.stabilization = StabilizationKind::parse(st)
+            .ok_or_else(|| err(format!("unknown stabilization '{st}' (none, baumgarte, projection)")))?;
+    }
+    s.end = d.end.unwrap_or(s.end);
+    s.step = d.step.unwrap_or(s.step);
+    s.output_every = d.output_every.unwrap_or(s.output_every);
+    s.rtol = d.rtol.unwrap_or(s.rtol);
+    s.atol = d.atol.unwrap_or(s.atol);
+    for (v, what) in [
+        (s.end, "end"),
+        (s.step, "step"),
+        (s.output_every, "output_every"),
+        (s.rtol, "rtol"),
+        (s.atol, "atol"),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(err(format!("'{what}' must be positive, got {v}")));
+        }
+    }
+    Ok(s)
+}

@@ -1,0 +1,147 @@
+//! The TOML structure of a scene file (serde). Unknown keys are errors, so typos are caught.
+
+use serde::Deserialize;
+use toml::Spanned;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    pub scene: Option<Meta>,
+    #[serde(default)]
+    pub bodies: Vec<Spanned<BodyDef>>,
+    #[serde(default)]
+    pub joints: Vec<Spanned<JointDef>>,
+    #[serde(default)]
+    pub drivers: Vec<Spanned<DriverDef>>,
+    #[serde(default)]
+    pub forces: Vec<Spanned<ForceDef>>,
+    pub simulation: Option<Spanned<SimDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct Meta {
+    pub name: Option<String>,
+    pub gravity: Option<[f64; 2]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BodyDef {
+    pub name: String,
+    pub mass: f64,
+    pub inertia: Option<f64>,
+    pub shape: Option<ShapeDef>,
+    pub position: [f64; 2],
+    #[serde(default)]
+    pub angle: f64,
+    pub velocity: Option<[f64; 2]>,
+    pub angular_velocity: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShapeDef {
+    pub rod: Option<f64>,
+    pub disk: Option<f64>,
+    pub rectangle: Option<[f64; 2]>,
+}
+
+/// One global point, or two (for elements between two points).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum Points {
+    One([f64; 2]),
+    Two([[f64; 2]; 2]),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct JointDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub bodies: [String; 2],
+    pub at: Option<Points>,
+    pub points: Option<[[f64; 2]; 2]>,
+    pub axis: Option<[f64; 2]>,
+    pub length: Option<f64>,
+    pub ratio: Option<f64>,
+    pub radius: Option<f64>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FunctionDef {
+    pub kind: String,
+    pub value: Option<f64>,
+    pub initial: Option<f64>,
+    pub rate: Option<f64>,
+    pub amplitude: Option<f64>,
+    pub frequency: Option<f64>,
+    pub phase: Option<f64>,
+    pub offset: Option<f64>,
+    pub coefficients: Option<Vec<f64>>,
+    pub t0: Option<f64>,
+    pub t1: Option<f64>,
+    pub from: Option<f64>,
+    pub to: Option<f64>,
+    pub absolute: Option<bool>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DriverDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub body: Option<String>,
+    pub coordinate: Option<String>,
+    pub joint: Option<String>,
+    pub bodies: Option<[String; 2]>,
+    pub at: Option<Points>,
+    pub function: FunctionDef,
+}
+
+/// A number, a vector, or a time function.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub(crate) enum ValueDef {
+    Number(f64),
+    Vector([f64; 2]),
+    Function(Box<FunctionDef>),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ForceDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub body: Option<String>,
+    pub bodies: Option<[String; 2]>,
+    pub joint: Option<String>,
+    pub at: Option<Points>,
+    pub point: Option<[f64; 2]>,
+    pub value: Option<ValueDef>,
+    pub fx: Option<FunctionDef>,
+    pub fy: Option<FunctionDef>,
+    pub stiffness: Option<f64>,
+    pub damping: Option<f64>,
+    pub free_length: Option<f64>,
+    pub free_angle: Option<f64>,
+    pub actuator: Option<FunctionDef>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SimDef {
+    pub end: Option<f64>,
+    pub formulation: Option<String>,
+    pub integrator: Option<String>,
+    pub step: Option<f64>,
+    pub output_every: Option<f64>,
+    pub stabilization: Option<String>,
+    pub rtol: Option<f64>,
+    pub atol: Option<f64>,
+}

@@ -1,0 +1,171 @@
+//! Scene files: a mechanism and its run, described in TOML (format: `docs/scenes.md`).
+//!
+//! A scene states only what it needs. The ground exists implicitly (`"ground"`); joint points may be
+//! given once, in global coordinates of the configuration written in the file; positions need only
+//! be approximate (the scene is assembled by position analysis) and velocities are made consistent
+//! (least change) before the run.
+
+mod build;
+mod error;
+mod format;
+mod functions;
+
+pub use error::SceneError;
+
+use crate::simulation::{FormulationKind, Simulation};
+use dalembert_constraints::{Model, Stabilization};
+use dalembert_integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Settings of the `[simulation]` table, with defaults for everything but `end`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunSettings {
+    /// End time (s). Default 1.
+    pub end: f64,
+    /// Formulation. Default augmented.
+    pub formulation: FormulationKind,
+    /// Integrator name: `symplectic-euler`, `rk4` (default), `dopri5`.
+    pub integrator: IntegratorKind,
+    /// Fixed step, or the initial step of an adaptive method. Default 1e-3 s.
+    pub step: f64,
+    /// Output interval. Default 1e-2 s.
+    pub output_every: f64,
+    /// Constraint treatment: `none`, `baumgarte` (default gains for the step), `projection` (default).
+    pub stabilization: StabilizationKind,
+    /// Relative tolerance of adaptive methods. Default 1e-8.
+    pub rtol: f64,
+    /// Absolute tolerance of adaptive methods. Default 1e-10.
+    pub atol: f64,
+}
+
+/// The integrators a scene can name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// Semi-implicit Euler.
+    SymplecticEuler,
+    /// Classic Runge–Kutta.
+    Rk4,
+    /// Dormand–Prince 5(4).
+    Dopri5,
+}
+
+/// The constraint treatments a scene can name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StabilizationKind {
+    /// None.
+    None,
+    /// Baumgarte with `Stabilization::for_step(step)`.
+    Baumgarte,
+    /// Projection to 1e-10 after every step.
+    Projection,
+}
+
+impl IntegratorKind {
+    /// Parses a scene or command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "symplectic-euler" | "euler" => IntegratorKind::SymplecticEuler,
+            "rk4" => IntegratorKind::Rk4,
+            "dopri5" | "dormand-prince" => IntegratorKind::Dopri5,
+            _ => return None,
+        })
+    }
+}
+
+impl StabilizationKind {
+    /// Parses a scene or command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "none" => StabilizationKind::None,
+            "baumgarte" => StabilizationKind::Baumgarte,
+            "projection" => StabilizationKind::Projection,
+            _ => return None,
+        })
+    }
+
+    /// Name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            StabilizationKind::None => "none",
+            StabilizationKind::Baumgarte => "baumgarte",
+            StabilizationKind::Projection => "projection",
+        }
+    }
+}
+
+impl FormulationKind {
+    /// Parses a scene or command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        Some(match s {
+            "augmented" => FormulationKind::Augmented,
+            "embedding" => FormulationKind::Embedding,
+            "amalgamated" => FormulationKind::Amalgamated,
+            _ => return None,
+        })
+    }
+}
+
+impl RunSettings {
+    /// The integrator options these settings describe.
+    pub fn integrator_options(&self) -> IntegratorOptions {
+        let method = match self.integrator {
+            IntegratorKind::SymplecticEuler => Method::SymplecticEuler,
+            IntegratorKind::Rk4 => Method::Rk4,
+            IntegratorKind::Dopri5 => Method::DormandPrince {
+                rtol: self.rtol,
+                atol: self.atol,
+            },
+        };
+        let treatment = match self.stabilization {
+            StabilizationKind::None => ConstraintTreatment::None,
+            StabilizationKind::Baumgarte => ConstraintTreatment::Baumgarte(Stabilization::for_step(self.step)),
+            StabilizationKind::Projection => ConstraintTreatment::Projection { tolerance: 1e-10 },
+        };
+        IntegratorOptions::fixed(method, self.step, self.output_every).with_treatment(treatment)
+    }
+}
+
+/// A loaded, assembled scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// `[scene] name`, or the file name.
+    pub name: String,
+    /// The model.
+    pub model: Arc<Model>,
+    /// Assembled positions.
+    pub q: Vec<f64>,
+    /// Consistent velocities.
+    pub qd: Vec<f64>,
+    /// The run settings.
+    pub settings: RunSettings,
+}
+
+impl Scene {
+    /// Reads, builds and assembles a scene file.
+    pub fn from_path(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(path, e))?;
+        Scene::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Builds and assembles a scene from TOML text; `origin` names it in errors.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        let file: format::SceneFile = toml::from_str(text).map_err(|e| SceneError::parse(origin, text, &e))?;
+        build::build(file, text, origin)
+    }
+
+    /// A simulation of this scene with its settings.
+    pub fn simulation(&self) -> Simulation {
+        Simulation {
+            model: self.model.clone(),
+            q: self.q.clone(),
+            qd: self.qd.clone(),
+            start: 0.0,
+            end: self.settings.end,
+            formulation: self.settings.formulation,
+            integrator: self.settings.integrator_options(),
+            velocity_weights: None,
+        }
+    }
+}
