@@ -513,6 +513,7 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
         stabilization: StabilizationKind::Projection,
         rtol: 1e-8,
         atol: 1e-10,
+        rho_inf: 0.8,
     };
     let Some(sim) = sim else { return Ok(s) };
     let span = sim.span();
@@ -523,8 +524,11 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
             .ok_or_else(|| err(format!("unknown formulation '{f}' (augmented, embedding, amalgamated)")))?;
     }
     if let Some(i) = &d.integrator {
-        s.integrator = IntegratorKind::parse(i)
-            .ok_or_else(|| err(format!("unknown integrator '{i}' (symplectic-euler, rk4, dopri5)")))?;
+        s.integrator = IntegratorKind::parse(i).ok_or_else(|| {
+            err(format!(
+                "unknown integrator '{i}' (symplectic-euler, rk4, dopri5, generalized-alpha)"
+            ))
+        })?;
     }
     if let Some(st) = &d.stabilization {
         s.stabilization = StabilizationKind::parse(st)
@@ -535,6 +539,10 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
     s.output_every = d.output_every.unwrap_or(s.output_every);
     s.rtol = d.rtol.unwrap_or(s.rtol);
     s.atol = d.atol.unwrap_or(s.atol);
+    s.rho_inf = d.rho_inf.unwrap_or(s.rho_inf);
+    if !(0.0..=1.0).contains(&s.rho_inf) {
+        return Err(err(format!("'rho_inf' must lie in [0, 1], got {}", s.rho_inf)));
+    }
     for (v, what) in [
         (s.end, "end"),
         (s.step, "step"),

@@ -144,4 +144,5 @@ pub(crate) struct SimDef {
     pub stabilization: Option<String>,
     pub rtol: Option<f64>,
     pub atol: Option<f64>,
+    pub rho_inf: Option<f64>,
 }

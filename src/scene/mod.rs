@@ -25,7 +25,7 @@ pub struct RunSettings {
     pub end: f64,
     /// Formulation. Default augmented.
     pub formulation: FormulationKind,
-    /// Integrator name: `symplectic-euler`, `rk4` (default), `dopri5`.
+    /// Integrator name: `symplectic-euler`, `rk4` (default), `dopri5`, `generalized-alpha`.
     pub integrator: IntegratorKind,
     /// Fixed step, or the initial step of an adaptive method. Default 1e-3 s.
     pub step: f64,
@@ -37,6 +37,8 @@ pub struct RunSettings {
     pub rtol: f64,
     /// Absolute tolerance of adaptive methods. Default 1e-10.
     pub atol: f64,
+    /// Spectral radius at infinity of generalized-α. Default 0.8.
+    pub rho_inf: f64,
 }
 
 /// The integrators a scene can name.
@@ -48,6 +50,8 @@ pub enum IntegratorKind {
     Rk4,
     /// Dormand–Prince 5(4).
     Dopri5,
+    /// Generalized-α (index 3, implicit).
+    GeneralizedAlpha,
 }
 
 /// The constraint treatments a scene can name.
@@ -68,6 +72,7 @@ impl IntegratorKind {
             "symplectic-euler" | "euler" => IntegratorKind::SymplecticEuler,
             "rk4" => IntegratorKind::Rk4,
             "dopri5" | "dormand-prince" => IntegratorKind::Dopri5,
+            "generalized-alpha" => IntegratorKind::GeneralizedAlpha,
             _ => return None,
         })
     }
@@ -116,6 +121,7 @@ impl RunSettings {
                 rtol: self.rtol,
                 atol: self.atol,
             },
+            IntegratorKind::GeneralizedAlpha => Method::GeneralizedAlpha { rho_inf: self.rho_inf },
         };
         let treatment = match self.stabilization {
             StabilizationKind::None => ConstraintTreatment::None,

@@ -16,9 +16,12 @@ pub struct Args {
     /// augmented | embedding | amalgamated
     #[arg(long)]
     formulation: Option<String>,
-    /// symplectic-euler | rk4 | dopri5
+    /// symplectic-euler | rk4 | dopri5 | generalized-alpha
     #[arg(long)]
     integrator: Option<String>,
+    /// Spectral radius at infinity of generalized-α, 0 to 1.
+    #[arg(long)]
+    rho_inf: Option<f64>,
     /// Fixed step, or initial step of dopri5 (s).
     #[arg(long)]
     step: Option<f64>,
@@ -51,6 +54,12 @@ fn load(a: &Args) -> Result<Scene, String> {
     }
     if let Some(i) = &a.integrator {
         s.integrator = IntegratorKind::parse(i).ok_or(format!("unknown integrator '{i}'"))?;
+    }
+    if let Some(r) = a.rho_inf {
+        if !(0.0..=1.0).contains(&r) {
+            return Err(format!("--rho-inf must lie in [0, 1], got {r}"));
+        }
+        s.rho_inf = r;
     }
     if let Some(st) = &a.stabilization {
         s.stabilization = StabilizationKind::parse(st).ok_or(format!("unknown stabilization '{st}'"))?;
@@ -90,6 +99,7 @@ pub fn run(a: Args) -> Result<(), String> {
         ),
         IntegratorKind::Rk4 => format!("rk4, step {:e} s", s.step),
         IntegratorKind::SymplecticEuler => format!("symplectic-euler, step {:e} s", s.step),
+        IntegratorKind::GeneralizedAlpha => format!("generalized-alpha (rho_inf {}), step {:e} s", s.rho_inf, s.step),
     };
     outln!("scene        {}", scene.name);
     outln!(
@@ -103,7 +113,11 @@ pub fn run(a: Args) -> Result<(), String> {
         "method       {} formulation, {}, constraints: {}",
         s.formulation.name(),
         method,
-        s.stabilization.name()
+        if s.integrator == IntegratorKind::GeneralizedAlpha {
+            "index-3 Newton (positions exact)"
+        } else {
+            s.stabilization.name()
+        }
     );
     let mut csv = match &a.output {
         Some(p) => {

@@ -2,6 +2,7 @@
 
 use crate::dopri5::Dopri5;
 use crate::explicit::{rk4_step, symplectic_euler_step, FixedWork};
+use crate::generalized_alpha::{GeneralizedAlpha, NotConverged};
 use crate::{ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method, Statistics};
 use dalembert_constraints::{DynamicsError, Formulation, FormulationStats};
 use std::time::{Duration, Instant};
@@ -42,6 +43,8 @@ struct Run<'o> {
     divergence_factor: f64,
     observer: &'o mut dyn FnMut(&Sample<'_>),
     observer_time: Duration,
+    /// Work done outside the formulation (the implicit method's own Newton solves).
+    extra: FormulationStats,
 }
 
 fn inf_norm(v: &[f64]) -> f64 {
@@ -122,9 +125,9 @@ impl Run<'_> {
     fn finish<F: Formulation + ?Sized>(&mut self, f: &F, wall: Instant) {
         let now = f.stats();
         let s = &mut self.stats;
-        s.evaluations = now.evaluations - self.start.evaluations;
-        s.factorizations = now.factorizations - self.start.factorizations;
-        s.newton_iterations = now.newton_iterations - self.start.newton_iterations;
+        s.evaluations = now.evaluations - self.start.evaluations + self.extra.evaluations;
+        s.factorizations = now.factorizations - self.start.factorizations + self.extra.factorizations;
+        s.newton_iterations = now.newton_iterations - self.start.newton_iterations + self.extra.newton_iterations;
         s.repartitions = now.repartitions - self.start.repartitions;
         s.wall_time = wall.elapsed().saturating_sub(self.observer_time);
         if s.steps == 0 {
@@ -186,6 +189,7 @@ pub fn integrate<F: Formulation + ?Sized>(
         divergence_factor: opts.divergence_factor,
         observer,
         observer_time: Duration::ZERO,
+        extra: FormulationStats::default(),
     };
     let result = run_loop(f, t0, t_end, &mut y, opts, &mut run);
     run.finish(f, wall);
@@ -212,6 +216,11 @@ fn check_options(t0: f64, t_end: f64, opts: &IntegratorOptions) -> Result<(), In
     if let Method::DormandPrince { rtol, atol } = opts.method {
         if !(rtol > 0.0 && atol > 0.0) {
             return bad("rtol and atol must be positive");
+        }
+    }
+    if let Method::GeneralizedAlpha { rho_inf } = opts.method {
+        if !(0.0..=1.0).contains(&rho_inf) {
+            return bad("rho_inf must lie in [0, 1]");
         }
     }
     Ok(())
@@ -260,6 +269,24 @@ fn run_loop<F: Formulation + ?Sized>(
                 run.emit(f, t, y, opts)?;
             }
         }
+        Method::GeneralizedAlpha { rho_inf } => {
+            let n = run.n;
+            let (q0, qd0) = y.split_at(n);
+            f.accelerations(
+                t0,
+                q0,
+                qd0,
+                dalembert_constraints::Stabilization::None,
+                &mut run.qdd,
+                &mut run.lambda,
+            )?;
+            let mut ga = GeneralizedAlpha::new(f.model(), rho_inf, &run.qdd, &run.lambda, q0);
+            let result = generalized_alpha_loop(f, &mut ga, t0, y, opts, run, n_out, &out_time);
+            run.extra.newton_iterations += ga.iterations;
+            run.extra.factorizations += ga.factorizations;
+            run.extra.evaluations += ga.evaluations;
+            result?;
+        }
         Method::DormandPrince { rtol, atol } => {
             let mut dp = Dopri5::new(run.n, run.lambda.len(), rtol, atol);
             let max_step = opts.max_step.min(t_end - t0).max(opts.min_step);
@@ -307,6 +334,62 @@ fn run_loop<F: Formulation + ?Sized>(
                 h = attempt.next_step.min(max_step);
             }
         }
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn generalized_alpha_loop<F: Formulation + ?Sized>(
+    f: &mut F,
+    ga: &mut GeneralizedAlpha,
+    t0: f64,
+    y: &mut [f64],
+    opts: &IntegratorOptions,
+    run: &mut Run<'_>,
+    n_out: u64,
+    out_time: &dyn Fn(u64) -> f64,
+) -> Result<(), IntegrationError> {
+    let n = run.n;
+    let mut h = opts.step;
+    let mut t = t0;
+    let mut successes = 0u32;
+    for k in 1..=n_out {
+        let t_next = out_time(k);
+        while t < t_next - 1e-12 * (1.0 + t_next.abs()) {
+            let remaining = t_next - t;
+            // Avoid a sliver of a step before the output time.
+            let hh = if h >= remaining * (1.0 - 1e-9) || remaining - h < 1e-3 * h {
+                remaining
+            } else {
+                h
+            };
+            let (q, qd) = y.split_at_mut(n);
+            match ga.step(f.model(), t, hh, q, qd) {
+                Ok(()) => {
+                    t = if hh == remaining { t_next } else { t + hh };
+                    run.monitor(f, t, y, hh)?;
+                    successes += 1;
+                    if successes >= 4 && h < opts.step {
+                        h = (2.0 * h).min(opts.step);
+                        successes = 0;
+                    }
+                }
+                Err(NotConverged) => {
+                    run.stats.rejected += 1;
+                    successes = 0;
+                    h = 0.5 * hh;
+                    if h < opts.min_step {
+                        return Err(IntegrationError::StepSizeTooSmall {
+                            time: t,
+                            step: h,
+                            min_step: opts.min_step,
+                            error: f64::NAN,
+                        });
+                    }
+                }
+            }
+        }
+        run.emit(f, t, y, opts)?;
     }
     Ok(())
 }

@@ -9,10 +9,12 @@
 //! | semi-implicit (symplectic) Euler | 1 | 1 | `q̇ₙ₊₁ = q̇ₙ + h q̈ₙ`, `qₙ₊₁ = qₙ + h q̇ₙ₊₁`; bounded energy error |
 //! | classic Runge–Kutta | 4 | 4 | slow energy drift |
 //! | Dormand–Prince 5(4) | 5 | 6 (FSAL) | adaptive, PI step control, dense output of order 4 |
+//! | generalized-α (index 3) | 2 | Newton iterations | implicit, unconditionally stable, `ρ∞` sets high-frequency damping; `C = 0` to the Newton tolerance |
 //!
-//! Constraint treatment ([`ConstraintTreatment`]) for all of them: none (the violation drifts),
-//! Baumgarte stabilization of the acceleration equation, or projection of `q` and `q̇` onto the
-//! manifold after every accepted step.
+//! Constraint treatment ([`ConstraintTreatment`]) for the explicit methods: none (the violation
+//! drifts), Baumgarte stabilization of the acceleration equation, or projection of `q` and `q̇`
+//! onto the manifold after every accepted step (with the embedding formulation: coordinate
+//! partitioning). The implicit method keeps the position constraints itself.
 //!
 //! [`integrate`] runs from `t₀` to `t_end`, hands every output sample to an observer as it is
 //! produced (so output written before a failure is kept), and returns [`Statistics`]: steps,
@@ -24,6 +26,7 @@ mod dopri5;
 mod driver;
 mod error;
 mod explicit;
+mod generalized_alpha;
 mod options;
 mod statistics;
 

@@ -16,6 +16,12 @@ pub enum Method {
         /// Absolute tolerance.
         atol: f64,
     },
+    /// Generalized-α on the index-3 form, implicit, with Newton iterations; the step is halved on
+    /// Newton failure and grows back to `step` after successes.
+    GeneralizedAlpha {
+        /// Spectral radius at infinite frequency, 0 (maximal damping) to 1 (none).
+        rho_inf: f64,
+    },
 }
 
 impl Method {
@@ -25,6 +31,7 @@ impl Method {
             Method::SymplecticEuler => "symplectic-euler",
             Method::Rk4 => "rk4",
             Method::DormandPrince { .. } => "dopri5",
+            Method::GeneralizedAlpha { .. } => "generalized-alpha",
         }
     }
 }
