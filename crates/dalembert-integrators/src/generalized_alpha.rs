@@ -27,8 +27,10 @@
 
 use dalembert_constraints::{ConstraintValues, Model};
 use dalembert_kinematics::MassMatrix;
-use faer::linalg::solvers::Solve;
-use faer::Mat;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor, solve};
+use faer::perm::PermRef;
+use faer::{Mat, MatMut, Par};
 
 /// Coefficients of the method for a spectral radius `ρ∞`.
 #[derive(Debug, Clone, Copy)]
@@ -63,6 +65,7 @@ pub(crate) struct GeneralizedAlpha {
     lambda: Vec<f64>,
     mass: MassMatrix,
     values: ConstraintValues,
+    work: Work,
     /// Newton tolerance on the position update and on `‖C‖∞`.
     pub tolerance: f64,
     /// Newton iterations spent (cumulative).
@@ -71,6 +74,53 @@ pub(crate) struct GeneralizedAlpha {
     pub factorizations: u64,
     /// Residual evaluations (cumulative).
     pub evaluations: u64,
+}
+
+/// Storage allocated once: trial state, residuals, the iteration matrix and its LU.
+struct Work {
+    qdd: Vec<f64>,
+    lam: Vec<f64>,
+    q1: Vec<f64>,
+    qd1: Vec<f64>,
+    res: Vec<f64>,
+    rp: Vec<f64>,
+    rm: Vec<f64>,
+    qp: Vec<f64>,
+    qdp: Vec<f64>,
+    dx: Vec<f64>,
+    matrix: Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+    factor_buf: MemBuffer,
+    solve_buf: MemBuffer,
+}
+
+impl Work {
+    fn new(n: usize, m: usize) -> Self {
+        let k = n + m;
+        Work {
+            qdd: vec![0.0; n],
+            lam: vec![0.0; m],
+            q1: vec![0.0; n],
+            qd1: vec![0.0; n],
+            res: vec![0.0; k],
+            rp: vec![0.0; k],
+            rm: vec![0.0; k],
+            qp: vec![0.0; n],
+            qdp: vec![0.0; n],
+            dx: vec![0.0; k],
+            matrix: Mat::zeros(k, k),
+            perm: vec![0; k],
+            perm_inv: vec![0; k],
+            factor_buf: MemBuffer::new(factor::lu_in_place_scratch::<usize, f64>(
+                k,
+                k,
+                Par::Seq,
+                Default::default(),
+            )),
+            solve_buf: MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(k, 1, Par::Seq)),
+        }
+    }
 }
 
 /// Newton did not converge (or produced non-finite values) within the iteration limit.
@@ -86,6 +136,7 @@ impl GeneralizedAlpha {
             lambda: lambda0.to_vec(),
             mass: model.mass_matrix(q0),
             values: model.constraints().values(),
+            work: Work::new(q0.len(), lambda0.len()),
             tolerance: 1e-10,
             iterations: 0,
             factorizations: 0,
@@ -93,40 +144,40 @@ impl GeneralizedAlpha {
         }
     }
 
-    /// Positions and velocities for a trial `q̈_{n+1}`.
-    fn predict(&self, h: f64, q: &[f64], qd: &[f64], qdd_new: &[f64], q_out: &mut [f64], qd_out: &mut [f64]) {
+    /// Positions and velocities for the trial `q̈_{n+1}` in `work.qdd` (into `work.q1`, `work.qd1`).
+    fn predict(&mut self, h: f64, q: &[f64], qd: &[f64]) {
         let c = self.coef;
+        let w = &mut self.work;
         for i in 0..q.len() {
             let a_new =
-                ((1.0 - c.alpha_f) * qdd_new[i] + c.alpha_f * self.qdd[i] - c.alpha_m * self.a[i]) / (1.0 - c.alpha_m);
-            q_out[i] = q[i] + h * qd[i] + h * h * ((0.5 - c.beta) * self.a[i] + c.beta * a_new);
-            qd_out[i] = qd[i] + h * ((1.0 - c.gamma) * self.a[i] + c.gamma * a_new);
+                ((1.0 - c.alpha_f) * w.qdd[i] + c.alpha_f * self.qdd[i] - c.alpha_m * self.a[i]) / (1.0 - c.alpha_m);
+            w.q1[i] = q[i] + h * qd[i] + h * h * ((0.5 - c.beta) * self.a[i] + c.beta * a_new);
+            w.qd1[i] = qd[i] + h * ((1.0 - c.gamma) * self.a[i] + c.gamma * a_new);
         }
     }
 
-    /// `r = M q̈ + C_qᵀ λ − Q_e` and `C / β'` at `(t, q, q̇)`; refreshes `self.values`.
+    /// `r = M q̈ + C_qᵀ λ − Q_e` and `C / β'` at `(t, q, q̇)`; refreshes `mass` and `values`.
+    #[allow(clippy::too_many_arguments)]
     fn residual(
-        &mut self,
+        mass: &mut MassMatrix,
+        values: &mut ConstraintValues,
         model: &Model,
         t: f64,
-        q: &[f64],
-        qd: &[f64],
-        qdd: &[f64],
-        lambda: &[f64],
+        (q, qd): (&[f64], &[f64]),
+        (qdd, lambda): (&[f64], &[f64]),
         bp: f64,
         out: &mut [f64],
     ) {
-        self.evaluations += 1;
         let n = q.len();
         let (r, c) = out.split_at_mut(n);
         model.applied_forces(t, q, qd, r);
         r.iter_mut().for_each(|v| *v = -*v);
-        self.mass.update(model.bodies(), q);
-        self.mass.mul_add(1.0, qdd, r);
+        mass.update(model.bodies(), q);
+        mass.mul_add(1.0, qdd, r);
         let sys = model.constraints();
-        sys.evaluate(t, q, qd, &mut self.values);
-        sys.jacobian_transpose_mul_add(&self.values, 1.0, lambda, r);
-        for (ci, v) in c.iter_mut().zip(&self.values.c) {
+        sys.evaluate(t, q, qd, values);
+        sys.jacobian_transpose_mul_add(values, 1.0, lambda, r);
+        for (ci, v) in c.iter_mut().zip(&values.c) {
             *ci = v / bp;
         }
     }
@@ -140,54 +191,73 @@ impl GeneralizedAlpha {
         let bp = h * h * c.beta * (1.0 - c.alpha_f) / (1.0 - c.alpha_m);
         let gp = h * c.gamma * (1.0 - c.alpha_f) / (1.0 - c.alpha_m);
         let t1 = t + h;
-        let mut qdd = self.qdd.clone();
-        let mut lam = self.lambda.clone();
-        let (mut q1, mut qd1) = (vec![0.0; n], vec![0.0; n]);
-        let mut res = vec![0.0; n + m];
-        let mut lu = None;
+        self.work.qdd.copy_from_slice(&self.qdd);
+        self.work.lam.copy_from_slice(&self.lambda);
+        let mut factored = false;
         for it in 0..MAX_ITERATIONS {
-            self.predict(h, q, qd, &qdd, &mut q1, &mut qd1);
-            self.residual(model, t1, &q1, &qd1, &qdd, &lam, bp, &mut res);
-            if res.iter().any(|v| !v.is_finite()) {
+            self.predict(h, q, qd);
+            let w = &mut self.work;
+            Self::residual(
+                &mut self.mass,
+                &mut self.values,
+                model,
+                t1,
+                (&w.q1, &w.qd1),
+                (&w.qdd, &w.lam),
+                bp,
+                &mut w.res,
+            );
+            self.evaluations += 1;
+            if w.res.iter().any(|v| !v.is_finite()) {
                 return Err(NotConverged);
             }
-            if lu.is_none() || it == 3 {
-                lu = Some(
-                    self.iteration_matrix(model, t1, &q1, &qd1, &qdd, &lam, bp, gp)
-                        .partial_piv_lu(),
-                );
+            if !factored || it == 3 {
+                self.factor_iteration_matrix(model, t1, bp, gp);
                 self.factorizations += 1;
+                factored = true;
             }
-            let Some(f) = &lu else { return Err(NotConverged) };
-            let rhs = Mat::from_fn(n + m, 1, |i, _| -res[i]);
-            let dx = f.solve(&rhs);
+            let w = &mut self.work;
+            for (d, r) in w.dx.iter_mut().zip(&w.res) {
+                *d = -r;
+            }
+            let k = n + m;
+            let perm = PermRef::new_checked(&w.perm, &w.perm_inv, k);
+            solve::solve_in_place(
+                w.matrix.as_ref(),
+                w.matrix.as_ref(),
+                perm,
+                MatMut::from_column_major_slice_mut(&mut w.dx, k, 1),
+                Par::Seq,
+                MemStack::new(&mut w.solve_buf),
+            );
             self.iterations += 1;
             let mut dq = 0.0f64;
             for i in 0..n {
-                qdd[i] += dx[(i, 0)];
-                dq = dq.max((bp * dx[(i, 0)]).abs());
+                w.qdd[i] += w.dx[i];
+                dq = dq.max((bp * w.dx[i]).abs());
             }
             for j in 0..m {
-                lam[j] += dx[(n + j, 0)];
+                w.lam[j] += w.dx[n + j];
             }
             if !dq.is_finite() {
                 return Err(NotConverged);
             }
-            let qscale = 1.0 + q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let qscale = 1.0 + w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             if dq <= self.tolerance * qscale {
-                self.predict(h, q, qd, &qdd, &mut q1, &mut qd1);
-                model.constraints().evaluate(t1, &q1, &qd1, &mut self.values);
+                self.predict(h, q, qd);
+                let w = &self.work;
+                model.constraints().evaluate(t1, &w.q1, &w.qd1, &mut self.values);
                 let cmax = self.values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
                 if cmax <= self.tolerance {
                     // Accept: advance a, q̈, λ.
                     for i in 0..n {
-                        self.a[i] = ((1.0 - c.alpha_f) * qdd[i] + c.alpha_f * self.qdd[i] - c.alpha_m * self.a[i])
+                        self.a[i] = ((1.0 - c.alpha_f) * w.qdd[i] + c.alpha_f * self.qdd[i] - c.alpha_m * self.a[i])
                             / (1.0 - c.alpha_m);
                     }
-                    self.qdd = qdd;
-                    self.lambda = lam;
-                    q.copy_from_slice(&q1);
-                    qd.copy_from_slice(&qd1);
+                    self.qdd.copy_from_slice(&w.qdd);
+                    self.lambda.copy_from_slice(&w.lam);
+                    q.copy_from_slice(&w.q1);
+                    qd.copy_from_slice(&w.qd1);
                     return Ok(());
                 }
             }
@@ -195,23 +265,14 @@ impl GeneralizedAlpha {
         Err(NotConverged)
     }
 
-    /// `[M + β'K + γ'D, C_qᵀ; C_q, 0]`, with `K` and `D` by central finite differences of the
-    /// residual.
-    fn iteration_matrix(
-        &mut self,
-        model: &Model,
-        t: f64,
-        q: &[f64],
-        qd: &[f64],
-        qdd: &[f64],
-        lam: &[f64],
-        bp: f64,
-        gp: f64,
-    ) -> Mat<f64> {
-        let n = q.len();
-        let m = lam.len();
-        let mut k = Mat::<f64>::zeros(n + m, n + m);
-        self.mass.update(model.bodies(), q);
+    /// Builds `[M + β'K + γ'D, C_qᵀ; C_q, 0]` at the trial state in `work` (with `K` and `D` by
+    /// central finite differences of the residual) and factors it in place.
+    fn factor_iteration_matrix(&mut self, model: &Model, t: f64, bp: f64, gp: f64) {
+        let w = &mut self.work;
+        let n = w.q1.len();
+        let k = &mut w.matrix;
+        k.fill(0.0);
+        self.mass.update(model.bodies(), &w.q1);
         for (b, blk) in self.mass.blocks().iter().enumerate() {
             for r in 0..3 {
                 for cc in 0..3 {
@@ -219,37 +280,80 @@ impl GeneralizedAlpha {
                 }
             }
         }
-        let mut rp = vec![0.0; n + m];
-        let mut rm = vec![0.0; n + m];
-        let (mut qp, mut qdp) = (q.to_vec(), qd.to_vec());
+        w.qp.copy_from_slice(&w.q1);
+        w.qdp.copy_from_slice(&w.qd1);
         for j in 0..n {
             // K column j (position), scaled by β'.
-            let hq = 1e-7 * (1.0 + q[j].abs());
-            qp[j] = q[j] + hq;
-            self.residual(model, t, &qp, qd, qdd, lam, 1.0, &mut rp);
-            qp[j] = q[j] - hq;
-            self.residual(model, t, &qp, qd, qdd, lam, 1.0, &mut rm);
-            qp[j] = q[j];
+            let hq = 1e-7 * (1.0 + w.q1[j].abs());
+            w.qp[j] = w.q1[j] + hq;
+            Self::residual(
+                &mut self.mass,
+                &mut self.values,
+                model,
+                t,
+                (&w.qp, &w.qd1),
+                (&w.qdd, &w.lam),
+                1.0,
+                &mut w.rp,
+            );
+            w.qp[j] = w.q1[j] - hq;
+            Self::residual(
+                &mut self.mass,
+                &mut self.values,
+                model,
+                t,
+                (&w.qp, &w.qd1),
+                (&w.qdd, &w.lam),
+                1.0,
+                &mut w.rm,
+            );
+            w.qp[j] = w.q1[j];
             for i in 0..n {
-                k[(i, j)] += bp * (rp[i] - rm[i]) / (2.0 * hq);
+                k[(i, j)] += bp * (w.rp[i] - w.rm[i]) / (2.0 * hq);
             }
             // D column j (velocity), scaled by γ'.
-            let hv = 1e-7 * (1.0 + qd[j].abs());
-            qdp[j] = qd[j] + hv;
-            self.residual(model, t, q, &qdp, qdd, lam, 1.0, &mut rp);
-            qdp[j] = qd[j] - hv;
-            self.residual(model, t, q, &qdp, qdd, lam, 1.0, &mut rm);
-            qdp[j] = qd[j];
+            let hv = 1e-7 * (1.0 + w.qd1[j].abs());
+            w.qdp[j] = w.qd1[j] + hv;
+            Self::residual(
+                &mut self.mass,
+                &mut self.values,
+                model,
+                t,
+                (&w.q1, &w.qdp),
+                (&w.qdd, &w.lam),
+                1.0,
+                &mut w.rp,
+            );
+            w.qdp[j] = w.qd1[j] - hv;
+            Self::residual(
+                &mut self.mass,
+                &mut self.values,
+                model,
+                t,
+                (&w.q1, &w.qdp),
+                (&w.qdd, &w.lam),
+                1.0,
+                &mut w.rm,
+            );
+            w.qdp[j] = w.qd1[j];
             for i in 0..n {
-                k[(i, j)] += gp * (rp[i] - rm[i]) / (2.0 * hv);
+                k[(i, j)] += gp * (w.rp[i] - w.rm[i]) / (2.0 * hv);
             }
         }
+        self.evaluations += 4 * n as u64;
         let sys = model.constraints();
-        sys.evaluate(t, q, qd, &mut self.values);
+        sys.evaluate(t, &w.q1, &w.qd1, &mut self.values);
         for (&(r, c), &v) in sys.pattern().iter().zip(&self.values.jacobian) {
             k[(n + r, c)] += v;
             k[(c, n + r)] += v;
         }
-        k
+        factor::lu_in_place(
+            k.as_mut(),
+            &mut w.perm,
+            &mut w.perm_inv,
+            Par::Seq,
+            MemStack::new(&mut w.factor_buf),
+            Default::default(),
+        );
     }
 }

@@ -1,0 +1,71 @@
+//! Every integrator runs on every formulation through the one interface, and they agree on the
+//! motion: four-bar with a crank torque, 0.5 s, each method with Baumgarte stabilization
+//! (generalized-α: its own index-3 constraint handling). Final positions agree across formulations
+//! to 1e-8 for each method (the formulations' accelerations differ only by round-off, amplified by
+//! the run). Projection is not compared here: the augmented formulation projects in the mass metric
+//! and the others by coordinate partitioning, two different (both valid) corrections.
+
+use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::{FormulationKind, Simulation};
+use dalembert_testkit::mechanisms;
+
+#[test]
+fn every_method_runs_on_every_formulation() {
+    let mech = mechanisms::four_bar(2.5, 1.0, 5.0, false);
+    let proj = ConstraintTreatment::baumgarte_for_step(1e-3);
+    let methods = [
+        IntegratorOptions::fixed(Method::SymplecticEuler, 1e-3, 0.1).with_treatment(proj),
+        IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1).with_treatment(proj),
+        IntegratorOptions::fixed(
+            Method::DormandPrince {
+                rtol: 1e-9,
+                atol: 1e-11,
+            },
+            1e-3,
+            0.1,
+        )
+        .with_treatment(proj),
+        IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 0.1),
+    ];
+    for opts in methods {
+        let mut finals = Vec::new();
+        for kind in [
+            FormulationKind::Augmented,
+            FormulationKind::Embedding,
+            FormulationKind::Amalgamated,
+        ] {
+            let sim = Simulation {
+                model: mech.model.clone(),
+                q: mech.q.clone(),
+                qd: mech.qd.clone(),
+                start: 0.0,
+                end: 0.5,
+                formulation: kind,
+                integrator: opts,
+                velocity_weights: None,
+            };
+            let mut f = sim.formulation().unwrap();
+            let mut last = Vec::new();
+            let stats = integrate(f.as_mut(), 0.0, 0.5, &sim.q, &sim.qd, &opts, &mut |s| {
+                last = s.q.to_vec()
+            })
+            .unwrap_or_else(|e| panic!("{} on {}: {e}", opts.method.name(), kind.name()));
+            if let Method::GeneralizedAlpha { .. } = opts.method {
+                assert!(
+                    stats.max_constraint_violation <= 1e-10,
+                    "{} on {}",
+                    opts.method.name(),
+                    kind.name()
+                );
+            }
+            finals.push(last);
+        }
+        for other in &finals[1..] {
+            let d = other
+                .iter()
+                .zip(&finals[0])
+                .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            assert!(d < 1e-8, "{}: formulations differ by {d:e}", opts.method.name());
+        }
+    }
+}
