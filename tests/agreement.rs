@@ -41,6 +41,27 @@ fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
             )
             .unwrap(),
         ),
+        // The Schur complement needs positive mass and inertia everywhere; where it cannot run, the
+        // dense LU stands in for it.
+        Box::new(
+            Augmented::new(
+                m.clone(),
+                AugmentedOptions {
+                    backend: Backend::Schur,
+                    ..Default::default()
+                },
+            )
+            .or_else(|_| {
+                Augmented::new(
+                    m.clone(),
+                    AugmentedOptions {
+                        backend: Backend::Dense,
+                        ..Default::default()
+                    },
+                )
+            })
+            .unwrap(),
+        ),
         Box::new(Embedding::with_defaults(m.clone())),
         Box::new(Embedding::new(
             m.clone(),
@@ -53,9 +74,10 @@ fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
     ]
 }
 
-const NAMES: [&str; 5] = [
+const NAMES: [&str; 6] = [
     "augmented/dense",
     "augmented/sparse",
+    "augmented/schur",
     "embedding",
     "embedding/elimination",
     "amalgamated",

@@ -1,7 +1,7 @@
 //! The augmented formulation type and its [`Formulation`] implementation.
 
 use crate::diagnosis::{diagnose, minimum_norm_solve};
-use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SparseKkt};
+use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SchurKkt, SparseKkt};
 use dalembert_constraints::{
     ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, RedundancyTreatment, Stabilization,
 };
@@ -11,11 +11,15 @@ use std::sync::Arc;
 /// Which linear-algebra back end solves the saddle-point system.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Backend {
-    /// Dense up to [`AugmentedOptions::dense_limit`] unknowns, sparse above.
+    /// Up to [`AugmentedOptions::dense_limit`] unknowns: the Schur complement when the mass blocks
+    /// allow it (positive definite or diagonal), dense LU otherwise; sparse LU above.
     #[default]
     Auto,
-    /// Dense LU with partial pivoting.
+    /// Dense LU with partial pivoting of the whole saddle-point matrix.
     Dense,
+    /// Range space: Cholesky of `S = C_q M⁻¹ C_qᵀ`, with a small reduced system for coordinates
+    /// without inertia (needs mass blocks that are positive definite, or diagonal).
+    Schur,
     /// Sparse LU with a symbolic analysis reused across evaluations.
     Sparse,
 }
@@ -78,13 +82,27 @@ impl Augmented {
     pub fn new(model: Arc<Model>, options: AugmentedOptions) -> Result<Self, DynamicsError> {
         let n = model.num_coordinates();
         let m = model.num_equations();
-        let dense = match options.backend {
-            Backend::Dense => true,
-            Backend::Sparse => false,
-            Backend::Auto => n + m <= options.dense_limit,
+        let schur_ok = crate::kkt::schur_applicable(model.bodies(), m);
+        let backend = match options.backend {
+            Backend::Auto if n + m > options.dense_limit => Backend::Sparse,
+            Backend::Auto if schur_ok => Backend::Schur,
+            Backend::Auto => Backend::Dense,
+            Backend::Schur if !schur_ok => {
+                return Err(DynamicsError::Singular {
+                    time: 0.0,
+                    what: "the Schur back end needs mass blocks that are positive definite or diagonal".into(),
+                })
+            }
+            other => other,
         };
-        let solver = if dense {
-            KktSolver::Dense(DenseKkt::new(n, m, options.pivot_tolerance))
+        let solver = if backend == Backend::Dense {
+            KktSolver::Dense(Box::new(DenseKkt::new(n, m, options.pivot_tolerance)))
+        } else if backend == Backend::Schur {
+            KktSolver::Schur(Box::new(SchurKkt::new(
+                model.constraints(),
+                model.bodies(),
+                options.pivot_tolerance,
+            )))
         } else {
             KktSolver::Sparse(Box::new(
                 SparseKkt::new(model.constraints(), options.pivot_tolerance)
@@ -112,7 +130,7 @@ impl Augmented {
         Self::new(model, AugmentedOptions::default())
     }
 
-    /// The back end in use: `"dense"` or `"sparse"`.
+    /// The back end in use: `"dense"`, `"schur"` or `"sparse"`.
     pub fn backend_name(&self) -> &'static str {
         self.solver.name()
     }
@@ -130,21 +148,35 @@ impl Augmented {
         let factored = self.solver.factor(&self.mass, sys, &self.values);
         if factored.is_ok() {
             self.x.copy_from_slice(&self.b);
-            self.solver.solve(&mut self.x);
-            kkt_mul(&self.mass, sys, &self.values, &self.x, &mut self.r);
+            self.solver.solve(sys, &mut self.x);
             let scale = kkt_scale(&self.mass, &self.values);
             let bn = self.b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let xn = self.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let res = self
-                .r
-                .iter()
-                .zip(&self.b)
-                .fold(0.0f64, |a, (r, b)| a.max((r - b).abs()));
-            if res.is_finite()
-                && xn.is_finite()
-                && res <= self.options.residual_tolerance * (bn + scale * xn).max(f64::MIN_POSITIVE)
-            {
-                return Ok(());
+            // Check the residual; one step of iterative refinement when it is above round-off (the
+            // Schur complement squares the condition number of C_q M^-1/2).
+            for refinement in 0..2 {
+                kkt_mul(&self.mass, sys, &self.values, &self.x, &mut self.r);
+                let xn = self.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let mut res = 0.0f64;
+                for (r, b) in self.r.iter_mut().zip(&self.b) {
+                    *r = b - *r;
+                    res = res.max(r.abs());
+                }
+                let size = (bn + scale * xn).max(f64::MIN_POSITIVE);
+                if !(res.is_finite() && xn.is_finite()) {
+                    break;
+                }
+                let round_off = res <= 1e-13 * size && !(refinement == 0 && self.solver.refines());
+                if round_off || (refinement == 1 && res <= self.options.residual_tolerance * size) {
+                    return Ok(());
+                }
+                if refinement == 0 {
+                    self.solver.solve(sys, &mut self.r);
+                    for (x, d) in self.x.iter_mut().zip(&self.r) {
+                        *x += d;
+                    }
+                } else {
+                    break;
+                }
             }
         }
         match self.options.redundancy {

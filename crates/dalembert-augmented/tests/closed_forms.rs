@@ -1,5 +1,5 @@
 //! The augmented solve against minimal-coordinate closed forms derived independently
-//! (`dalembert-testkit::closed_form`), on both back ends.
+//! (`dalembert-testkit::closed_form`), on every back end (dense LU, Schur complement, sparse LU).
 //!
 //! Tolerance 1e-12 relative: the saddle-point systems here have condition numbers ≈ 1e2–1e3, so
 //! backward-stable LU leaves ≈ 1e-14 relative error; 1e-12 leaves a margin without hiding a
@@ -28,7 +28,7 @@ fn rel(a: f64, b: f64, scale: f64) -> f64 {
     (a - b).abs() / scale.max(b.abs())
 }
 
-const BACKENDS: [Backend; 2] = [Backend::Dense, Backend::Sparse];
+const BACKENDS: [Backend; 3] = [Backend::Dense, Backend::Schur, Backend::Sparse];
 
 #[test]
 fn rod_pendulum_matches_closed_form() {

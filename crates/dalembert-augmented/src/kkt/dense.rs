@@ -1,7 +1,11 @@
 //! Dense back end: LU with partial pivoting of the assembled `(n+m)²` KKT matrix, factored in place
 //! in storage allocated once.
 
+use super::small_lu::SmallLu;
 use super::SingularKkt;
+
+/// Largest `n + m` factored by the unblocked LU.
+const SMALL: usize = 64;
 use dalembert_constraints::{ConstraintSystem, ConstraintValues};
 use dalembert_kinematics::MassMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -11,6 +15,8 @@ use faer::{Mat, MatMut, Par};
 
 pub(crate) struct DenseKkt {
     n: usize,
+    /// Unblocked LU for small matrices (`n + m ≤ SMALL`), else faer's.
+    small: Option<SmallLu>,
     a: Mat<f64>,
     perm: Vec<usize>,
     perm_inv: Vec<usize>,
@@ -23,8 +29,11 @@ pub(crate) struct DenseKkt {
 impl DenseKkt {
     pub fn new(n: usize, m: usize, pivot_tolerance: f64) -> Self {
         let k = n + m;
+        let small = (k <= SMALL).then(|| SmallLu::new(k));
+        let k = if small.is_some() { 0 } else { k };
         DenseKkt {
             n,
+            small,
             a: Mat::zeros(k, k),
             perm: vec![0; k],
             perm_inv: vec![0; k],
@@ -46,6 +55,26 @@ impl DenseKkt {
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
         let n = self.n;
+        if let Some(lu) = &mut self.small {
+            let k = n + sys.num_equations();
+            lu.a.iter_mut().for_each(|v| *v = 0.0);
+            for (i, b) in mass.blocks().iter().enumerate() {
+                for r in 0..3 {
+                    for c in 0..3 {
+                        lu.a[(3 * i + r) * k + 3 * i + c] = b[(r, c)];
+                    }
+                }
+            }
+            for (&(r, c), &v) in sys.pattern().iter().zip(&vals.jacobian) {
+                lu.a[(n + r) * k + c] += v;
+                lu.a[c * k + n + r] += v;
+            }
+            let (smallest, largest) = lu.factor();
+            if !(smallest.is_finite() && largest.is_finite()) || smallest <= self.pivot_tolerance * largest {
+                return Err(SingularKkt(format!("LU pivot ratio {:.3e}", smallest / largest)));
+            }
+            return Ok(());
+        }
         let k = self.a.nrows();
         self.a.fill(0.0);
         for (i, b) in mass.blocks().iter().enumerate() {
@@ -81,6 +110,10 @@ impl DenseKkt {
     }
 
     pub fn solve(&mut self, x: &mut [f64]) {
+        if let Some(lu) = &self.small {
+            lu.solve(x);
+            return;
+        }
         let k = x.len();
         let rhs = MatMut::from_column_major_slice_mut(x, k, 1);
         // SAFETY-free: the permutation arrays were written by `lu_in_place` and are valid inverses.

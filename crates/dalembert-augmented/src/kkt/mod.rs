@@ -2,9 +2,12 @@
 //! matrix with the Jacobian restricted to chosen rows.
 
 mod dense;
+mod schur;
+mod small_lu;
 mod sparse;
 
 pub(crate) use dense::DenseKkt;
+pub(crate) use schur::{applicable as schur_applicable, SchurKkt};
 pub(crate) use sparse::SparseKkt;
 
 use dalembert_constraints::{ConstraintSystem, ConstraintValues};
@@ -16,7 +19,8 @@ pub(crate) struct SingularKkt(pub String);
 
 /// A factorization of the KKT matrix, refactored in place each evaluation.
 pub(crate) enum KktSolver {
-    Dense(DenseKkt),
+    Dense(Box<DenseKkt>),
+    Schur(Box<SchurKkt>),
     Sparse(Box<SparseKkt>),
 }
 
@@ -30,22 +34,31 @@ impl KktSolver {
     ) -> Result<(), SingularKkt> {
         match self {
             KktSolver::Dense(d) => d.factor(mass, sys, vals),
+            KktSolver::Schur(s) => s.factor(mass, sys, vals),
             KktSolver::Sparse(s) => s.factor(mass, sys, vals),
         }
     }
 
     /// Solves in place: `x` holds the right-hand side on entry, the solution on exit.
-    pub fn solve(&mut self, x: &mut [f64]) {
+    pub fn solve(&mut self, sys: &ConstraintSystem, x: &mut [f64]) {
         match self {
             KktSolver::Dense(d) => d.solve(x),
+            KktSolver::Schur(s) => s.solve(sys, x),
             KktSolver::Sparse(s) => s.solve(x),
         }
+    }
+
+    /// True for back ends that are not backward stable for the whole matrix (the Schur complement
+    /// squares the conditioning of `C_q M^-1/2`): their solutions get one step of refinement.
+    pub fn refines(&self) -> bool {
+        matches!(self, KktSolver::Schur(_))
     }
 
     /// Back end name.
     pub fn name(&self) -> &'static str {
         match self {
             KktSolver::Dense(_) => "dense",
+            KktSolver::Schur(_) => "schur",
             KktSolver::Sparse(_) => "sparse",
         }
     }

@@ -1,0 +1,121 @@
+//! LU with partial pivoting for small dense matrices (up to a few dozen rows), row-major, in
+//! storage allocated once. For matrices this small a plain unblocked elimination beats a blocked,
+//! SIMD-dispatched library routine several times over (measured on the slider-crank's 17 × 17
+//! saddle-point matrix: 2.7× fewer instructions per evaluation).
+
+/// In-place LU factors `P A = L U` of an `n × n` row-major matrix.
+pub(crate) struct SmallLu {
+    n: usize,
+    /// The matrix on input; `L` (unit, strictly lower) and `U` after [`SmallLu::factor`].
+    pub a: Vec<f64>,
+    piv: Vec<usize>,
+}
+
+impl SmallLu {
+    pub fn new(n: usize) -> Self {
+        SmallLu {
+            n,
+            a: vec![0.0; n * n],
+            piv: vec![0; n],
+        }
+    }
+
+    /// Factors in place; returns the smallest and largest pivot magnitudes.
+    pub fn factor(&mut self) -> (f64, f64) {
+        let n = self.n;
+        let a = &mut self.a;
+        let (mut smallest, mut largest) = (f64::INFINITY, 0.0f64);
+        for k in 0..n {
+            let mut p = k;
+            let mut best = a[k * n + k].abs();
+            for i in k + 1..n {
+                let v = a[i * n + k].abs();
+                if v > best {
+                    best = v;
+                    p = i;
+                }
+            }
+            self.piv[k] = p;
+            if p != k {
+                for j in 0..n {
+                    a.swap(k * n + j, p * n + j);
+                }
+            }
+            smallest = smallest.min(best);
+            largest = largest.max(best);
+            if best == 0.0 || !best.is_finite() {
+                continue;
+            }
+            let inv = 1.0 / a[k * n + k];
+            let (upper, lower) = a.split_at_mut((k + 1) * n);
+            let pivot_row = &upper[k * n + k + 1..k * n + n];
+            for i in 0..n - k - 1 {
+                let row = &mut lower[i * n..(i + 1) * n];
+                let l = row[k] * inv;
+                row[k] = l;
+                if l != 0.0 {
+                    for (r, u) in row[k + 1..].iter_mut().zip(pivot_row) {
+                        *r -= l * u;
+                    }
+                }
+            }
+        }
+        (smallest, largest)
+    }
+
+    /// Solves `A x = b` in place with the factors.
+    pub fn solve(&self, x: &mut [f64]) {
+        let n = self.n;
+        let a = &self.a;
+        for k in 0..n {
+            x.swap(k, self.piv[k]);
+        }
+        for i in 0..n {
+            let mut s = x[i];
+            for j in 0..i {
+                s -= a[i * n + j] * x[j];
+            }
+            x[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = x[i];
+            for j in i + 1..n {
+                s -= a[i * n + j] * x[j];
+            }
+            x[i] = s / a[i * n + i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SmallLu;
+
+    /// Residual of a pivoting-demanding system (zero leading diagonal, saddle-point shape).
+    #[test]
+    fn solves_a_saddle_point_system_to_round_off() {
+        let n = 5;
+        let m = [
+            [2.0, 0.0, 0.0, 1.0, 0.0],
+            [0.0, 3.0, 0.0, 0.5, 1.0],
+            [0.0, 0.0, 1.5, -1.0, 2.0],
+            [1.0, 0.5, -1.0, 0.0, 0.0],
+            [0.0, 1.0, 2.0, 0.0, 0.0],
+        ];
+        let mut lu = SmallLu::new(n);
+        for i in 0..n {
+            for j in 0..n {
+                lu.a[i * n + j] = m[i][j];
+            }
+        }
+        let (lo, hi) = lu.factor();
+        assert!(lo > 0.1 && hi < 10.0);
+        let b = [1.0, -2.0, 0.5, 3.0, -1.0];
+        let mut x = b;
+        lu.solve(&mut x);
+        for i in 0..n {
+            let r: f64 = (0..n).map(|j| m[i][j] * x[j]).sum::<f64>() - b[i];
+            assert!(r.abs() < 1e-14, "row {i}: {r}");
+        }
+    }
+}

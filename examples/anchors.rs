@@ -1,0 +1,193 @@
+//! dalembert's side of the `shared/anchors` protocol: times and accuracy on the anchor scenes
+//! (chain of N rods, four-bar, slider-crank), one JSON record per line to `$ANCHORS_OUT` (or
+//! stdout), in the fields of `shared/anchors/README.md`. Run from the anchors folder (it reads
+//! `results/reference.json` for the errors at t = 1 s):
+//!
+//! ```sh
+//! ANCHORS_EXTRA="cargo run --release --manifest-path $PROJECT/Cargo.toml --example anchors" python run_all.py
+//! ```
+//!
+//! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once.
+
+use dalembert::augmented::Augmented;
+use dalembert::constraints::{Formulation, Stabilization};
+use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert_testkit::mechanisms::{self, Mechanism};
+use std::io::Write;
+use std::time::Instant;
+
+struct Variant {
+    name: &'static str,
+    integrator: &'static str,
+    options: IntegratorOptions,
+}
+
+fn variants() -> Vec<Variant> {
+    let h = 1e-3;
+    let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
+    vec![
+        Variant {
+            name: "augmented RK4",
+            integrator: "RK4",
+            options: IntegratorOptions::fixed(Method::Rk4, h, 0.01),
+        },
+        Variant {
+            name: "augmented RK4+proj",
+            integrator: "RK4",
+            options: IntegratorOptions::fixed(Method::Rk4, h, 0.01).with_treatment(proj),
+        },
+        Variant {
+            name: "augmented Euler+proj",
+            integrator: "Euler",
+            options: IntegratorOptions::fixed(Method::SymplecticEuler, h, 0.01).with_treatment(proj),
+        },
+        Variant {
+            name: "augmented GenAlpha",
+            integrator: "GeneralizedAlpha",
+            options: IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.9 }, h, 0.01),
+        },
+    ]
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// µs per forward-dynamics evaluation (median of batches).
+fn fd_us(mech: &Mechanism) -> f64 {
+    let mut f = Augmented::with_defaults(mech.model.clone()).expect("formulation");
+    let (n, m) = (mech.q.len(), mech.model.num_equations());
+    let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
+    let reps = (20000 / (n + 1)).max(20);
+    let batches: Vec<f64> = (0..7)
+        .map(|_| {
+            let t0 = Instant::now();
+            for _ in 0..reps {
+                f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+                    .expect("evaluation");
+            }
+            t0.elapsed().as_secs_f64() * 1e6 / reps as f64
+        })
+        .collect();
+    median(batches)
+}
+
+struct RunResult {
+    sim_s: f64,
+    at_one: Vec<f64>,
+    de_10s: f64,
+    de_max: f64,
+    cviol: f64,
+}
+
+fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
+    let mut f = Augmented::with_defaults(mech.model.clone()).expect("formulation");
+    let e0 = f.energy(0.0, &mech.q, &mech.qd).total();
+    let mut at_one = Vec::new();
+    let mut de_max = 0.0f64;
+    let mut de_last = 0.0;
+    let stats = integrate(&mut f, 0.0, 10.0, &mech.q, &mech.qd, opts, &mut |s| {
+        if (s.t - 1.0).abs() < 1e-9 {
+            at_one = [s.q, s.qd].concat();
+        }
+        de_max = de_max.max((s.energy - e0).abs());
+        de_last = s.energy - e0;
+    })
+    .expect("run");
+    RunResult {
+        sim_s: stats.wall_time.as_secs_f64(),
+        at_one,
+        de_10s: de_last,
+        de_max,
+        cviol: stats.max_constraint_violation,
+    }
+}
+
+/// Max abs errors (positions and angles; velocities) against the reference bodies at t = 1 s.
+fn errors(state: &[f64], reference: &serde_json::Value) -> (f64, f64) {
+    let n = state.len() / 2;
+    let (q, qd) = state.split_at(n);
+    let mut ep = 0.0f64;
+    let mut ev = 0.0f64;
+    let tau = std::f64::consts::TAU;
+    for (k, b) in reference.as_array().into_iter().flatten().enumerate() {
+        let r: Vec<f64> = b.as_array().into_iter().flatten().filter_map(|v| v.as_f64()).collect();
+        if r.len() != 6 || 3 * k + 2 >= n {
+            continue;
+        }
+        let dth = (q[3 * k + 2] - r[2]).rem_euclid(tau);
+        ep = ep
+            .max((q[3 * k] - r[0]).abs())
+            .max((q[3 * k + 1] - r[1]).abs())
+            .max(dth.min(tau - dth));
+        ev = ev
+            .max((qd[3 * k] - r[3]).abs())
+            .max((qd[3 * k + 1] - r[4]).abs())
+            .max((qd[3 * k + 2] - r[5]).abs());
+    }
+    (ep, ev)
+}
+
+fn main() {
+    let quick = std::env::var("ANCHORS_QUICK").is_ok();
+    let reference: serde_json::Value = std::fs::read_to_string("results/reference.json")
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or(serde_json::Value::Null);
+    let mut out: Box<dyn Write> = match std::env::var("ANCHORS_OUT") {
+        Ok(p) => Box::new(std::fs::File::create(p).expect("ANCHORS_OUT writable")),
+        Err(_) => Box::new(std::io::stdout()),
+    };
+    let mut scenes: Vec<(String, usize, Mechanism)> = Vec::new();
+    for &n in &[1usize, 2, 4, 8, 16, 32, 64] {
+        if quick && n > 8 {
+            continue;
+        }
+        scenes.push((
+            "chain".into(),
+            n,
+            mechanisms::chain(1.0, 1.0, &vec![0.0; n], &vec![0.0; n], &[]),
+        ));
+    }
+    scenes.push((
+        "fourbar".into(),
+        1,
+        mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false),
+    ));
+    scenes.push((
+        "slidercrank".into(),
+        1,
+        mechanisms::slider_crank(std::f64::consts::FRAC_PI_3, 0.0),
+    ));
+    for (scene, n, mech) in &scenes {
+        let key = format!("{scene}/{n}");
+        let fd = fd_us(mech);
+        for v in variants() {
+            let repeats = if quick { 1 } else { 3 };
+            let runs: Vec<RunResult> = (0..repeats).map(|_| simulate(mech, &v.options)).collect();
+            let sim_s = median(runs.iter().map(|r| r.sim_s).collect());
+            let r = &runs[0];
+            let (ep, ev) = errors(&r.at_one, &reference["scenes"][&key]["bodies"]);
+            let has_ref = !reference["scenes"][&key]["bodies"].is_null();
+            let rec = serde_json::json!({
+                "engine": "dalembert",
+                "variant": v.name,
+                "scene": scene,
+                "N": n,
+                "integrator": v.integrator,
+                "fd_us": fd,
+                "fd_call": "Augmented::accelerations",
+                "sim_s": sim_s,
+                "sim_native_s": sim_s,
+                "err_pos_1s": if has_ref { serde_json::json!(ep) } else { serde_json::Value::Null },
+                "err_vel_1s": if has_ref { serde_json::json!(ev) } else { serde_json::Value::Null },
+                "dE_10s": r.de_10s,
+                "dE_max": r.de_max,
+                "cviol_max": r.cviol,
+            });
+            writeln!(out, "{rec}").expect("write");
+            eprintln!("{key} {}: {:.4} s, err {ep:.2e}/{ev:.2e}", v.name, sim_s);
+        }
+    }
+}
