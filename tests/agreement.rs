@@ -62,6 +62,25 @@ fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
             })
             .unwrap(),
         ),
+        Box::new(
+            Augmented::new(
+                m.clone(),
+                AugmentedOptions {
+                    backend: Backend::SparseSchur,
+                    ..Default::default()
+                },
+            )
+            .or_else(|_| {
+                Augmented::new(
+                    m.clone(),
+                    AugmentedOptions {
+                        backend: Backend::Dense,
+                        ..Default::default()
+                    },
+                )
+            })
+            .unwrap(),
+        ),
         Box::new(Embedding::with_defaults(m.clone())),
         Box::new(Embedding::new(
             m.clone(),
@@ -74,10 +93,11 @@ fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
     ]
 }
 
-const NAMES: [&str; 6] = [
+const NAMES: [&str; 7] = [
     "augmented/dense",
     "augmented/sparse",
     "augmented/schur",
+    "augmented/sparse-schur",
     "embedding",
     "embedding/elimination",
     "amalgamated",

@@ -1,7 +1,7 @@
 //! The augmented formulation type and its [`Formulation`] implementation.
 
 use crate::diagnosis::{diagnose, minimum_norm_solve};
-use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SchurKkt, SparseKkt};
+use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SchurKkt, SparseKkt, SparseSchurKkt};
 use dalembert_constraints::{
     ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, RedundancyTreatment, Stabilization,
 };
@@ -12,7 +12,8 @@ use std::sync::Arc;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Backend {
     /// Up to [`AugmentedOptions::dense_limit`] unknowns: the Schur complement when the mass blocks
-    /// allow it (positive definite or diagonal), dense LU otherwise; sparse LU above.
+    /// allow it (positive definite or diagonal), dense LU otherwise; above it the sparse Schur
+    /// complement when every mass block is positive definite, sparse LU otherwise.
     #[default]
     Auto,
     /// Dense LU with partial pivoting of the whole saddle-point matrix.
@@ -20,8 +21,11 @@ pub enum Backend {
     /// Range space: Cholesky of `S = C_q M⁻¹ C_qᵀ`, with a small reduced system for coordinates
     /// without inertia (needs mass blocks that are positive definite, or diagonal).
     Schur,
-    /// Sparse LU with a symbolic analysis reused across evaluations.
+    /// Sparse LU of the saddle-point matrix with a symbolic analysis reused across evaluations.
     Sparse,
+    /// Sparse Cholesky of `S = C_q M⁻¹ C_qᵀ` (positive definite mass blocks), symbolic analysis
+    /// reused: linear cost for chains.
+    SparseSchur,
 }
 
 /// Settings of the augmented formulation.
@@ -83,7 +87,9 @@ impl Augmented {
         let n = model.num_coordinates();
         let m = model.num_equations();
         let schur_ok = crate::kkt::schur_applicable(model.bodies(), m);
+        let spd = model.bodies().iter().all(|b| b.mass > 0.0 && b.inertia > 0.0);
         let backend = match options.backend {
+            Backend::Auto if n + m > options.dense_limit && spd => Backend::SparseSchur,
             Backend::Auto if n + m > options.dense_limit => Backend::Sparse,
             Backend::Auto if schur_ok => Backend::Schur,
             Backend::Auto => Backend::Dense,
@@ -97,6 +103,17 @@ impl Augmented {
         };
         let solver = if backend == Backend::Dense {
             KktSolver::Dense(Box::new(DenseKkt::new(n, m, options.pivot_tolerance)))
+        } else if backend == Backend::SparseSchur {
+            if !spd {
+                return Err(DynamicsError::Singular {
+                    time: 0.0,
+                    what: "the sparse Schur back end needs every body's mass and inertia positive".into(),
+                });
+            }
+            KktSolver::SparseSchur(Box::new(
+                SparseSchurKkt::new(model.constraints(), options.pivot_tolerance)
+                    .map_err(|e| DynamicsError::Factorization { time: 0.0, what: e.0 })?,
+            ))
         } else if backend == Backend::Schur {
             KktSolver::Schur(Box::new(SchurKkt::new(
                 model.constraints(),

@@ -18,10 +18,13 @@ fn run(model: &Arc<Model>, q: &[f64], qd: &[f64], backend: Backend) -> (Vec<f64>
         },
     )
     .unwrap();
-    assert_eq!(
-        f.backend_name(),
-        if backend == Backend::Dense { "dense" } else { "sparse" }
-    );
+    let expected = match backend {
+        Backend::Dense => "dense",
+        Backend::Schur => "schur",
+        Backend::SparseSchur => "sparse-schur",
+        _ => "sparse",
+    };
+    assert_eq!(f.backend_name(), expected);
     let (mut qdd, mut lam) = (vec![0.0; q.len()], vec![0.0; model.num_equations()]);
     f.accelerations(0.3, q, qd, Stabilization::None, &mut qdd, &mut lam)
         .unwrap();
@@ -39,6 +42,30 @@ fn dense_and_sparse_agree_on_chains() {
         let mech = mechanisms::chain(1.0, 1.0, &angles, &rates, &[]);
         let (a1, l1) = run(&mech.model, &mech.q, &mech.qd, Backend::Dense);
         let (a2, l2) = run(&mech.model, &mech.q, &mech.qd, Backend::Sparse);
+        // The Schur back ends (dense and sparse) against the dense LU.
+        for backend in [Backend::Schur, Backend::SparseSchur] {
+            let (a, l) = run(&mech.model, &mech.q, &mech.qd, backend);
+            let da = a1.iter().zip(&a).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            let dl = l1.iter().zip(&l).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            let sa = a1.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            let sl = l1.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                da <= 1e-9 * sa && dl <= 1e-9 * sl,
+                "n = {n}, {backend:?}: Δq̈ {da:e}, Δλ {dl:e}"
+            );
+        }
+        let (a3, l3) = run(&mech.model, &mech.q, &mech.qd, Backend::SparseSchur);
+        let (a4, l4) = run(&mech.model, &mech.q, &mech.qd, Backend::Schur);
+        for (a, l) in [(&a3, &l3), (&a4, &l4)] {
+            let da = a1.iter().zip(a).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            let dl = l1.iter().zip(l).fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+            let sa = a1.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            let sl = l1.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            assert!(
+                da <= 1e-9 * sa && dl <= 1e-9 * sl,
+                "n = {n}: Schur Δq̈ {da:e}, Δλ {dl:e}"
+            );
+        }
         let sa = a1.iter().fold(1.0f64, |a, v| a.max(v.abs()));
         let sl = l1.iter().fold(1.0f64, |a, v| a.max(v.abs()));
         let da = a1.iter().zip(&a2).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
@@ -106,7 +133,7 @@ fn parallelogram(phi: f64) -> (Arc<Model>, Vec<f64>, Vec<f64>) {
 #[test]
 fn redundant_constraints_are_an_error_naming_the_joints() {
     let (model, q, qd) = parallelogram(1.0);
-    for backend in [Backend::Dense, Backend::Sparse] {
+    for backend in [Backend::Dense, Backend::Sparse, Backend::Schur, Backend::SparseSchur] {
         let mut f = Augmented::new(
             model.clone(),
             AugmentedOptions {

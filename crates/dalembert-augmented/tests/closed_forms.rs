@@ -28,7 +28,7 @@ fn rel(a: f64, b: f64, scale: f64) -> f64 {
     (a - b).abs() / scale.max(b.abs())
 }
 
-const BACKENDS: [Backend; 3] = [Backend::Dense, Backend::Schur, Backend::Sparse];
+const BACKENDS: [Backend; 4] = [Backend::Dense, Backend::Schur, Backend::Sparse, Backend::SparseSchur];
 
 #[test]
 fn rod_pendulum_matches_closed_form() {

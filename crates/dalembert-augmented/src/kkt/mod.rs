@@ -5,10 +5,12 @@ mod dense;
 mod schur;
 mod small_lu;
 mod sparse;
+mod sparse_schur;
 
 pub(crate) use dense::DenseKkt;
 pub(crate) use schur::{applicable as schur_applicable, SchurKkt};
 pub(crate) use sparse::SparseKkt;
+pub(crate) use sparse_schur::SparseSchurKkt;
 
 use dalembert_constraints::{ConstraintSystem, ConstraintValues};
 use dalembert_kinematics::MassMatrix;
@@ -22,6 +24,7 @@ pub(crate) enum KktSolver {
     Dense(Box<DenseKkt>),
     Schur(Box<SchurKkt>),
     Sparse(Box<SparseKkt>),
+    SparseSchur(Box<SparseSchurKkt>),
 }
 
 impl KktSolver {
@@ -36,6 +39,7 @@ impl KktSolver {
             KktSolver::Dense(d) => d.factor(mass, sys, vals),
             KktSolver::Schur(s) => s.factor(mass, sys, vals),
             KktSolver::Sparse(s) => s.factor(mass, sys, vals),
+            KktSolver::SparseSchur(s) => s.factor(mass, sys, vals),
         }
     }
 
@@ -45,13 +49,14 @@ impl KktSolver {
             KktSolver::Dense(d) => d.solve(x),
             KktSolver::Schur(s) => s.solve(sys, x),
             KktSolver::Sparse(s) => s.solve(x),
+            KktSolver::SparseSchur(s) => s.solve(sys, x),
         }
     }
 
     /// True for back ends that are not backward stable for the whole matrix (the Schur complement
     /// squares the conditioning of `C_q M^-1/2`): their solutions get one step of refinement.
     pub fn refines(&self) -> bool {
-        matches!(self, KktSolver::Schur(_))
+        matches!(self, KktSolver::Schur(_) | KktSolver::SparseSchur(_))
     }
 
     /// Back end name.
@@ -60,6 +65,7 @@ impl KktSolver {
             KktSolver::Dense(_) => "dense",
             KktSolver::Schur(_) => "schur",
             KktSolver::Sparse(_) => "sparse",
+            KktSolver::SparseSchur(_) => "sparse-schur",
         }
     }
 }

@@ -206,19 +206,11 @@ impl SchurKkt {
         Ok(())
     }
 
-    /// `y ← M⁻¹ x` block by block.
-    fn apply_minv(minv: &[Matrix3<f64>], x: &[f64], y: &mut [f64]) {
-        for (b, mi) in minv.iter().enumerate() {
-            let v = mi * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
-            y[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
-        }
-    }
-
     pub fn solve(&mut self, sys: &ConstraintSystem, x: &mut [f64]) {
         let (n, m) = (self.n, self.m);
         let (top, bottom) = x.split_at_mut(n);
         // tmp_m = C M⁻¹ b_top − b_bottom
-        Self::apply_minv(&self.minv, top, &mut self.tmp_n);
+        apply_minv(&self.minv, top, &mut self.tmp_n);
         self.tmp_m.iter_mut().for_each(|v| *v = 0.0);
         for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
             self.tmp_m[r] += v * self.tmp_n[c];
@@ -240,7 +232,7 @@ impl SchurKkt {
             for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
                 top[c] -= v * self.tmp_m[r];
             }
-            Self::apply_minv(&self.minv, top, &mut self.tmp_n);
+            apply_minv(&self.minv, top, &mut self.tmp_n);
             top.copy_from_slice(&self.tmp_n);
             for (k, &c) in self.massless.iter().enumerate() {
                 top[c] = self.tmp_r[k];
@@ -267,7 +259,15 @@ impl SchurKkt {
         for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
             top[c] -= v * self.tmp_m[r];
         }
-        Self::apply_minv(&self.minv, top, &mut self.tmp_n);
+        apply_minv(&self.minv, top, &mut self.tmp_n);
         top.copy_from_slice(&self.tmp_n);
+    }
+}
+
+/// `y ← M⁻¹ x` block by block.
+pub(crate) fn apply_minv(minv: &[Matrix3<f64>], x: &[f64], y: &mut [f64]) {
+    for (b, mi) in minv.iter().enumerate() {
+        let v = mi * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
+        y[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
     }
 }
