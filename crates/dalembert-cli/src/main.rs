@@ -33,6 +33,7 @@ mod check;
 mod inverse;
 mod plot;
 mod simulate;
+mod trade;
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -59,6 +60,8 @@ enum Command {
     Inverse(inverse::Args),
     /// Plot columns of a result CSV against time as an SVG.
     Plot(plot::Args),
+    /// Measure the speed–accuracy trade over formulations, integrators, treatments and steps.
+    Trade(trade::Args),
 }
 
 fn main() -> ExitCode {
@@ -68,6 +71,7 @@ fn main() -> ExitCode {
         Command::Check { scene } => check::run(&scene),
         Command::Inverse(a) => inverse::run(a),
         Command::Plot(a) => plot::run(a),
+        Command::Trade(a) => trade::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -194,3 +194,44 @@ fn plot_writes_an_svg() {
     ]);
     assert!(!ok && err.contains("no column 'nope'"), "{err}");
 }
+
+/// A narrowed grid: the files are written, every run is recorded, and RK4's error falls by about
+/// 2⁴ when the step halves (its order; the reference is Dormand–Prince at 1e-12).
+#[test]
+fn trade_measures_a_narrowed_grid() {
+    let dir = tmp("trade");
+    let (ok, out, err) = dalembert(&[
+        "trade",
+        &scene("pendulum.toml"),
+        "--end",
+        "1",
+        "--formulations",
+        "augmented",
+        "--integrators",
+        "rk4,dopri5",
+        "--treatments",
+        "none",
+        "--steps",
+        "2e-2,1e-2",
+        "--tolerances",
+        "1e-6",
+        "--output",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("best method per accuracy band"), "{out}");
+    let csv = std::fs::read_to_string(dir.join("trade.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 3);
+    let err_of = |h: &str| -> f64 {
+        rows.iter().find(|r| r[0] == "augmented/rk4/none" && r[1] == h).unwrap()[4]
+            .parse()
+            .unwrap()
+    };
+    let ratio = err_of("0.02") / err_of("0.01");
+    assert!((10.0..=24.0).contains(&ratio), "RK4 error ratio {ratio}");
+    assert!(std::fs::read_to_string(dir.join("work-precision.svg"))
+        .unwrap()
+        .starts_with("<svg"));
+    assert!(std::fs::read_to_string(dir.join("trade.md")).unwrap().contains("★"));
+}

@@ -1,0 +1,132 @@
+//! One forward-dynamics evaluation (`q̈`, `λ`) per formulation on the reference scenes and on chains
+//! of N rods, then the scaling exponent of the augmented formulation's cost against N (fitted on
+//! N = 64 … 4096, printed at the end).
+//!
+//! `cargo bench --bench evaluation` (add `-- --quick` for a fast pass).
+
+use criterion::{BenchmarkId, Criterion};
+use dalembert::amalgamated::Amalgamated;
+use dalembert::augmented::Augmented;
+use dalembert::constraints::{Formulation, Stabilization};
+use dalembert::embedding::Embedding;
+use dalembert_testkit::closed_form::DoublePendulum;
+use dalembert_testkit::mechanisms::{self, Mechanism};
+use std::hint::black_box;
+use std::time::Instant;
+
+fn formulation(kind: &str, mech: &Mechanism) -> Box<dyn Formulation> {
+    match kind {
+        "augmented" => Box::new(Augmented::with_defaults(mech.model.clone()).expect("augmented")),
+        "embedding" => Box::new(Embedding::with_defaults(mech.model.clone())),
+        _ => Box::new(Amalgamated::with_defaults(mech.model.clone())),
+    }
+}
+
+fn chain(n: usize) -> Mechanism {
+    let angles: Vec<f64> = (0..n).map(|k| -0.3 - 0.01 * k as f64).collect();
+    mechanisms::chain(1.0, 1.0, &angles, &vec![0.1; n], &[])
+}
+
+fn scenes() -> Vec<(String, Mechanism)> {
+    let mut v = vec![
+        (
+            "pendulum".to_string(),
+            mechanisms::chain(1.0, 1.0, &[-0.5], &[1.0], &[]),
+        ),
+        (
+            "double-pendulum".to_string(),
+            mechanisms::double_pendulum(
+                DoublePendulum {
+                    m: [1.0, 1.0],
+                    l: [1.0, 1.0],
+                },
+                [0.3, 1.0],
+                [0.0, 2.0],
+                [0.0, 0.0],
+            ),
+        ),
+        ("four-bar".to_string(), mechanisms::four_bar(2.5, 1.0, 0.0, false)),
+        ("slider-crank".to_string(), mechanisms::slider_crank(1.0, 3.0)),
+    ];
+    for n in [1usize, 4, 16, 64, 256, 1024, 4096] {
+        v.push((format!("chain-{n}"), chain(n)));
+    }
+    v
+}
+
+fn evaluations(c: &mut Criterion) {
+    let mut group = c.benchmark_group("evaluation");
+    for (name, mech) in scenes() {
+        for kind in ["augmented", "embedding", "amalgamated"] {
+            // The embedding and amalgamated formulations are dense: chains above 64 links are out of
+            // their range (docs/formulations.md).
+            if kind != "augmented" && mech.q.len() > 3 * 64 {
+                continue;
+            }
+            let mut f = formulation(kind, &mech);
+            let (n, m) = (mech.q.len(), mech.model.num_equations());
+            let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
+            group.bench_with_input(BenchmarkId::new(kind, &name), &mech, |b, mech| {
+                b.iter(|| {
+                    f.accelerations(
+                        0.0,
+                        black_box(&mech.q),
+                        black_box(&mech.qd),
+                        Stabilization::None,
+                        &mut qdd,
+                        &mut lam,
+                    )
+                    .expect("evaluation");
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
+/// Median time of one augmented evaluation on a chain of `n` links.
+fn time_per_evaluation(n: usize) -> f64 {
+    let mech = chain(n);
+    let mut f = Augmented::with_defaults(mech.model.clone()).expect("augmented");
+    let (mut qdd, mut lam) = (vec![0.0; mech.q.len()], vec![0.0; mech.model.num_equations()]);
+    let reps = (200_000 / n).max(5);
+    let mut samples: Vec<f64> = (0..7)
+        .map(|_| {
+            let t0 = Instant::now();
+            for _ in 0..reps {
+                f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+                    .expect("evaluation");
+            }
+            t0.elapsed().as_secs_f64() / reps as f64
+        })
+        .collect();
+    samples.sort_by(|a, b| a.total_cmp(b));
+    samples[3]
+}
+
+fn scaling() {
+    let ns = [64usize, 256, 1024, 4096];
+    let times: Vec<f64> = ns.iter().map(|&n| time_per_evaluation(n)).collect();
+    let xs: Vec<f64> = ns.iter().map(|&n| (n as f64).ln()).collect();
+    let ys: Vec<f64> = times.iter().map(|t| t.ln()).collect();
+    let k = xs.len() as f64;
+    let (mx, my) = (xs.iter().sum::<f64>() / k, ys.iter().sum::<f64>() / k);
+    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    println!("\naugmented formulation, one evaluation on a chain of N rods (sparse Schur back end):");
+    for (n, t) in ns.iter().zip(&times) {
+        println!(
+            "  N = {n:5}: {:10.2} µs  ({:.3} µs per body)",
+            t * 1e6,
+            t * 1e6 / *n as f64
+        );
+    }
+    println!("  fitted exponent of cost against N (64 … 4096): {slope:.3}");
+}
+
+fn main() {
+    let mut c = Criterion::default().configure_from_args();
+    evaluations(&mut c);
+    c.final_summary();
+    scaling();
+}
