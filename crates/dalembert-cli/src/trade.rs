@@ -16,7 +16,8 @@ pub struct Args {
     /// End time of every run (s); default the scene's, at most 5 s.
     #[arg(long)]
     end: Option<f64>,
-    /// Comparison interval (s); default the scene's output interval.
+    /// Comparison interval (s); default the larger of the scene's output interval and the largest
+    /// step (a fixed step is never longer than the interval between samples).
     #[arg(long)]
     every: Option<f64>,
     /// Formulations to try (comma-separated).
@@ -132,7 +133,8 @@ fn grid(a: &Args) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64
 pub fn run(a: Args) -> Result<(), String> {
     let scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
     let end = a.end.unwrap_or(scene.settings.end.min(5.0));
-    let every = a.every.unwrap_or(scene.settings.output_every);
+    let largest_step = a.steps.iter().cloned().fold(0.0f64, f64::max);
+    let every = a.every.unwrap_or(scene.settings.output_every.max(largest_step));
     if !(end > 0.0 && every > 0.0) {
         return Err("--end and --every must be positive".into());
     }
