@@ -56,13 +56,16 @@ struct Run {
     status: String,
 }
 
-/// Samples `[q, q̇]` at the comparison times, or the failure.
+/// Wall time, evaluations, largest |C| and largest energy change of a finished run.
+type Outcome = (f64, u64, f64, f64);
+
+/// Samples `[q, q̇]` at the comparison times, and the outcome or the failure.
 fn samples(
     scene: &Scene,
     kind: FormulationKind,
     opts: IntegratorOptions,
     end: f64,
-) -> (Vec<Vec<f64>>, Result<(f64, u64, f64, f64), String>) {
+) -> (Vec<Vec<f64>>, Result<Outcome, String>) {
     let mut sim = scene.simulation();
     sim.formulation = kind;
     sim.integrator = opts;
