@@ -74,6 +74,8 @@ fn fd_us(mech: &Mechanism) -> f64 {
 }
 
 struct RunResult {
+    /// `None` when the run failed (the message is reported instead).
+    failure: Option<String>,
     sim_s: f64,
     at_one: Vec<f64>,
     de_10s: f64,
@@ -87,15 +89,19 @@ fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
     let mut at_one = Vec::new();
     let mut de_max = 0.0f64;
     let mut de_last = 0.0;
-    let stats = integrate(&mut f, 0.0, 10.0, &mech.q, &mech.qd, opts, &mut |s| {
+    let result = integrate(&mut f, 0.0, 10.0, &mech.q, &mech.qd, opts, &mut |s| {
         if (s.t - 1.0).abs() < 1e-9 {
             at_one = [s.q, s.qd].concat();
         }
         de_max = de_max.max((s.energy - e0).abs());
         de_last = s.energy - e0;
-    })
-    .expect("run");
+    });
+    let (failure, stats) = match result {
+        Ok(s) => (None, s),
+        Err(e) => (Some(format!("stopped at {}", e.error)), *e.statistics),
+    };
     RunResult {
+        failure,
         sim_s: stats.wall_time.as_secs_f64(),
         at_one,
         de_10s: de_last,
@@ -175,7 +181,7 @@ fn main() {
             let r = &runs[0];
             let (ep, ev) = errors(&r.at_one, &reference["scenes"][&key]["bodies"]);
             let has_ref = !reference["scenes"][&key]["bodies"].is_null();
-            let rec = serde_json::json!({
+            let mut rec = serde_json::json!({
                 "engine": "dalembert",
                 "variant": v.name,
                 "scene": scene,
@@ -191,6 +197,14 @@ fn main() {
                 "dE_max": r.de_max,
                 "cviol_max": r.cviol,
             });
+            if let Some(msg) = &r.failure {
+                // A failed run has no meaningful time or accuracy: report the cause instead.
+                let short: String = msg.chars().take(160).collect();
+                rec["sim_s"] = serde_json::Value::Null;
+                rec["sim_native_s"] = serde_json::Value::Null;
+                rec["dE_10s"] = serde_json::Value::Null;
+                rec["note"] = serde_json::json!(short);
+            }
             writeln!(out, "{rec}").expect("write");
             eprintln!("{key} {}: {:.4} s, err {ep:.2e}/{ev:.2e}", v.name, sim_s);
         }

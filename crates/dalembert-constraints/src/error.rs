@@ -23,15 +23,28 @@ impl fmt::Display for EquationRef {
     }
 }
 
-fn list(eqs: &[EquationRef]) -> String {
-    eqs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
+/// At most this many equations are listed in a message; the rest are counted.
+const LISTED: usize = 8;
+
+fn truncated(mut items: Vec<String>) -> String {
+    let more = items.len().saturating_sub(LISTED);
+    items.truncate(LISTED);
+    let mut s = items.join(", ");
+    if more > 0 {
+        s.push_str(&format!(" and {more} more"));
+    }
+    s
+}
+
+pub(crate) fn list(eqs: &[EquationRef]) -> String {
+    truncated(eqs.iter().map(|e| e.to_string()).collect())
 }
 
 fn list_violated(v: &[(EquationRef, f64)]) -> String {
-    v.iter()
-        .map(|(e, r)| format!("{e} by {r:.3e}"))
-        .collect::<Vec<_>>()
-        .join(", ")
+    // Largest violations first.
+    let mut v: Vec<&(EquationRef, f64)> = v.iter().collect();
+    v.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    truncated(v.iter().map(|(e, r)| format!("{e} by {r:.3e}")).collect())
 }
 
 /// What can go wrong building a constraint system or analysing its kinematics.

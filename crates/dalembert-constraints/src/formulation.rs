@@ -134,7 +134,7 @@ pub enum DynamicsError {
 }
 
 fn list(eqs: &[EquationRef]) -> String {
-    eqs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
+    crate::error::list(eqs)
 }
 
 /// Counters a formulation keeps (cumulative since construction).

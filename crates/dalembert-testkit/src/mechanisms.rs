@@ -358,3 +358,83 @@ pub fn double_pendulum(dp: crate::closed_form::DoublePendulum, th: [f64; 2], w: 
         qd,
     }
 }
+
+/// A chain of uniform rods of length `l` with the given masses (one per link), pinned end to end
+/// from the origin, at absolute angles `angles`, at rest.
+pub fn chain_with_masses(masses: &[f64], l: f64, angles: &[f64]) -> Mechanism {
+    let mut mech = chain(1.0, l, angles, &vec![0.0; angles.len()], &[]);
+    let bodies: Vec<Body> = masses
+        .iter()
+        .enumerate()
+        .map(|(k, &m)| Body::rod(format!("link{k}"), m, l).expect("valid rod"))
+        .collect();
+    let mut joints: Vec<Box<dyn Constraint>> = Vec::new();
+    for k in 0..masses.len() {
+        let first = if k == 0 { BodyRef::Ground } else { b(k - 1) };
+        let p_first = if k == 0 { Vec2::zeros() } else { Vec2::new(l / 2.0, 0.0) };
+        joints.push(Box::new(Revolute::new(
+            format!("J{k}"),
+            [first, b(k)],
+            [p_first, Vec2::new(-l / 2.0, 0.0)],
+        )));
+    }
+    mech.model = Arc::new(Model::new(bodies, vec![gravity()], joints).expect("valid chain"));
+    mech
+}
+
+/// A parallelogram: two cranks (1 kg, 1 m) pinned to the ground at (0, 0) and (2, 0), joined by a
+/// coupler (2 kg, 2 m); with `extra_crank` a third, redundant crank from (1, 0) to the coupler's
+/// middle. Cranks at angle `phi` turning at `phi_dot`. Every crank shares one angle: the motion is
+/// `(2/3 + 2 [+ 1/3]) φ̈ = −g (1 + 2 [+ 0.5]) cos φ`.
+pub fn parallelogram(phi: f64, phi_dot: f64, extra_crank: bool) -> Mechanism {
+    let u = Vec2::new(phi.cos(), phi.sin());
+    let v = Vec2::new(-phi.sin(), phi.cos()) * phi_dot;
+    let mut q = vec![
+        u.x / 2.0,
+        u.y / 2.0,
+        phi,
+        1.0 + u.x,
+        u.y,
+        0.0,
+        2.0 + u.x / 2.0,
+        u.y / 2.0,
+        phi,
+    ];
+    let mut qd = vec![
+        v.x / 2.0,
+        v.y / 2.0,
+        phi_dot,
+        v.x,
+        v.y,
+        0.0,
+        v.x / 2.0,
+        v.y / 2.0,
+        phi_dot,
+    ];
+    let mut bodies = vec![
+        Body::rod("crank1", 1.0, 1.0).expect("rod"),
+        Body::rod("coupler", 2.0, 2.0).expect("rod"),
+        Body::rod("crank2", 1.0, 1.0).expect("rod"),
+    ];
+    if extra_crank {
+        q.extend_from_slice(&[1.0 + u.x / 2.0, u.y / 2.0, phi]);
+        qd.extend_from_slice(&[v.x / 2.0, v.y / 2.0, phi_dot]);
+        bodies.push(Body::rod("crank3", 1.0, 1.0).expect("rod"));
+    }
+    let g = BodyRef::Ground;
+    let mut joints: Vec<Box<dyn Constraint>> = vec![
+        Box::new(Revolute::at("A", [g, b(0)], Vec2::zeros(), &q)),
+        Box::new(Revolute::at("B", [b(0), b(1)], u, &q)),
+        Box::new(Revolute::at("C", [b(1), b(2)], Vec2::new(2.0, 0.0) + u, &q)),
+        Box::new(Revolute::at("D", [g, b(2)], Vec2::new(2.0, 0.0), &q)),
+    ];
+    if extra_crank {
+        joints.push(Box::new(Revolute::at("E", [g, b(3)], Vec2::new(1.0, 0.0), &q)));
+        joints.push(Box::new(Revolute::at("F", [b(3), b(1)], Vec2::new(1.0, 0.0) + u, &q)));
+    }
+    Mechanism {
+        model: Arc::new(Model::new(bodies, vec![gravity()], joints).expect("valid parallelogram")),
+        q,
+        qd,
+    }
+}

@@ -46,6 +46,9 @@ pub(crate) struct SchurKkt {
     /// LU of the reduced system when there are massless coordinates.
     reduced: Option<SmallLu>,
     tmp_r: Vec<f64>,
+    /// Condition estimate of the last factorization (squared Cholesky pivot ratio, or the reduced
+    /// LU's pivot ratio).
+    pub condition: f64,
 }
 
 /// True when the Schur back end can run: every body's mass block is positive definite, or is
@@ -109,6 +112,7 @@ impl SchurKkt {
             massless_entries,
             reduced,
             tmp_r: vec![0.0; p],
+            condition: 1.0,
         }
     }
 
@@ -181,6 +185,7 @@ impl SchurKkt {
         for i in 0..m {
             largest = largest.max(self.s[i * m + i]);
         }
+        let (mut lmin, mut lmax) = (f64::INFINITY, 0.0f64);
         for j in 0..m {
             let mut d = self.s[j * m + j];
             for k in 0..j {
@@ -193,6 +198,8 @@ impl SchurKkt {
                 )));
             }
             let d = d.sqrt();
+            lmin = lmin.min(d);
+            lmax = lmax.max(d);
             self.s[j * m + j] = d;
             for i in j + 1..m {
                 let mut v = self.s[i * m + j];
@@ -203,6 +210,11 @@ impl SchurKkt {
             }
         }
         self.jacobian.copy_from_slice(jac);
+        self.condition = if lmin > 0.0 {
+            (lmax / lmin).powi(2)
+        } else {
+            f64::INFINITY
+        };
         Ok(())
     }
 

@@ -37,6 +37,8 @@ pub(crate) struct SparseSchurKkt {
     tmp_m: Vec<f64>,
     probe: Vec<f64>,
     pivot_tolerance: f64,
+    /// Condition estimate from the probe: `‖S⁻¹ p‖∞ · max diag(S)`.
+    pub condition: f64,
 }
 
 impl SparseSchurKkt {
@@ -107,6 +109,7 @@ impl SparseSchurKkt {
             tmp_m: vec![0.0; m],
             probe: vec![0.0; m],
             pivot_tolerance,
+            condition: 1.0,
         })
     }
 
@@ -154,6 +157,7 @@ impl SparseSchurKkt {
         let largest = (0..self.m).map(|j| self.values[self.col_ptr[j]]).fold(0.0f64, f64::max);
         let growth = probe.iter().fold(0.0f64, |a, v| a.max(v.abs())) * largest;
         self.probe = probe;
+        self.condition = growth;
         let regular = growth.is_finite() && growth * self.pivot_tolerance < 1.0;
         if !regular {
             return Err(SingularKkt(format!(
