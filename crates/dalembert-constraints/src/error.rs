@@ -24,7 +24,7 @@ impl fmt::Display for EquationRef {
 }
 
 /// At most this many equations are listed in a message; the rest are counted.
-const LISTED: usize = 8;
+const LISTED: usize = 12;
 
 fn truncated(mut items: Vec<String>) -> String {
     let more = items.len().saturating_sub(LISTED);

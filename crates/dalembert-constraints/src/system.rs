@@ -28,6 +28,8 @@ pub struct ConstraintValues {
     pub gamma: Vec<f64>,
     /// Values of `C_q` in the order of [`ConstraintSystem::pattern`].
     pub jacobian: Vec<f64>,
+    /// Scratch: the state of every body at the last evaluation (one `sin_cos` per body).
+    states: Vec<BodyState>,
 }
 
 impl ConstraintSystem {
@@ -126,6 +128,7 @@ impl ConstraintSystem {
             c_t: vec![0.0; m],
             gamma: vec![0.0; m],
             jacobian: vec![0.0; self.pattern.len()],
+            states: vec![BodyState::GROUND; self.coordinates.bodies()],
         }
     }
 
@@ -133,10 +136,16 @@ impl ConstraintSystem {
     /// in which case `Q_d` holds only the `C_tt` part). Allocates nothing.
     pub fn evaluate(&self, t: f64, q: &[f64], qd: &[f64], out: &mut ConstraintValues) {
         let mut eval = ConstraintEval::default();
+        for (i, st) in out.states.iter_mut().enumerate() {
+            *st = BodyState::of(BodyRef::Body(dalembert_kinematics::BodyId(i)), q, qd);
+        }
+        let state = |b: BodyRef| match b {
+            BodyRef::Ground => BodyState::GROUND,
+            BodyRef::Body(id) => out.states[id.0],
+        };
         for (k, c) in self.constraints.iter().enumerate() {
             let [a, b] = c.bodies();
-            let sa = BodyState::of(a, q, qd);
-            let sb = BodyState::of(b, q, qd);
+            let (sa, sb) = (state(a), state(b));
             c.evaluate(t, &sa, &sb, &mut eval);
             let r0 = self.row_offsets[k];
             let ne = self.row_offsets[k + 1] - r0;

@@ -53,6 +53,10 @@ pub struct BodyState {
     pub velocity: Vec2,
     /// Angular velocity `θ̇` (rad/s).
     pub omega: f64,
+    /// `cos θ`, cached.
+    pub cos: f64,
+    /// `sin θ`, cached.
+    pub sin: f64,
 }
 
 impl BodyState {
@@ -62,7 +66,29 @@ impl BodyState {
         angle: 0.0,
         velocity: Vec2::new(0.0, 0.0),
         omega: 0.0,
+        cos: 1.0,
+        sin: 0.0,
     };
+
+    /// A state from its parts (computes and caches `cos θ`, `sin θ`).
+    #[inline]
+    pub fn new(position: Vec2, angle: f64, velocity: Vec2, omega: f64) -> BodyState {
+        let (sin, cos) = angle.sin_cos();
+        BodyState {
+            position,
+            angle,
+            velocity,
+            omega,
+            cos,
+            sin,
+        }
+    }
+
+    /// The rotation matrix `A(θ)` from the cached sine and cosine.
+    #[inline]
+    pub fn rotation(&self) -> nalgebra::Matrix2<f64> {
+        nalgebra::Matrix2::new(self.cos, -self.sin, self.sin, self.cos)
+    }
 
     /// Reads the state of `body` from the system vectors (`qd` may be empty: zero velocity).
     #[inline]
@@ -76,12 +102,7 @@ impl BodyState {
                 } else {
                     (Vec2::new(qd[k], qd[k + 1]), qd[k + 2])
                 };
-                BodyState {
-                    position: Vec2::new(q[k], q[k + 1]),
-                    angle: q[k + 2],
-                    velocity,
-                    omega,
-                }
+                BodyState::new(Vec2::new(q[k], q[k + 1]), q[k + 2], velocity, omega)
             }
         }
     }

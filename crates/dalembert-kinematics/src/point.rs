@@ -26,7 +26,7 @@ impl PointState {
     /// Kinematics of the point at local offset `u` on a body in state `s`.
     #[inline]
     pub fn new(s: &BodyState, u: Vec2) -> PointState {
-        let arm = rotation(s.angle) * u;
+        let arm = s.rotation() * u;
         PointState {
             arm,
             position: s.position + arm,
@@ -69,11 +69,13 @@ mod tests {
     #[test]
     fn derivatives_match_finite_differences() {
         let u = Vec2::new(0.7, -0.2);
-        let traj = |t: f64| BodyState {
-            position: Vec2::new(t.sin(), 0.3 * t * t),
-            angle: 0.5 + 1.3 * t + 0.2 * t * t,
-            velocity: Vec2::new(t.cos(), 0.6 * t),
-            omega: 1.3 + 0.4 * t,
+        let traj = |t: f64| {
+            BodyState::new(
+                Vec2::new(t.sin(), 0.3 * t * t),
+                0.5 + 1.3 * t + 0.2 * t * t,
+                Vec2::new(t.cos(), 0.6 * t),
+                1.3 + 0.4 * t,
+            )
         };
         let accel = |t: f64| (Vec2::new(-t.sin(), 0.6), 0.4);
         let t = 0.37;
