@@ -3,12 +3,10 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert::constraints::{
-    Constraint, DynamicsError, Formulation, Model, Prismatic, RedundancyTreatment, Stabilization,
-};
+use dalembert::constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Stabilization};
 use dalembert::embedding::{Embedding, EmbeddingOptions};
 use dalembert::integrators::{integrate, ConstraintTreatment, IntegrationError, IntegratorOptions, Method, Statistics};
-use dalembert::kinematics::{Body, BodyId, BodyRef, SpringDamper, Vec2};
+use dalembert::kinematics::{Body, BodyId, BodyRef, Vec2};
 use dalembert_testkit::closed_form::{pendulum_angle, DoublePendulum};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 use std::sync::Arc;
@@ -150,40 +148,6 @@ fn point_mass_hanging_from_a_heavy_body() {
     }
 }
 
-fn spring_model(k: f64) -> Mechanism {
-    let q = vec![1.001, 0.0, 0.0];
-    let body = BodyRef::Body(BodyId(0));
-    let guide: Box<dyn Constraint> = Box::new(Prismatic::at(
-        "guide",
-        [BodyRef::Ground, body],
-        Vec2::new(1.0, 0.0),
-        Vec2::x(),
-        &q,
-    ));
-    let spring = SpringDamper {
-        name: "spring".into(),
-        bodies: (BodyRef::Ground, body),
-        points: (Vec2::zeros(), Vec2::zeros()),
-        stiffness: k,
-        damping: 0.0,
-        free_length: 1.0,
-        actuator: None,
-    };
-    let model = Arc::new(
-        Model::new(
-            vec![Body::new("mass", 1.0, 0.1).unwrap()],
-            vec![Box::new(spring)],
-            vec![guide],
-        )
-        .unwrap(),
-    );
-    Mechanism {
-        model,
-        q,
-        qd: vec![0.0; 3],
-    }
-}
-
 /// Springs from 1e2 to 1e9 N/m on a 1 kg slider, 0.05 s. RK4 at h = 1 ms is stable while hω < 2.8
 /// (k ≤ 1e6 here): its energy never grows, and is conserved to 1e-5 while hω ≤ 0.1 (at hω = 1 it
 /// loses 46 % in 50 steps, as |R(i)| = 0.994 predicts); beyond the limit it stops with `Diverged`.
@@ -194,7 +158,7 @@ fn spring_model(k: f64) -> Mechanism {
 fn stiffness_sweep() {
     let mut dopri_steps = Vec::new();
     for &k in &[1e2, 1e4, 1e6, 1e8, 1e9] {
-        let mech = spring_model(k);
+        let mech = mechanisms::slider_on_spring(k);
         let omega = k.sqrt();
         let e0 = 0.5 * k * 1e-6;
         let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();

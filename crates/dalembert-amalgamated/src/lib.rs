@@ -71,14 +71,7 @@ impl Amalgamated {
     }
 
     fn singular(&self, t: f64) -> DynamicsError {
-        let sys = self.model.constraints();
-        let s = sys.analyse_structure(&self.values, 1e-9);
-        DynamicsError::RedundantConstraints {
-            time: t,
-            rank: s.rank,
-            equations: s.equations,
-            involved: sys.dependent_equations(&self.values, 1e-9),
-        }
+        self.model.constraints().redundancy_error(t, &self.values)
     }
 }
 
@@ -101,15 +94,7 @@ impl Formulation for Amalgamated {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
-        for (v, what) in [(q, "position"), (qd, "velocity")] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                let body = &self.model.bodies()[i / 3].name;
-                return Err(DynamicsError::NonFinite {
-                    time: t,
-                    what: format!("{what} of body '{body}'"),
-                });
-            }
-        }
+        self.model.check_state(t, q, qd)?;
         let n = q.len();
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
@@ -183,20 +168,7 @@ impl Formulation for Amalgamated {
         // λ on the independent rows from the dependent columns of Q_c = −C_qᵀ λ.
         let mut y: Vec<f64> = partition.dependent.iter().map(|&d| -sol[(n + d, 0)]).collect();
         vt.solve_dependent_transpose(&mut y);
-        lambda.iter_mut().for_each(|l| *l = 0.0);
-        for (kk, &row) in partition.rows.iter().enumerate() {
-            lambda[row] = y[kk];
-        }
-        if redundant {
-            let f: Vec<f64> = (0..n).map(|i| -sol[(n + i, 0)]).collect();
-            let mn = sys
-                .minimum_norm_multipliers(&self.values, &f)
-                .ok_or(DynamicsError::Factorization {
-                    time: t,
-                    what: "SVD of C_qᵀ failed".into(),
-                })?;
-            lambda.copy_from_slice(&mn);
-        }
+        sys.scatter_multipliers(t, &self.values, &partition.rows, &y, lambda)?;
         Ok(())
     }
 

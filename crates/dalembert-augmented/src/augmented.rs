@@ -213,24 +213,12 @@ impl Augmented {
 
     /// Evaluates `M`, `Q_e` and the constraints at `(t, q, q̇)` into the workspaces.
     fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
-        check_finite(t, self.model.as_ref(), q, "position")?;
-        check_finite(t, self.model.as_ref(), qd, "velocity")?;
+        self.model.check_state(t, q, qd)?;
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.constraints().evaluate(t, q, qd, &mut self.values);
         Ok(())
     }
-}
-
-fn check_finite(t: f64, model: &Model, v: &[f64], what: &str) -> Result<(), DynamicsError> {
-    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-        let coord = ["x", "y", "angle"][i % 3];
-        return Err(DynamicsError::NonFinite {
-            time: t,
-            what: format!("{what} {coord} of body '{}'", model.bodies()[i / 3].name),
-        });
-    }
-    Ok(())
 }
 
 impl Formulation for Augmented {

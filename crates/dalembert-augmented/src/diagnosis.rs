@@ -14,14 +14,8 @@ const RANK_TOLERANCE: f64 = 1e-9;
 /// or else a generic singular system.
 pub(crate) fn diagnose(t: f64, model: &Model, vals: &ConstraintValues, pivot_tolerance: f64) -> DynamicsError {
     let sys = model.constraints();
-    let s = sys.analyse_structure(vals, RANK_TOLERANCE);
-    if !s.is_full_rank() {
-        return DynamicsError::RedundantConstraints {
-            time: t,
-            rank: s.rank,
-            equations: s.equations,
-            involved: sys.dependent_equations(vals, RANK_TOLERANCE),
-        };
+    if !sys.analyse_structure(vals, RANK_TOLERANCE).is_full_rank() {
+        return sys.redundancy_error(t, vals);
     }
     let light: Vec<String> = model
         .bodies()

@@ -77,6 +77,22 @@ impl Model {
             .sum()
     }
 
+    /// `Ok` when every position and velocity is finite; otherwise the error names the body and the
+    /// coordinate.
+    pub fn check_state(&self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), crate::DynamicsError> {
+        for (v, what) in [(q, "position"), (qd, "velocity")] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                let coord = ["x", "y", "angle"][i % 3];
+                let body = &self.bodies[i / 3].name;
+                return Err(crate::DynamicsError::NonFinite {
+                    time: t,
+                    what: format!("{what} {coord} of body '{body}'"),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Kinetic energy `½ q̇ᵀ M q̇`, computed body by body without building `M`.
     pub fn kinetic_energy(&self, q: &[f64], qd: &[f64]) -> f64 {
         self.bodies

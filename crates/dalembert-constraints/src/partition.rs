@@ -241,15 +241,7 @@ impl PartitionTracker {
     ) -> Result<usize, crate::DynamicsError> {
         const MAX_ITERATIONS: usize = 25;
         let zeros = vec![0.0; sys.num_equations()];
-        let singular = |values: &ConstraintValues| {
-            let s = sys.analyse_structure(values, 1e-9);
-            crate::DynamicsError::RedundantConstraints {
-                time: t,
-                rank: s.rank,
-                equations: s.equations,
-                involved: sys.dependent_equations(values, 1e-9),
-            }
-        };
+        let singular = |values: &ConstraintValues| sys.redundancy_error(t, values);
         let mut iterations = 0;
         loop {
             sys.evaluate(t, q, qd, values);
@@ -294,5 +286,47 @@ impl PartitionTracker {
             qd[d] = y[k];
         }
         Ok(iterations)
+    }
+}
+
+impl ConstraintSystem {
+    /// The error for a rank-deficient `C_q` at `values`: rank, and the equations in the dependent set.
+    pub fn redundancy_error(&self, t: f64, values: &ConstraintValues) -> crate::DynamicsError {
+        let s = self.analyse_structure(values, 1e-9);
+        crate::DynamicsError::RedundantConstraints {
+            time: t,
+            rank: s.rank,
+            equations: s.equations,
+            involved: self.dependent_equations(values, 1e-9),
+        }
+    }
+
+    /// Writes multipliers `lam_rows` solved on the independent `rows` into `lambda` (zero
+    /// elsewhere); when some rows were left out (redundant constraints), replaces them by the
+    /// minimum-norm multipliers of the same generalized constraint force `C_qᵀ λ`.
+    pub fn scatter_multipliers(
+        &self,
+        t: f64,
+        values: &ConstraintValues,
+        rows: &[usize],
+        lam_rows: &[f64],
+        lambda: &mut [f64],
+    ) -> Result<(), crate::DynamicsError> {
+        lambda.iter_mut().for_each(|l| *l = 0.0);
+        for (&row, &l) in rows.iter().zip(lam_rows) {
+            lambda[row] = l;
+        }
+        if rows.len() < self.num_equations() {
+            let mut f = vec![0.0; self.num_coordinates()];
+            self.jacobian_transpose_mul_add(values, 1.0, lambda, &mut f);
+            let mn = self
+                .minimum_norm_multipliers(values, &f)
+                .ok_or(crate::DynamicsError::Factorization {
+                    time: t,
+                    what: "SVD of C_qᵀ failed".into(),
+                })?;
+            lambda.copy_from_slice(&mn);
+        }
+        Ok(())
     }
 }

@@ -124,26 +124,11 @@ impl Embedding {
     }
 
     fn singular(&self, t: f64) -> DynamicsError {
-        let sys = self.model.constraints();
-        let s = sys.analyse_structure(&self.values, 1e-9);
-        DynamicsError::RedundantConstraints {
-            time: t,
-            rank: s.rank,
-            equations: s.equations,
-            involved: sys.dependent_equations(&self.values, 1e-9),
-        }
+        self.model.constraints().redundancy_error(t, &self.values)
     }
 
     fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
-        for (v, what) in [(q, "position"), (qd, "velocity")] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                let body = &self.model.bodies()[i / 3].name;
-                return Err(DynamicsError::NonFinite {
-                    time: t,
-                    what: format!("{what} of body '{body}'"),
-                });
-            }
-        }
+        self.model.check_state(t, q, qd)?;
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.constraints().evaluate(t, q, qd, &mut self.values);
@@ -257,7 +242,7 @@ impl Formulation for Embedding {
         for i in 0..n {
             qdd[i] = vt.gamma[i] + (0..ni).map(|j| vt.b[(i, j)] * qdd_i[j]).sum::<f64>();
         }
-        // Multipliers on the independent rows; zero on redundant rows.
+        // Multipliers on the independent rows (minimum-norm over all rows when some are redundant).
         let lam_r = match lam_rows {
             Some(l) => l,
             None => {
@@ -268,21 +253,7 @@ impl Formulation for Embedding {
                 y
             }
         };
-        lambda.iter_mut().for_each(|l| *l = 0.0);
-        for (k, &row) in partition.rows.iter().enumerate() {
-            lambda[row] = lam_r[k];
-        }
-        if redundant {
-            let mut f = vec![0.0; n];
-            sys.jacobian_transpose_mul_add(&self.values, 1.0, lambda, &mut f);
-            let mn = sys
-                .minimum_norm_multipliers(&self.values, &f)
-                .ok_or(DynamicsError::Factorization {
-                    time: t,
-                    what: "SVD of C_qᵀ failed".into(),
-                })?;
-            lambda.copy_from_slice(&mn);
-        }
+        sys.scatter_multipliers(t, &self.values, &partition.rows, &lam_r, lambda)?;
         if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
             let what = format!("acceleration of body '{}'", self.model.bodies()[i / 3].name);
             return Err(DynamicsError::NonFinite { time: t, what });

@@ -4,12 +4,9 @@
 mod common;
 use common::{max_diff, run};
 use dalembert_augmented::Augmented;
-use dalembert_constraints::{Constraint, Model, Prismatic};
 use dalembert_integrators::{integrate, IntegratorOptions, Method};
-use dalembert_kinematics::{Body, BodyId, BodyRef, SpringDamper, Vec2};
 use dalembert_testkit::closed_form::DoublePendulum;
 use dalembert_testkit::mechanisms;
-use std::sync::Arc;
 
 /// Double pendulum, t = 1 s, ρ∞ = 0.8: the error against an RK4 reference (h = 1/8000, ≈ 3e-10
 /// accurate) falls at order 2 (fitted slope within ±0.3).
@@ -87,33 +84,9 @@ fn generalized_alpha_keeps_the_four_bar_closed() {
 /// the unresolved oscillation instead).
 #[test]
 fn generalized_alpha_is_stable_far_beyond_the_explicit_limit() {
-    let q = vec![1.001, 0.0, 0.0];
-    let body = BodyRef::Body(BodyId(0));
-    let guide: Box<dyn Constraint> = Box::new(Prismatic::at(
-        "guide",
-        [BodyRef::Ground, body],
-        Vec2::new(1.0, 0.0),
-        Vec2::x(),
-        &q,
-    ));
-    let spring = SpringDamper {
-        name: "stiff".into(),
-        bodies: (BodyRef::Ground, body),
-        points: (Vec2::zeros(), Vec2::zeros()),
-        stiffness: 1e8,
-        damping: 0.0,
-        free_length: 1.0,
-        actuator: None,
-    };
-    let model = Arc::new(
-        Model::new(
-            vec![Body::new("mass", 1.0, 0.1).unwrap()],
-            vec![Box::new(spring)],
-            vec![guide],
-        )
-        .unwrap(),
-    );
-    let mut f = Augmented::with_defaults(model).unwrap();
+    let mech = mechanisms::slider_on_spring(1e8);
+    let q = mech.q.clone();
+    let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();
     let e0 = 0.5 * 1e8 * 1e-6;
     let mut worst = 0.0f64;
     let stats = integrate(

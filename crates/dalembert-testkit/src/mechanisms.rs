@@ -438,3 +438,38 @@ pub fn parallelogram(phi: f64, phi_dot: f64, extra_crank: bool) -> Mechanism {
         qd,
     }
 }
+
+/// A slider of 1 kg (inertia 0.1) on a frictionless guide along x, held by a spring of stiffness
+/// `k` (N/m, free length 1 m) to the origin, released from rest 1 mm stretched: natural frequency
+/// `√k` rad/s, initial energy `½ k 1e-6` J.
+pub fn slider_on_spring(k: f64) -> Mechanism {
+    use dalembert_kinematics::SpringDamper;
+    let q = vec![1.001, 0.0, 0.0];
+    let guide: Box<dyn Constraint> = Box::new(Prismatic::at(
+        "guide",
+        [BodyRef::Ground, b(0)],
+        Vec2::new(1.0, 0.0),
+        Vec2::x(),
+        &q,
+    ));
+    let spring = SpringDamper {
+        name: "spring".into(),
+        bodies: (BodyRef::Ground, b(0)),
+        points: (Vec2::zeros(), Vec2::zeros()),
+        stiffness: k,
+        damping: 0.0,
+        free_length: 1.0,
+        actuator: None,
+    };
+    let model = Model::new(
+        vec![Body::new("mass", 1.0, 0.1).expect("body")],
+        vec![Box::new(spring)],
+        vec![guide],
+    )
+    .expect("valid");
+    Mechanism {
+        model: Arc::new(model),
+        q,
+        qd: vec![0.0; 3],
+    }
+}

@@ -50,15 +50,8 @@ impl SparseKkt {
         for &(r, c) in &entries {
             cols[c].push(r);
         }
-        let mut col_ptr = vec![0usize];
-        let mut row_idx = Vec::new();
-        for col in cols.iter_mut() {
-            col.sort_unstable();
-            col.dedup();
-            row_idx.extend_from_slice(col);
-            col_ptr.push(row_idx.len());
-        }
-        let pos = |r: usize, c: usize| col_ptr[c] + row_idx[col_ptr[c]..col_ptr[c + 1]].binary_search(&r).unwrap_or(0);
+        let (col_ptr, row_idx) = super::compress_columns(cols);
+        let pos = |r: usize, c: usize| super::entry_position(&col_ptr, &row_idx, r, c);
         let mass_map = (0..n / 3)
             .flat_map(|b| (0..9).map(move |k| (3 * b + k / 3, 3 * b + k % 3)))
             .map(|(r, c)| pos(r, c))

@@ -65,15 +65,8 @@ impl SparseSchurKkt {
                 }
             }
         }
-        let mut col_ptr = vec![0usize];
-        let mut row_idx = Vec::new();
-        for c in cols.iter_mut() {
-            c.sort_unstable();
-            c.dedup();
-            row_idx.extend_from_slice(c);
-            col_ptr.push(row_idx.len());
-        }
-        let pos = |i: usize, j: usize| col_ptr[j] + row_idx[col_ptr[j]..col_ptr[j + 1]].binary_search(&i).unwrap_or(0);
+        let (col_ptr, row_idx) = super::compress_columns(cols);
+        let pos = |i: usize, j: usize| super::entry_position(&col_ptr, &row_idx, i, j);
         let mut contributions = Vec::new();
         for (b, rows) in rows_of_body.iter().enumerate() {
             for &(i, ei) in rows {
