@@ -45,6 +45,13 @@ pub(crate) struct SchurKkt {
     massless_entries: Vec<(usize, usize, usize)>,
     /// LU of the reduced system when there are massless coordinates.
     reduced: Option<SmallLu>,
+    /// When every massless coordinate appears in exactly one equation, and that equation involves
+    /// no coordinate with inertia (a point mass's angle held by a prismatic joint), the reduced
+    /// system decouples: `(coordinate, row, coefficient)` per massless coordinate, solved directly,
+    /// and the rest by the Cholesky of `S` (identity on those rows). Empty when it does not apply.
+    decoupled: Vec<(usize, usize, f64)>,
+    /// Scratch: number of non-zero entries per massless coordinate (decoupling check).
+    counts: Vec<usize>,
     tmp_r: Vec<f64>,
     /// Condition estimate of the last factorization (squared Cholesky pivot ratio, or the reduced
     /// LU's pivot ratio).
@@ -112,6 +119,8 @@ impl SchurKkt {
             massless_entries,
             reduced,
             tmp_r: vec![0.0; p],
+            decoupled: Vec::new(),
+            counts: vec![0; p - m],
             condition: 1.0,
         }
     }
@@ -153,7 +162,13 @@ impl SchurKkt {
                 }
             }
         }
-        if let Some(lu) = &mut self.reduced {
+        self.decoupled.clear();
+        if self.reduced.is_some() && self.try_decouple(jac) {
+            for &(_, r, _) in &self.decoupled {
+                self.s[r * m + r] = 1.0;
+            }
+        } else if let Some(lu) = &mut self.reduced {
+            self.decoupled.clear();
             // [0 C_zᵀ; C_z −S]
             let z = self.massless.len();
             let p = z + m;
@@ -218,6 +233,30 @@ impl SchurKkt {
         Ok(())
     }
 
+    /// Fills `decoupled` when each massless coordinate has exactly one non-zero Jacobian entry, in
+    /// a row no other massless coordinate uses and whose `S` diagonal is zero (no inertia in it).
+    fn try_decouple(&mut self, jac: &[f64]) -> bool {
+        let m = self.m;
+        self.counts.iter_mut().for_each(|c| *c = 0);
+        for &(e, r, k) in &self.massless_entries {
+            if jac[e] != 0.0 {
+                self.counts[k] += 1;
+                self.decoupled.push((self.massless[k], r, jac[e]));
+            }
+        }
+        let ok = self.counts.iter().all(|&c| c == 1)
+            && self.decoupled.iter().all(|&(_, r, _)| self.s[r * m + r] == 0.0)
+            && self
+                .decoupled
+                .iter()
+                .enumerate()
+                .all(|(i, a)| self.decoupled[..i].iter().all(|b| b.1 != a.1));
+        if !ok {
+            self.decoupled.clear();
+        }
+        ok
+    }
+
     pub fn solve(&mut self, sys: &ConstraintSystem, x: &mut [f64]) {
         let (n, m) = (self.n, self.m);
         let (top, bottom) = x.split_at_mut(n);
@@ -230,7 +269,16 @@ impl SchurKkt {
         for (t, b) in self.tmp_m.iter_mut().zip(bottom.iter()) {
             *t -= b;
         }
-        if let Some(lu) = &self.reduced {
+        // Decoupled massless coordinates: λ_r = b_z / c and q̈_z = b_r / c for each (z, r, c).
+        let mut qz = [0.0f64; 8];
+        let decoupled = !self.decoupled.is_empty() && self.decoupled.len() <= qz.len();
+        if decoupled {
+            for (k, &(c, r, v)) in self.decoupled.iter().enumerate() {
+                self.tmp_m[r] = top[c] / v;
+                qz[k] = bottom[r] / v;
+            }
+        }
+        if let (Some(lu), false) = (&self.reduced, decoupled) {
             let z = self.massless.len();
             for (k, &c) in self.massless.iter().enumerate() {
                 self.tmp_r[k] = top[c];
@@ -273,6 +321,11 @@ impl SchurKkt {
         }
         apply_minv(&self.minv, top, &mut self.tmp_n);
         top.copy_from_slice(&self.tmp_n);
+        if decoupled {
+            for (k, &(c, _, _)) in self.decoupled.iter().enumerate() {
+                top[c] = qz[k];
+            }
+        }
     }
 }
 
