@@ -260,10 +260,7 @@ impl Formulation for Augmented {
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
-        let sys = self.model.constraints();
-        sys.evaluate(t, q, qd, &mut self.values);
-        c.copy_from_slice(&self.values.c);
-        sys.velocity_residual(&self.values, qd, cdot);
+        self.model.constraints().residuals(t, q, qd, &mut self.values, c, cdot);
     }
 
     /// Mass-weighted projection with the same saddle-point matrix:

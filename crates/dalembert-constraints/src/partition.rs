@@ -226,6 +226,23 @@ impl PartitionTracker {
 }
 
 impl PartitionTracker {
+    /// [`PartitionTracker::project`], adding its Newton iterations and re-partitions to `stats`.
+    pub fn project_counted(
+        &mut self,
+        t: f64,
+        sys: &ConstraintSystem,
+        values: &mut ConstraintValues,
+        (q, qd): (&mut [f64], &mut [f64]),
+        tolerance: f64,
+        stats: &mut crate::FormulationStats,
+    ) -> Result<usize, crate::DynamicsError> {
+        let before = self.log.len();
+        let it = self.project(t, sys, values, q, qd, tolerance)?;
+        stats.repartitions += (self.log.len() - before) as u64;
+        stats.newton_iterations += it as u64;
+        Ok(it)
+    }
+
     /// Coordinate partitioning: with the independent coordinates held, Newton–Raphson on the
     /// dependent ones (`C_qd Δq_d = −C` over the independent equations) until `‖C‖∞ ≤ tolerance`,
     /// then the dependent velocities from `C_qd q̇_d = −C_t − C_qi q̇_i`. `values` is scratch and ends

@@ -204,6 +204,21 @@ impl ConstraintSystem {
         a
     }
 
+    /// Evaluates at `(t, q, q̇)` into the scratch `values` and writes `C` and `Ċ = C_q q̇ + C_t`.
+    pub fn residuals(
+        &self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        values: &mut ConstraintValues,
+        c: &mut [f64],
+        cdot: &mut [f64],
+    ) {
+        self.evaluate(t, q, qd, values);
+        c.copy_from_slice(&values.c);
+        self.velocity_residual(values, qd, cdot);
+    }
+
     /// Velocity-level residual `Ċ = C_q q̇ + C_t` into `out`.
     pub fn velocity_residual(&self, values: &ConstraintValues, qd: &[f64], out: &mut [f64]) {
         self.jacobian_mul(values, qd, out);

@@ -262,22 +262,15 @@ impl Formulation for Embedding {
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
-        let sys = self.model.constraints();
-        sys.evaluate(t, q, qd, &mut self.values);
-        c.copy_from_slice(&self.values.c);
-        sys.velocity_residual(&self.values, qd, cdot);
+        self.model.constraints().residuals(t, q, qd, &mut self.values, c, cdot);
     }
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
     /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation.
     fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
-        let before = self.tracker.log.len();
-        let it = self
-            .tracker
-            .project(t, self.model.constraints(), &mut self.values, q, qd, tolerance)?;
-        self.stats.repartitions += (self.tracker.log.len() - before) as u64;
-        self.stats.newton_iterations += it as u64;
-        Ok(it)
+        let sys = self.model.constraints();
+        self.tracker
+            .project_counted(t, sys, &mut self.values, (q, qd), tolerance, &mut self.stats)
     }
 
     fn stats(&self) -> FormulationStats {
