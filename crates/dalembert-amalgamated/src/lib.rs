@@ -13,9 +13,10 @@
 //!
 //! The velocity transformation and its partition are shared with the embedding formulation
 //! (`dalembert_constraints::partition`). The system (size `3n − r`) is solved with dense LU for
-//! small models and with faer's sparse LU above 150 unknowns (measured crossover: chain of 16, 112 unknowns, dense 70 µs vs sparse 86 µs; chain of 64: dense 2.56 ms, sparse 0.76 ms); the sparse pattern (with `B_i` full in
-//! its dependent rows) depends only on the partition, so its symbolic analysis is redone only at a
-//! re-partition. (A symmetric indefinite sparse factorization would halve the work; faer's needs
+//! small models and with faer's sparse LU above 150 unknowns (measured: chain of 16, 112 unknowns,
+//! dense 70 µs vs sparse 86 µs; chain of 64, dense 2.56 ms vs sparse 0.76 ms); the sparse pattern
+//! (with `B_i` full in its dependent rows) depends only on the partition, so its symbolic analysis
+//! is redone only at a re-partition. (A symmetric indefinite sparse factorization would halve the work; faer's needs
 //! regularisation on this matrix, see `shared/LINALG-NOTES.md`.)
 
 use dalembert_constraints::{
