@@ -189,6 +189,18 @@ proptest! {
     ) {
         let first = if grounded { BodyRef::Ground } else { b(0) };
         for c in constraints(first, &p) {
+            // The distance |p_j − p_i| has derivatives growing like 1/|d|^k: near coincident
+            // points the finite differences (not the analytic terms) lose their accuracy, so
+            // distance elements are checked where |d| ≥ 0.3 (the coincident case is a documented
+            // singularity of the element).
+            if c.name().ends_with("dist") {
+                let [a_ref, b_ref] = c.bodies();
+                let pa = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(a_ref, &q, &[]), Vec2::new(p[0], p[1]));
+                let pb = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(b_ref, &q, &[]), Vec2::new(p[2], p[3]));
+                if (pb.position - pa.position).norm() < 0.3 {
+                    continue;
+                }
+            }
             let sys = ConstraintSystem::new(2, vec![c]).unwrap();
             check(&sys, t, &q, &v, &a)?;
         }
