@@ -93,15 +93,20 @@ impl Model {
         Ok(())
     }
 
-    /// Kinetic energy `½ q̇ᵀ M q̇`, computed body by body without building `M`.
+    /// Kinetic energy `½ q̇ᵀ M q̇`, computed body by body without building `M` (no trigonometry
+    /// for bodies whose reference point is the centre of mass).
     pub fn kinetic_energy(&self, q: &[f64], qd: &[f64]) -> f64 {
         self.bodies
             .iter()
             .enumerate()
             .map(|(i, b)| {
-                let blk = MassMatrix::block(b, q[3 * i + 2]);
                 let v = nalgebra::Vector3::new(qd[3 * i], qd[3 * i + 1], qd[3 * i + 2]);
-                0.5 * v.dot(&(blk * v))
+                if b.center_of_mass == dalembert_kinematics::Vec2::zeros() {
+                    0.5 * (b.mass * (v.x * v.x + v.y * v.y) + b.inertia * v.z * v.z)
+                } else {
+                    let blk = MassMatrix::block(b, q[3 * i + 2]);
+                    0.5 * v.dot(&(blk * v))
+                }
             })
             .sum()
     }

@@ -38,7 +38,10 @@ impl ForceElement for Gravity {
         let mut v = 0.0;
         for (i, b) in bodies.iter().enumerate() {
             let k = 3 * i;
-            let r = Vec2::new(q[k], q[k + 1]) + rotation(q[k + 2]) * b.center_of_mass;
+            let mut r = Vec2::new(q[k], q[k + 1]);
+            if b.center_of_mass != Vec2::zeros() {
+                r += rotation(q[k + 2]) * b.center_of_mass;
+            }
             v -= b.mass * self.g.dot(&r);
         }
         Some(v)
