@@ -18,7 +18,9 @@
 //!
 //! `β' = h² β (1 − α_f)/(1 − α_m)`, `γ' = h γ (1 − α_f)/(1 − α_m)`, `K = ∂(M q̈ + C_qᵀ λ − Q_e)/∂q`,
 //! `D = −∂Q_e/∂q̇`. `K` and `D` are formed by finite differences of the residual (the documented
-//! fallback; analytic force and constraint Jacobians are future work). The positions satisfy
+//! fallback; analytic force and constraint Jacobians are future work), and the factored matrix is
+//! reused across steps of the same size (modified Newton) until it has served 20 steps or Newton
+//! stalls. The positions satisfy
 //! `C = 0` to the Newton tolerance at every step: no drift. On Newton failure the step is halved
 //! (down to the minimum step) and grows back after successful steps.
 //!
@@ -66,6 +68,11 @@ pub(crate) struct GeneralizedAlpha {
     mass: MassMatrix,
     values: ConstraintValues,
     work: Work,
+    /// Step size the current iteration matrix was built for (NaN: none), and how many steps it
+    /// has served: the matrix is kept across steps (modified Newton) and rebuilt when the step
+    /// changes, after `MATRIX_LIFETIME` steps, or when Newton has not converged in 3 iterations.
+    matrix_h: f64,
+    matrix_age: u32,
     /// Newton tolerance on the position update and on `‖C‖∞`.
     pub tolerance: f64,
     /// Newton iterations spent (cumulative).
@@ -140,6 +147,8 @@ impl GeneralizedAlpha {
             tolerance: 1e-10,
             iterations: 0,
             factorizations: 0,
+            matrix_h: f64::NAN,
+            matrix_age: 0,
             evaluations: 0,
         }
     }
@@ -193,7 +202,12 @@ impl GeneralizedAlpha {
         let t1 = t + h;
         self.work.qdd.copy_from_slice(&self.qdd);
         self.work.lam.copy_from_slice(&self.lambda);
-        let mut factored = false;
+        const MATRIX_LIFETIME: u32 = 20;
+        // Reuse the last iteration matrix when it was built for this step size (modified Newton).
+        let mut fresh = false;
+        if self.matrix_h != h || self.matrix_age >= MATRIX_LIFETIME {
+            self.matrix_h = f64::NAN;
+        }
         for it in 0..MAX_ITERATIONS {
             self.predict(h, q, qd);
             let w = &mut self.work;
@@ -209,12 +223,15 @@ impl GeneralizedAlpha {
             );
             self.evaluations += 1;
             if w.res.iter().any(|v| !v.is_finite()) {
+                self.matrix_h = f64::NAN;
                 return Err(NotConverged);
             }
-            if !factored || it == 3 {
+            if self.matrix_h.is_nan() || (it == 3 && !fresh) {
                 self.factor_iteration_matrix(model, t1, bp, gp);
                 self.factorizations += 1;
-                factored = true;
+                self.matrix_h = h;
+                self.matrix_age = 0;
+                fresh = true;
             }
             let w = &mut self.work;
             for (d, r) in w.dx.iter_mut().zip(&w.res) {
@@ -240,6 +257,7 @@ impl GeneralizedAlpha {
                 w.lam[j] += w.dx[n + j];
             }
             if !dq.is_finite() {
+                self.matrix_h = f64::NAN;
                 return Err(NotConverged);
             }
             let qscale = 1.0 + w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -258,10 +276,12 @@ impl GeneralizedAlpha {
                     self.lambda.copy_from_slice(&w.lam);
                     q.copy_from_slice(&w.q1);
                     qd.copy_from_slice(&w.qd1);
+                    self.matrix_age += 1;
                     return Ok(());
                 }
             }
         }
+        self.matrix_h = f64::NAN;
         Err(NotConverged)
     }
 
