@@ -20,8 +20,7 @@
 //! `D = −∂Q_e/∂q̇`. `K` and `D` are formed by finite differences of the residual (the documented
 //! fallback; analytic force and constraint Jacobians are future work), and the factored matrix is
 //! reused across steps of the same size (modified Newton) until it has served 20 steps or Newton
-//! stalls. The positions satisfy
-//! `C = 0` to the Newton tolerance at every step: no drift. On Newton failure the step is halved
+//! stalls. The positions satisfy `C = 0` to the Newton tolerance at every step: no drift. On Newton failure the step is halved
 //! (down to the minimum step) and grows back after successful steps.
 //!
 //! This method always solves the index-3 system of the model; the formulation supplies the initial
