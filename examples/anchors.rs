@@ -12,6 +12,7 @@
 use dalembert::augmented::Augmented;
 use dalembert::constraints::{Formulation, Stabilization};
 use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert_testkit::anchors::state_errors;
 use dalembert_testkit::mechanisms::{self, Mechanism};
 use std::io::Write;
 use std::time::Instant;
@@ -112,27 +113,18 @@ fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
 
 /// Max abs errors (positions and angles; velocities) against the reference bodies at t = 1 s.
 fn errors(state: &[f64], reference: &serde_json::Value) -> (f64, f64) {
-    let n = state.len() / 2;
-    let (q, qd) = state.split_at(n);
-    let mut ep = 0.0f64;
-    let mut ev = 0.0f64;
-    let tau = std::f64::consts::TAU;
-    for (k, b) in reference.as_array().into_iter().flatten().enumerate() {
-        let r: Vec<f64> = b.as_array().into_iter().flatten().filter_map(|v| v.as_f64()).collect();
-        if r.len() != 6 || 3 * k + 2 >= n {
-            continue;
-        }
-        let dth = (q[3 * k + 2] - r[2]).rem_euclid(tau);
-        ep = ep
-            .max((q[3 * k] - r[0]).abs())
-            .max((q[3 * k + 1] - r[1]).abs())
-            .max(dth.min(tau - dth));
-        ev = ev
-            .max((qd[3 * k] - r[3]).abs())
-            .max((qd[3 * k + 1] - r[4]).abs())
-            .max((qd[3 * k + 2] - r[5]).abs());
-    }
-    (ep, ev)
+    let (q, qd) = state.split_at(state.len() / 2);
+    let rows: Vec<[f64; 6]> = reference
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|b| {
+            let r: Vec<f64> = b.as_array().into_iter().flatten().filter_map(|v| v.as_f64()).collect();
+            r.try_into().ok()
+        })
+        .take(q.len() / 3)
+        .collect();
+    state_errors(q, qd, &rows)
 }
 
 fn main() {

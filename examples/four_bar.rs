@@ -9,36 +9,8 @@ use dalembert::constraints::{Constraint, Model, Reaction, Revolute};
 use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};
 use dalembert::{FormulationKind, Simulation};
+use dalembert_testkit::anchors::{state_errors, FOURBAR_1S};
 use std::sync::Arc;
-
-/// Reference body states `[x, y, θ, vx, vy, ω]` at t = 1 s (crank, coupler, rocker), from
-/// `shared/anchors/results/reference.json` (angles there are wrapped to [0, 2π)).
-const REFERENCE_1S: [[f64; 6]; 3] = [
-    [
-        0.39086516984116365,
-        -0.3118083049005543,
-        5.609824677472552,
-        0.2817451225029032,
-        0.35317967298567776,
-        0.9035844077104529,
-    ],
-    [
-        2.0290237483794917,
-        -0.7058306756334527,
-        -0.06581876472583136,
-        0.571100712102016,
-        0.8218199469049838,
-        0.09256891772901597,
-    ],
-    [
-        2.6381585785383286,
-        -0.39402237073290275,
-        -0.5531418641762115,
-        0.2893555895991149,
-        0.46864027391929525,
-        0.7343633536866413,
-    ],
-];
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // Pivots A = (0,0), D = (2,0); B = (−1,0); C = (7/6, −√14/3): the elbow-down assembly.
@@ -119,20 +91,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         stats.max_constraint_violation, stats.max_velocity_violation, stats.max_energy_change
     );
     if let Some((q1, qd1)) = at_one {
-        let mut err = 0.0f64;
-        for (k, r) in REFERENCE_1S.iter().enumerate() {
-            let tau = std::f64::consts::TAU;
-            let dth = (q1[3 * k + 2] - r[2]).rem_euclid(tau);
-            let vals = [
-                q1[3 * k] - r[0],
-                q1[3 * k + 1] - r[1],
-                dth.min(tau - dth),
-                qd1[3 * k] - r[3],
-                qd1[3 * k + 1] - r[4],
-                qd1[3 * k + 2] - r[5],
-            ];
-            err = vals.iter().fold(err, |a, v| a.max(v.abs()));
-        }
+        let (ep, ev) = state_errors(&q1, &qd1, &FOURBAR_1S);
+        let err = ep.max(ev);
         println!("state error at t = 1 s against the independent reference: {err:.2e}");
     }
     Ok(())

@@ -193,21 +193,7 @@ impl Formulation for Amalgamated {
             res <= 1e-9 * (b.norm_max() + k.norm_max() * x.norm_max())
         };
         if !accurate || sol.iter().any(|v| !v.is_finite()) {
-            let bodies: Vec<String> = self
-                .model
-                .bodies()
-                .iter()
-                .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
-                .map(|b| b.name.clone())
-                .collect();
-            return Err(if bodies.is_empty() {
-                DynamicsError::Singular {
-                    time: t,
-                    what: "amalgamated system singular".into(),
-                }
-            } else {
-                DynamicsError::SingularMass { time: t, bodies }
-            });
+            return Err(self.model.singular_mass_error(t, "amalgamated system singular"));
         }
         qdd.copy_from_slice(&sol[..n]);
         // λ on the independent rows from the dependent columns of Q_c = −C_qᵀ λ.

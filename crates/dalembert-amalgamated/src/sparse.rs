@@ -3,6 +3,7 @@
 //! dependent ones) depends only on the partition, so its symbolic LU is computed once per partition
 //! and reused until the next re-partition.
 
+use dalembert_constraints::sparse_pattern::{compress_columns, entry_position};
 use dalembert_constraints::Partition;
 use dalembert_kinematics::MassMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -60,15 +61,8 @@ impl SparseSystem {
         for &(r, c) in &entries {
             cols[c].push(r);
         }
-        let mut col_ptr = vec![0usize];
-        let mut row_idx = Vec::new();
-        for col in cols.iter_mut() {
-            col.sort_unstable();
-            col.dedup();
-            row_idx.extend_from_slice(col);
-            col_ptr.push(row_idx.len());
-        }
-        let pos = |r: usize, c: usize| col_ptr[c] + row_idx[col_ptr[c]..col_ptr[c + 1]].binary_search(&r).unwrap_or(0);
+        let (col_ptr, row_idx) = compress_columns(cols);
+        let pos = |r: usize, c: usize| entry_position(&col_ptr, &row_idx, r, c);
         let mass_pos = (0..n / 3)
             .flat_map(|b| (0..9).map(move |k| (3 * b + k / 3, 3 * b + k % 3)))
             .map(|(r, c)| pos(r, c))

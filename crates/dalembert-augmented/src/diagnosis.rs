@@ -17,19 +17,10 @@ pub(crate) fn diagnose(t: f64, model: &Model, vals: &ConstraintValues, pivot_tol
     if !sys.analyse_structure(vals, RANK_TOLERANCE).is_full_rank() {
         return sys.redundancy_error(t, vals);
     }
-    let light: Vec<String> = model
-        .bodies()
-        .iter()
-        .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
-        .map(|b| b.name.clone())
-        .collect();
-    if !light.is_empty() {
-        return DynamicsError::SingularMass { time: t, bodies: light };
-    }
-    DynamicsError::Singular {
-        time: t,
-        what: format!("saddle-point matrix singular (pivot tolerance {pivot_tolerance:e})"),
-    }
+    model.singular_mass_error(
+        t,
+        &format!("saddle-point matrix singular (pivot tolerance {pivot_tolerance:e})"),
+    )
 }
 
 /// Solves with a maximal independent set of constraint rows, then returns in `x` the accelerations
@@ -76,7 +67,7 @@ pub(crate) fn minimum_norm_solve(
     let scale = rhs.norm_max() + k.norm_max() * sol.norm_max();
     let ok = res.norm_max() <= 1e-9 * scale.max(f64::MIN_POSITIVE);
     if !ok {
-        return Err(diagnose_mass(t, model));
+        return Err(model.singular_mass_error(t, "reduced saddle-point matrix singular"));
     }
     // Dropped rows must be consistent: C_q,dropped q̈ = rhs_dropped.
     let m = sys.num_equations();
@@ -113,21 +104,4 @@ pub(crate) fn minimum_norm_solve(
         x[n + row] = lambda[(row, 0)];
     }
     Ok(())
-}
-
-fn diagnose_mass(t: f64, model: &Model) -> DynamicsError {
-    let light: Vec<String> = model
-        .bodies()
-        .iter()
-        .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
-        .map(|b| b.name.clone())
-        .collect();
-    if light.is_empty() {
-        DynamicsError::Singular {
-            time: t,
-            what: "reduced saddle-point matrix singular".into(),
-        }
-    } else {
-        DynamicsError::SingularMass { time: t, bodies: light }
-    }
 }

@@ -27,6 +27,7 @@ pub mod model;
 pub mod partition;
 pub mod primitives;
 pub mod reactions;
+pub mod sparse_pattern;
 pub mod structure;
 pub mod system;
 

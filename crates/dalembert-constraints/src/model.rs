@@ -77,6 +77,25 @@ impl Model {
             .sum()
     }
 
+    /// The error for a singular system whose cause is not a rank-deficient `C_q`: `SingularMass`
+    /// naming the bodies without mass or inertia when there are any, otherwise `Singular` with `what`.
+    pub fn singular_mass_error(&self, t: f64, what: &str) -> crate::DynamicsError {
+        let bodies: Vec<String> = self
+            .bodies
+            .iter()
+            .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
+            .map(|b| b.name.clone())
+            .collect();
+        if bodies.is_empty() {
+            crate::DynamicsError::Singular {
+                time: t,
+                what: what.to_string(),
+            }
+        } else {
+            crate::DynamicsError::SingularMass { time: t, bodies }
+        }
+    }
+
     /// `Ok` when every position and velocity is finite; otherwise the error names the body and the
     /// coordinate.
     pub fn check_state(&self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), crate::DynamicsError> {

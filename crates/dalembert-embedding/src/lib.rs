@@ -136,15 +136,6 @@ impl Embedding {
     }
 }
 
-fn light_bodies(model: &Model) -> Vec<String> {
-    model
-        .bodies()
-        .iter()
-        .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
-        .map(|b| b.name.clone())
-        .collect()
-}
-
 impl Formulation for Embedding {
     fn name(&self) -> &'static str {
         "embedding"
@@ -203,15 +194,8 @@ impl Formulation for Embedding {
                 let mi = vt.b.transpose() * &mb;
                 let qi = vt.b.transpose() * Mat::from_fn(n, 1, |i, _| rhs_full[i]);
                 let llt = mi.llt(Side::Lower).map_err(|_| {
-                    let bodies = light_bodies(&self.model);
-                    if bodies.is_empty() {
-                        DynamicsError::Singular {
-                            time: t,
-                            what: "reduced mass matrix B_iᵀ M B_i not positive definite".into(),
-                        }
-                    } else {
-                        DynamicsError::SingularMass { time: t, bodies }
-                    }
+                    self.model
+                        .singular_mass_error(t, "reduced mass matrix B_iᵀ M B_i not positive definite")
                 })?;
                 let sol = llt.solve(&qi);
                 qdd_i = (0..ni).map(|i| sol[(i, 0)]).collect();
@@ -230,10 +214,9 @@ impl Formulation for Embedding {
                 let lu = k.partial_piv_lu();
                 let sol = lu.solve(Mat::from_fn(n, 1, |i, _| rhs_full[i]));
                 if (0..n).any(|i| !sol[(i, 0)].is_finite()) {
-                    return Err(DynamicsError::SingularMass {
-                        time: t,
-                        bodies: light_bodies(&self.model),
-                    });
+                    return Err(self
+                        .model
+                        .singular_mass_error(t, "elimination matrix [M B_i  C_qᵀ] singular"));
                 }
                 qdd_i = (0..ni).map(|i| sol[(i, 0)]).collect();
                 lam_rows = Some((0..r).map(|i| sol[(ni + i, 0)]).collect());

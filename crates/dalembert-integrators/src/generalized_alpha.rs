@@ -302,61 +302,37 @@ impl GeneralizedAlpha {
         w.qp.copy_from_slice(&w.q1);
         w.qdp.copy_from_slice(&w.qd1);
         for j in 0..n {
-            // K column j (position), scaled by β'.
-            let hq = 1e-7 * (1.0 + w.q1[j].abs());
-            w.qp[j] = w.q1[j] + hq;
-            Self::residual(
-                &mut self.mass,
-                &mut self.values,
-                model,
-                t,
-                (&w.qp, &w.qd1),
-                (&w.qdd, &w.lam),
-                1.0,
-                &mut w.rp,
-            );
-            w.qp[j] = w.q1[j] - hq;
-            Self::residual(
-                &mut self.mass,
-                &mut self.values,
-                model,
-                t,
-                (&w.qp, &w.qd1),
-                (&w.qdd, &w.lam),
-                1.0,
-                &mut w.rm,
-            );
-            w.qp[j] = w.q1[j];
-            for i in 0..n {
-                k[(i, j)] += bp * (w.rp[i] - w.rm[i]) / (2.0 * hq);
-            }
-            // D column j (velocity), scaled by γ'.
-            let hv = 1e-7 * (1.0 + w.qd1[j].abs());
-            w.qdp[j] = w.qd1[j] + hv;
-            Self::residual(
-                &mut self.mass,
-                &mut self.values,
-                model,
-                t,
-                (&w.q1, &w.qdp),
-                (&w.qdd, &w.lam),
-                1.0,
-                &mut w.rp,
-            );
-            w.qdp[j] = w.qd1[j] - hv;
-            Self::residual(
-                &mut self.mass,
-                &mut self.values,
-                model,
-                t,
-                (&w.q1, &w.qdp),
-                (&w.qdd, &w.lam),
-                1.0,
-                &mut w.rm,
-            );
-            w.qdp[j] = w.qd1[j];
-            for i in 0..n {
-                k[(i, j)] += gp * (w.rp[i] - w.rm[i]) / (2.0 * hv);
+            // K column j (perturbing the position), scaled by β'; D column j (the velocity), by γ'.
+            for (velocity, scale) in [(false, bp), (true, gp)] {
+                let x = if velocity { w.qd1[j] } else { w.q1[j] };
+                let h = 1e-7 * (1.0 + x.abs());
+                for (sign, out) in [(1.0, &mut w.rp), (-1.0, &mut w.rm)] {
+                    let (qs, qds) = if velocity {
+                        w.qdp[j] = x + sign * h;
+                        (&w.q1, &w.qdp)
+                    } else {
+                        w.qp[j] = x + sign * h;
+                        (&w.qp, &w.qd1)
+                    };
+                    Self::residual(
+                        &mut self.mass,
+                        &mut self.values,
+                        model,
+                        t,
+                        (qs, qds),
+                        (&w.qdd, &w.lam),
+                        1.0,
+                        out,
+                    );
+                }
+                if velocity {
+                    w.qdp[j] = x;
+                } else {
+                    w.qp[j] = x;
+                }
+                for i in 0..n {
+                    k[(i, j)] += scale * (w.rp[i] - w.rm[i]) / (2.0 * h);
+                }
             }
         }
         self.evaluations += 4 * n as u64;

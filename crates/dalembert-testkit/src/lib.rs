@@ -3,6 +3,7 @@
 //!
 //! Every builder returns a [`Mechanism`]: the model and a consistent initial state.
 
+pub mod anchors;
 pub mod closed_form;
 pub mod generator;
 pub mod jet;

@@ -39,6 +39,11 @@ fn rod_from_pin(p: Vec2, v: Vec2, l: f64, th: f64, w: f64) -> ([f64; 3], [f64; 3
 /// at the origin; link `k` at absolute angle `angles[k]` turning at `rates[k]`. Optional joint
 /// torques: `torques[k]` acts at joint `k` on link `k` (reaction on link `k−1` or the ground).
 pub fn chain(m: f64, l: f64, angles: &[f64], rates: &[f64], torques: &[f64]) -> Mechanism {
+    chain_of(&vec![m; angles.len()], l, angles, rates, torques)
+}
+
+/// [`chain`] with one mass per link.
+fn chain_of(masses: &[f64], l: f64, angles: &[f64], rates: &[f64], torques: &[f64]) -> Mechanism {
     let n = angles.len();
     let mut q = Vec::with_capacity(3 * n);
     let mut qd = Vec::with_capacity(3 * n);
@@ -52,7 +57,7 @@ pub fn chain(m: f64, l: f64, angles: &[f64], rates: &[f64], torques: &[f64]) -> 
         let (s, c) = angles[k].sin_cos();
         pin += Vec2::new(c, s) * l;
         vpin += Vec2::new(-s, c) * (l * rates[k]);
-        bodies.push(Body::rod(format!("link{k}"), m, l).expect("valid rod"));
+        bodies.push(Body::rod(format!("link{k}"), masses[k], l).expect("valid rod"));
     }
     let mut joints: Vec<Box<dyn Constraint>> = Vec::new();
     for k in 0..n {
@@ -362,24 +367,7 @@ pub fn double_pendulum(dp: crate::closed_form::DoublePendulum, th: [f64; 2], w: 
 /// A chain of uniform rods of length `l` with the given masses (one per link), pinned end to end
 /// from the origin, at absolute angles `angles`, at rest.
 pub fn chain_with_masses(masses: &[f64], l: f64, angles: &[f64]) -> Mechanism {
-    let mut mech = chain(1.0, l, angles, &vec![0.0; angles.len()], &[]);
-    let bodies: Vec<Body> = masses
-        .iter()
-        .enumerate()
-        .map(|(k, &m)| Body::rod(format!("link{k}"), m, l).expect("valid rod"))
-        .collect();
-    let mut joints: Vec<Box<dyn Constraint>> = Vec::new();
-    for k in 0..masses.len() {
-        let first = if k == 0 { BodyRef::Ground } else { b(k - 1) };
-        let p_first = if k == 0 { Vec2::zeros() } else { Vec2::new(l / 2.0, 0.0) };
-        joints.push(Box::new(Revolute::new(
-            format!("J{k}"),
-            [first, b(k)],
-            [p_first, Vec2::new(-l / 2.0, 0.0)],
-        )));
-    }
-    mech.model = Arc::new(Model::new(bodies, vec![gravity()], joints).expect("valid chain"));
-    mech
+    chain_of(masses, l, angles, &vec![0.0; angles.len()], &[])
 }
 
 /// A parallelogram: two cranks (1 kg, 1 m) pinned to the ground at (0, 0) and (2, 0), joined by a

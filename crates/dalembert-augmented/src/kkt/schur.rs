@@ -30,9 +30,7 @@ pub(crate) struct SchurKkt {
     m: usize,
     /// For each body: `(row, index of the row's first Jacobian entry on that body)`.
     rows_of_body: Vec<Vec<(usize, usize)>>,
-    minv: Vec<Matrix3<f64>>,
-    /// `minv` holds the inverse of a constant mass matrix (reference points at the centres of mass).
-    minv_valid: bool,
+    minv: InverseMass,
     /// `S`, then its Cholesky factor (lower triangle), row-major `m × m`.
     s: Vec<f64>,
     pivot_tolerance: f64,
@@ -108,8 +106,7 @@ impl SchurKkt {
             n,
             m,
             rows_of_body,
-            minv: vec![Matrix3::zeros(); n / 3],
-            minv_valid: false,
+            minv: InverseMass::new(n / 3),
             s: vec![0.0; m * m],
             pivot_tolerance,
             tmp_m: vec![0.0; m],
@@ -131,27 +128,12 @@ impl SchurKkt {
         _sys: &ConstraintSystem,
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
-        if !self.minv_valid || mass.is_configuration_dependent() {
-            for (mi, blk) in self.minv.iter_mut().zip(mass.blocks()) {
-                *mi = match blk.cholesky() {
-                    Some(c) => c.inverse(),
-                    // A diagonal block with zero entries: invert the non-zero part only.
-                    None if (blk - Matrix3::from_diagonal(&blk.diagonal()))
-                        .iter()
-                        .all(|v| *v == 0.0) =>
-                    {
-                        Matrix3::from_diagonal(&blk.diagonal().map(|d| if d > 0.0 { 1.0 / d } else { 0.0 }))
-                    }
-                    None => return Err(SingularKkt("mass block neither positive definite nor diagonal".into())),
-                };
-            }
-            self.minv_valid = !mass.is_configuration_dependent();
-        }
+        self.minv.update(mass, true)?;
         let m = self.m;
         self.s.iter_mut().for_each(|v| *v = 0.0);
         let jac = &vals.jacobian;
         for (b, rows) in self.rows_of_body.iter().enumerate() {
-            let minv = &self.minv[b];
+            let minv = &self.minv.blocks[b];
             for &(i, ei) in rows {
                 let ci = Vector3::new(jac[ei], jac[ei + 1], jac[ei + 2]);
                 let wi = minv * ci;
@@ -261,7 +243,7 @@ impl SchurKkt {
         let (n, m) = (self.n, self.m);
         let (top, bottom) = x.split_at_mut(n);
         // tmp_m = C M⁻¹ b_top − b_bottom
-        apply_minv(&self.minv, top, &mut self.tmp_n);
+        self.minv.apply(top, &mut self.tmp_n);
         self.tmp_m.iter_mut().for_each(|v| *v = 0.0);
         for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
             self.tmp_m[r] += v * self.tmp_n[c];
@@ -292,7 +274,7 @@ impl SchurKkt {
             for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
                 top[c] -= v * self.tmp_m[r];
             }
-            apply_minv(&self.minv, top, &mut self.tmp_n);
+            self.minv.apply(top, &mut self.tmp_n);
             top.copy_from_slice(&self.tmp_n);
             for (k, &c) in self.massless.iter().enumerate() {
                 top[c] = self.tmp_r[k];
@@ -319,7 +301,7 @@ impl SchurKkt {
         for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
             top[c] -= v * self.tmp_m[r];
         }
-        apply_minv(&self.minv, top, &mut self.tmp_n);
+        self.minv.apply(top, &mut self.tmp_n);
         top.copy_from_slice(&self.tmp_n);
         if decoupled {
             for (k, &(c, _, _)) in self.decoupled.iter().enumerate() {
@@ -329,10 +311,54 @@ impl SchurKkt {
     }
 }
 
-/// `y ← M⁻¹ x` block by block.
-pub(crate) fn apply_minv(minv: &[Matrix3<f64>], x: &[f64], y: &mut [f64]) {
-    for (b, mi) in minv.iter().enumerate() {
-        let v = mi * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
-        y[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
+/// `M⁻¹` block by block, recomputed only when the mass matrix depends on the configuration.
+pub(crate) struct InverseMass {
+    /// One inverse 3×3 block per body.
+    pub blocks: Vec<Matrix3<f64>>,
+    valid: bool,
+}
+
+impl InverseMass {
+    pub fn new(bodies: usize) -> Self {
+        InverseMass {
+            blocks: vec![Matrix3::zeros(); bodies],
+            valid: false,
+        }
+    }
+
+    /// Refreshes the inverse when needed. With `allow_diagonal`, a diagonal block with zero entries
+    /// (no mass or no inertia) is inverted on its non-zero part only; otherwise every block must be
+    /// positive definite.
+    pub fn update(&mut self, mass: &MassMatrix, allow_diagonal: bool) -> Result<(), SingularKkt> {
+        if self.valid && !mass.is_configuration_dependent() {
+            return Ok(());
+        }
+        for (mi, blk) in self.blocks.iter_mut().zip(mass.blocks()) {
+            *mi = match blk.cholesky() {
+                Some(c) => c.inverse(),
+                None if allow_diagonal
+                    && (blk - Matrix3::from_diagonal(&blk.diagonal()))
+                        .iter()
+                        .all(|v| *v == 0.0) =>
+                {
+                    Matrix3::from_diagonal(&blk.diagonal().map(|d| if d > 0.0 { 1.0 / d } else { 0.0 }))
+                }
+                None => {
+                    return Err(SingularKkt(
+                        "mass block not positive definite (nor diagonal where allowed)".into(),
+                    ))
+                }
+            };
+        }
+        self.valid = !mass.is_configuration_dependent();
+        Ok(())
+    }
+
+    /// `y ← M⁻¹ x` block by block.
+    pub fn apply(&self, x: &[f64], y: &mut [f64]) {
+        for (b, mi) in self.blocks.iter().enumerate() {
+            let v = mi * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
+            y[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
+        }
     }
 }

@@ -50,8 +50,8 @@ impl SparseKkt {
         for &(r, c) in &entries {
             cols[c].push(r);
         }
-        let (col_ptr, row_idx) = super::compress_columns(cols);
-        let pos = |r: usize, c: usize| super::entry_position(&col_ptr, &row_idx, r, c);
+        let (col_ptr, row_idx) = dalembert_constraints::sparse_pattern::compress_columns(cols);
+        let pos = |r: usize, c: usize| dalembert_constraints::sparse_pattern::entry_position(&col_ptr, &row_idx, r, c);
         let mass_map = (0..n / 3)
             .flat_map(|b| (0..9).map(move |k| (3 * b + k / 3, 3 * b + k % 3)))
             .map(|(r, c)| pos(r, c))

@@ -8,6 +8,7 @@
 //! Singularity: a failed Cholesky, or a large amplification of a fixed ±1 probe vector by `S⁻¹`
 //! (a rank-deficient `C_q` makes `S` singular).
 
+use super::schur::InverseMass;
 use super::SingularKkt;
 use dalembert_constraints::{ConstraintSystem, ConstraintValues};
 use dalembert_kinematics::MassMatrix;
@@ -16,7 +17,7 @@ use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 pub(crate) struct SparseSchurKkt {
     n: usize,
@@ -30,8 +31,7 @@ pub(crate) struct SparseSchurKkt {
     l_values: Vec<f64>,
     factor_buf: MemBuffer,
     solve_buf: MemBuffer,
-    minv: Vec<Matrix3<f64>>,
-    minv_valid: bool,
+    minv: InverseMass,
     jacobian: Vec<f64>,
     tmp_n: Vec<f64>,
     tmp_m: Vec<f64>,
@@ -65,8 +65,8 @@ impl SparseSchurKkt {
                 }
             }
         }
-        let (col_ptr, row_idx) = super::compress_columns(cols);
-        let pos = |i: usize, j: usize| super::entry_position(&col_ptr, &row_idx, i, j);
+        let (col_ptr, row_idx) = dalembert_constraints::sparse_pattern::compress_columns(cols);
+        let pos = |i: usize, j: usize| dalembert_constraints::sparse_pattern::entry_position(&col_ptr, &row_idx, i, j);
         let mut contributions = Vec::new();
         for (b, rows) in rows_of_body.iter().enumerate() {
             for &(i, ei) in rows {
@@ -95,8 +95,7 @@ impl SparseSchurKkt {
             symbolic,
             factor_buf,
             solve_buf,
-            minv: vec![Matrix3::zeros(); n / 3],
-            minv_valid: false,
+            minv: InverseMass::new(n / 3),
             jacobian: vec![0.0; sys.pattern().len()],
             tmp_n: vec![0.0; n],
             tmp_m: vec![0.0; m],
@@ -112,19 +111,11 @@ impl SparseSchurKkt {
         _sys: &ConstraintSystem,
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
-        if !self.minv_valid || mass.is_configuration_dependent() {
-            for (mi, blk) in self.minv.iter_mut().zip(mass.blocks()) {
-                *mi = blk
-                    .cholesky()
-                    .ok_or_else(|| SingularKkt("mass block not positive definite".into()))?
-                    .inverse();
-            }
-            self.minv_valid = !mass.is_configuration_dependent();
-        }
+        self.minv.update(mass, false)?;
         let jac = &vals.jacobian;
         self.values.iter_mut().for_each(|v| *v = 0.0);
         for &(b, ei, ej, p) in &self.contributions {
-            let wi = self.minv[b] * Vector3::new(jac[ei], jac[ei + 1], jac[ei + 2]);
+            let wi = self.minv.blocks[b] * Vector3::new(jac[ei], jac[ei + 1], jac[ei + 2]);
             self.values[p] += wi.x * jac[ej] + wi.y * jac[ej + 1] + wi.z * jac[ej + 2];
         }
         let s = SymbolicSparseColMatRef::new_checked(self.m, self.m, &self.col_ptr, None, &self.row_idx);
@@ -173,7 +164,7 @@ impl SparseSchurKkt {
     pub fn solve(&mut self, sys: &ConstraintSystem, x: &mut [f64]) {
         let n = self.n;
         let (top, bottom) = x.split_at_mut(n);
-        super::schur::apply_minv(&self.minv, top, &mut self.tmp_n);
+        self.minv.apply(top, &mut self.tmp_n);
         self.tmp_m.iter_mut().for_each(|v| *v = 0.0);
         for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
             self.tmp_m[r] += v * self.tmp_n[c];
@@ -188,7 +179,7 @@ impl SparseSchurKkt {
             top[c] -= v * lam[r];
         }
         self.tmp_m = lam;
-        super::schur::apply_minv(&self.minv, top, &mut self.tmp_n);
+        self.minv.apply(top, &mut self.tmp_n);
         top.copy_from_slice(&self.tmp_n);
     }
 }
