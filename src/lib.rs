@@ -15,6 +15,7 @@
 //!
 //! The mathematics is in `docs/` and in each crate's documentation.
 
+pub mod animation;
 pub mod output;
 pub mod scene;
 pub mod simulation;

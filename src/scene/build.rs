@@ -4,6 +4,7 @@ use super::error::SceneError;
 use super::format::{BodyDef, DriverDef, ForceDef, JointDef, Points, SceneFile, SimDef, ValueDef};
 use super::functions::time_function;
 use super::{IntegratorKind, RunSettings, Scene, StabilizationKind};
+use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
 use crate::simulation::{FormulationKind, Simulation};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
@@ -132,6 +133,21 @@ fn inertia(def: &BodyDef) -> Result<f64, String> {
     }
 }
 
+/// The outline a body's `shape` key describes.
+fn shape(def: &BodyDef) -> Shape {
+    match def.shape.as_ref().map(|s| (s.rod, s.disk, s.rectangle)) {
+        Some((Some(length), None, None)) => Shape::Rod { length },
+        Some((None, Some(radius), None)) => Shape::Disk { radius },
+        Some((None, None, Some([width, height]))) => Shape::Rectangle { width, height },
+        _ => Shape::Unspecified,
+    }
+}
+
+/// A body reference as the drawing stores it.
+fn draw_body(b: BodyRef) -> DrawBody {
+    b.id().map(|id| id.0)
+}
+
 pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
     let ctx = Ctx { file: origin, text };
     let mut b = Builder {
@@ -145,6 +161,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         return Err(b.ctx.err(None, "the scene has no [[bodies]]"));
     }
     // Bodies.
+    let mut drawing = Drawing::default();
     let mut bodies = Vec::new();
     let mut qd = Vec::new();
     let mut weights = Vec::new();
@@ -166,6 +183,13 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
                 format!("body '{}': position, angle and velocities must be finite", d.name),
             ));
         }
+        drawing.bodies.push(BodyDrawing {
+            name: d.name.clone(),
+            shape: shape(d),
+            points: Vec::new(),
+            slider: false,
+            point_mass: j == 0.0 && d.shape.is_none(),
+        });
         bodies.push(body);
         b.names.insert(d.name.clone(), BodyRef::Body(BodyId(i)));
         b.q.extend_from_slice(&[d.position[0], d.position[1], d.angle]);
@@ -199,20 +223,33 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         }
         let name = d.name.clone();
         let axis_global = v2(d.axis.unwrap_or([1.0, 0.0]));
-        let (c, info): (Box<dyn Constraint>, JointInfo) = match d.kind.as_str() {
+        let db = [draw_body(pair[0]), draw_body(pair[1])];
+        let (c, info, mark): (Box<dyn Constraint>, JointInfo, Option<Mark>) = match d.kind.as_str() {
             "revolute" => {
-                let r = Revolute::new(name, pair, b.local_points(d, pair, &span)?);
-                (Box::new(r.clone()), JointInfo::Revolute(r))
+                let r = Revolute::new(name.clone(), pair, b.local_points(d, pair, &span)?);
+                let mark = Mark::Pin { name, bodies: db, points: r.points.map(xy) };
+                (Box::new(r.clone()), JointInfo::Revolute(r), Some(mark))
             }
             "prismatic" => {
                 let p = Prismatic {
-                    name,
+                    name: name.clone(),
                     bodies: pair,
                     points: b.local_points(d, pair, &span)?,
                     axis: local_direction_of(pair[0], &b.q, axis_global),
                     angle: b.angle(pair[1]) - b.angle(pair[0]),
                 };
-                (Box::new(p.clone()), JointInfo::Prismatic(p))
+                if let Some(k) = db[1] {
+                    drawing.bodies[k].slider = true;
+                }
+                let mark = Mark::Guide {
+                    name,
+                    body: db[0],
+                    point: xy(p.points[0]),
+                    direction: xy(p.axis),
+                    follower: db[1],
+                    follower_point: xy(p.points[1]),
+                };
+                (Box::new(p.clone()), JointInfo::Prismatic(p), Some(mark))
             }
             "rigid" => {
                 let points = if d.at.is_none() && d.points.is_none() {
@@ -222,7 +259,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
                     b.local_points(d, pair, &span)?
                 };
                 let angle = b.angle(pair[1]) - b.angle(pair[0]);
-                (Box::new(Rigid { name, bodies: pair, points, angle }), JointInfo::Other(pair))
+                (Box::new(Rigid { name, bodies: pair, points, angle }), JointInfo::Other(pair), None)
             }
             "distance" => {
                 let points = b.local_points(d, pair, &span)?;
@@ -232,21 +269,30 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
                     - dalembert_kinematics::point::global_point(si.position, si.angle, points[0]))
                 .norm();
                 let length = d.length.unwrap_or(now);
-                (Box::new(Distance { name, bodies: pair, points, length }), JointInfo::Other(pair))
+                let mark = Mark::Link { name: name.clone(), bodies: db, points: points.map(xy) };
+                (Box::new(Distance { name, bodies: pair, points, length }), JointInfo::Other(pair), Some(mark))
             }
             "point-on-line" => {
                 let points = b.local_points(d, pair, &span)?;
                 let direction = local_direction_of(pair[0], &b.q, axis_global);
-                (Box::new(PointOnLine { name, bodies: pair, points, direction }), JointInfo::Other(pair))
+                let mark = Mark::Guide {
+                    name: name.clone(),
+                    body: db[0],
+                    point: xy(points[0]),
+                    direction: xy(direction),
+                    follower: db[1],
+                    follower_point: xy(points[1]),
+                };
+                (Box::new(PointOnLine { name, bodies: pair, points, direction }), JointInfo::Other(pair), Some(mark))
             }
             "gear" => {
                 let ratio = d.ratio.ok_or_else(|| b.ctx.err(Some(span.clone()), format!("{owner}: a gear needs 'ratio'")))?;
-                (Box::new(Gear::new(name, pair, ratio, &b.q)), JointInfo::Other(pair))
+                (Box::new(Gear::new(name, pair, ratio, &b.q)), JointInfo::Other(pair), None)
             }
             "rack-pinion" => {
                 let radius =
                     d.radius.ok_or_else(|| b.ctx.err(Some(span.clone()), format!("{owner}: a rack and pinion needs 'radius'")))?;
-                (Box::new(RackPinion::new(name, pair, axis_global, radius, &b.q)), JointInfo::Other(pair))
+                (Box::new(RackPinion::new(name, pair, axis_global, radius, &b.q)), JointInfo::Other(pair), None)
             }
             other => {
                 return Err(b.ctx.err(
@@ -256,6 +302,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
             }
         };
         c.validate().map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
+        if let Some(mark) = mark {
+            drawing.add(mark);
+        }
         constraints.push(c);
         joints.insert(d.name.clone(), info);
     }
@@ -275,7 +324,11 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         let span = sf.span();
         let d = sf.get_ref();
         b.unique(&d.name, &span, "force")?;
-        forces.push(force(&b, d, &span, &joints)?);
+        let (element, mark) = force(&b, d, &span, &joints)?;
+        if let Some(mark) = mark {
+            drawing.add(mark);
+        }
+        forces.push(element);
     }
     let model = Model::new(bodies, forces, constraints).map_err(|e| b.ctx.err(None, e.to_string()))?;
     let settings = settings(&b, file.simulation.as_ref())?;
@@ -298,6 +351,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         q: sim.q,
         qd: sim.qd,
         settings,
+        drawing,
     })
 }
 
@@ -403,8 +457,9 @@ fn force(
     d: &ForceDef,
     span: &Range<usize>,
     joints: &HashMap<String, JointInfo>,
-) -> Result<Box<dyn ForceElement>, SceneError> {
+) -> Result<(Box<dyn ForceElement>, Option<Mark>), SceneError> {
     let owner = format!("force '{}'", d.name);
+    let mut mark = None;
     let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
     let pair = || -> Result<[BodyRef; 2], SceneError> {
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
@@ -473,10 +528,16 @@ fn force(
                 .map(|f| time_function(f, None))
                 .transpose()
                 .map_err(err)?;
+            let points = (local_point_of(pr[0], &b.q, v2(p0)), local_point_of(pr[1], &b.q, v2(p1)));
+            mark = Some(Mark::Spring {
+                name: d.name.clone(),
+                bodies: pr.map(draw_body),
+                points: [xy(points.0), xy(points.1)],
+            });
             Box::new(SpringDamper {
                 name: d.name.clone(),
                 bodies: (pr[0], pr[1]),
-                points: (local_point_of(pr[0], &b.q, v2(p0)), local_point_of(pr[1], &b.q, v2(p1))),
+                points,
                 stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'".into()))?,
                 damping: d.damping.unwrap_or(0.0),
                 free_length: d.free_length.unwrap_or((v2(p1) - v2(p0)).norm()),
@@ -500,7 +561,7 @@ fn force(
         }
     };
     element.validate(b.q.len() / 3).map_err(|e| err(e.to_string()))?;
-    Ok(element)
+    Ok((element, mark))
 }
 
 fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSettings, SceneError> {

@@ -145,6 +145,9 @@ pub struct Scene {
     pub qd: Vec<f64>,
     /// The run settings.
     pub settings: RunSettings,
+    /// What the scene looks like (shapes, attachment points, pins, guides, springs), for
+    /// [`crate::animation`].
+    pub drawing: crate::animation::Drawing,
 }
 
 impl Scene {

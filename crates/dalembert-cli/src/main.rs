@@ -29,6 +29,7 @@ fn stdout_failed(e: std::io::Error) -> ! {
     std::process::exit(1);
 }
 
+mod animate;
 mod check;
 mod inverse;
 mod plot;
@@ -62,6 +63,8 @@ enum Command {
     Plot(plot::Args),
     /// Measure the speed–accuracy trade over formulations, integrators, treatments and steps.
     Trade(trade::Args),
+    /// Write a self-contained HTML animation of a scene's motion (or of a saved run, --from).
+    Animate(animate::Args),
 }
 
 fn main() -> ExitCode {
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Inverse(a) => inverse::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Trade(a) => trade::run(a),
+        Command::Animate(a) => animate::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

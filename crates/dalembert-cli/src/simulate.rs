@@ -13,6 +13,16 @@ use std::time::Instant;
 pub struct Args {
     /// Scene file (TOML).
     scene: PathBuf,
+    #[command(flatten)]
+    run: RunArgs,
+    /// Write the results as CSV (streamed: rows before a failure are kept).
+    #[arg(long)]
+    output: Option<PathBuf>,
+}
+
+/// Flags that override a scene's `[simulation]` table (`simulate`, `animate`).
+#[derive(clap::Args)]
+pub struct RunArgs {
     /// augmented | embedding | amalgamated
     #[arg(long)]
     formulation: Option<String>,
@@ -40,14 +50,11 @@ pub struct Args {
     /// none | baumgarte | projection
     #[arg(long)]
     stabilization: Option<String>,
-    /// Write the results as CSV (streamed: rows before a failure are kept).
-    #[arg(long)]
-    output: Option<PathBuf>,
 }
 
 /// Loads the scene and applies the command-line overrides.
-fn load(a: &Args) -> Result<Scene, String> {
-    let mut scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
+    let mut scene = Scene::from_path(path).map_err(|e| e.to_string())?;
     let s = &mut scene.settings;
     if let Some(f) = &a.formulation {
         s.formulation = FormulationKind::parse(f).ok_or(format!("unknown formulation '{f}'"))?;
@@ -82,7 +89,7 @@ fn load(a: &Args) -> Result<Scene, String> {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let scene = load(&a)?;
+    let scene = load(&a.scene, &a.run)?;
     let sim = scene.simulation();
     let model = scene.model.clone();
     let s = &scene.settings;
