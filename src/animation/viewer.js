@@ -146,6 +146,7 @@
     };
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     ctx.font = "12px system-ui, sans-serif";
+    document.body.dataset.viewport = innerWidth + "x" + innerHeight;
     canvas.dataset.view = JSON.stringify({
       scale: view.scale, ox: view.ox + r.left, oy: view.oy + r.top,
       colors: drawing.bodies.map((_, i) => color(i)),

@@ -1,0 +1,353 @@
+//! `dalembert animate` end to end: the page renders in headless Chromium without console errors,
+//! and the pixels at the simulated body positions carry the bodies' colours at two times.
+//!
+//! The browser is Debian's `chromium` (`.ci/run` installs it); set `DALEMBERT_CHROMIUM` to use
+//! another. Without a browser the rendering test is skipped with a message, except under CI
+//! (`CI` set), where a missing browser fails it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn dalembert(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_dalembert"))
+        .args(args)
+        .output()
+        .expect("runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+fn scene(name: &str) -> String {
+    format!("{}/../../scenes/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("dalembert-animate-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn chromium() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("DALEMBERT_CHROMIUM") {
+        return Some(PathBuf::from(p));
+    }
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .flat_map(|d| ["chromium", "chromium-browser", "google-chrome"].map(|n| d.join(n)))
+        .find(|p| p.is_file())
+}
+
+/// Runs headless Chromium on `page` at window size `size` with `extra` arguments; returns stdout.
+fn browse(browser: &Path, page: &str, size: (usize, usize), extra: &[&str]) -> String {
+    let profile = tmp(&format!("profile-{}", extra.len()));
+    let out = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--hide-scrollbars",
+            "--force-device-scale-factor=1",
+        ])
+        .arg(format!("--window-size={},{}", size.0, size.1))
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .args(extra)
+        .arg(page)
+        .output()
+        .expect("chromium runs");
+    assert!(
+        out.status.success(),
+        "chromium failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into()
+}
+
+/// The value of attribute `name` on the element whose tag starts with `tag` in a dumped DOM.
+fn attribute(dom: &str, tag: &str, name: &str) -> Option<String> {
+    let start = dom.find(tag)?;
+    let end = start + dom[start..].find('>')?;
+    let element = &dom[start..end];
+    let key = format!("{name}=\"");
+    let at = element.find(&key)? + key.len();
+    let len = element[at..].find('"')?;
+    Some(element[at..at + len].replace("&quot;", "\"").replace("&amp;", "&"))
+}
+
+/// Number after `"key":` in a flat JSON object.
+fn json_number(json: &str, key: &str) -> f64 {
+    let k = format!("\"{key}\":");
+    let at = json.find(&k).unwrap() + k.len();
+    let end = json[at..].find([',', '}']).unwrap();
+    json[at..at + end].parse().unwrap()
+}
+
+struct Png {
+    width: usize,
+    rgba: Vec<u8>,
+}
+
+impl Png {
+    fn read(path: &Path) -> Png {
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!(info.bit_depth, png::BitDepth::Eight);
+        let channels = info.color_type.samples();
+        let rgba = buf[..info.buffer_size()]
+            .chunks(channels)
+            .flat_map(|p| [p[0], p[1], p[2], if channels == 4 { p[3] } else { 255 }])
+            .collect();
+        Png {
+            width: info.width as usize,
+            rgba,
+        }
+    }
+
+    fn pixel(&self, x: usize, y: usize) -> [u8; 3] {
+        let k = 4 * (y * self.width + x);
+        [self.rgba[k], self.rgba[k + 1], self.rgba[k + 2]]
+    }
+
+    /// True when a pixel within `r` of `(x, y)` is within 40 (per channel) of `color`.
+    fn has_color_near(&self, x: f64, y: f64, r: i64, color: [u8; 3]) -> bool {
+        let (cx, cy) = (x.round() as i64, y.round() as i64);
+        (-r..=r).any(|dy| {
+            (-r..=r).any(|dx| {
+                let p = self.pixel((cx + dx) as usize, (cy + dy) as usize);
+                (0..3).all(|i| (i32::from(p[i]) - i32::from(color[i])).abs() <= 40)
+            })
+        })
+    }
+}
+
+fn hex(c: &str) -> [u8; 3] {
+    let v = u32::from_str_radix(c.trim_start_matches('#'), 16).unwrap();
+    [(v >> 16) as u8, (v >> 8) as u8, v as u8]
+}
+
+/// Reads `t` and each body's `x, y` from a result CSV.
+fn positions(csv: &Path, bodies: &[&str]) -> Vec<(f64, Vec<[f64; 2]>)> {
+    let mut rdr = csv::Reader::from_path(csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let cols: Vec<[usize; 2]> = bodies
+        .iter()
+        .map(|b| [col(&format!("{b}.x")), col(&format!("{b}.y"))])
+        .collect();
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            let v = |k: usize| r[k].parse::<f64>().unwrap();
+            (v(0), cols.iter().map(|c| [v(c[0]), v(c[1])]).collect())
+        })
+        .collect()
+}
+
+#[test]
+fn replay_of_a_saved_run_is_the_same_page_as_the_simulation() {
+    let csv = tmp("fb.csv");
+    let (ok, _, err) = dalembert(&[
+        "simulate",
+        &scene("four-bar.toml"),
+        "--end",
+        "2",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let direct = tmp("direct.html");
+    let replay = tmp("replay.html");
+    for (page, from) in [(&direct, None), (&replay, Some(&csv))] {
+        let mut args = vec![
+            "animate".to_string(),
+            scene("four-bar.toml"),
+            "--end".into(),
+            "2".into(),
+            "--output".into(),
+            page.display().to_string(),
+        ];
+        if let Some(c) = from {
+            args.extend(["--from".into(), c.display().to_string()]);
+        }
+        let args: Vec<&str> = args.iter().map(|s| s.as_str()).collect();
+        let (ok, out, err) = dalembert(&args);
+        assert!(ok && out.contains("201 frames"), "{out}{err}");
+    }
+    // The CSV holds shortest round-trip decimals, so replaying it gives the very same numbers.
+    assert_eq!(std::fs::read(&direct).unwrap(), std::fs::read(&replay).unwrap());
+    let html = std::fs::read_to_string(&direct).unwrap();
+    assert!(
+        !html.contains("src=\"http") && !html.contains("<link"),
+        "self-contained"
+    );
+}
+
+#[test]
+fn bad_traces_and_mismatched_csv_get_one_line_errors() {
+    let out = tmp("bad.html");
+    let o = out.to_str().unwrap();
+    let fb = scene("four-bar.toml");
+    for (trace, expected) in [
+        (
+            "nobody:0.5,0",
+            "--trace 'nobody:0.5,0': unknown body 'nobody' (bodies: crank, coupler, rocker)",
+        ),
+        ("coupler:0.5", "--trace 'coupler:0.5': '0.5' is not two numbers X,Y"),
+        (
+            "coupler:a,0",
+            "--trace 'coupler:a,0': 'a,0' is not two finite numbers X,Y",
+        ),
+        ("coupler", "--trace 'coupler': expected BODY:X,Y"),
+    ] {
+        let (ok, _, err) = dalembert(&["animate", &fb, "--end", "0.1", "--trace", trace, "--output", o]);
+        assert!(
+            !ok && err.lines().count() == 1 && err.contains(expected),
+            "{trace}: {err}"
+        );
+    }
+    // A run of another scene does not match: the missing column is named.
+    let csv = tmp("pendulum.csv");
+    let (ok, _, err) = dalembert(&[
+        "simulate",
+        &scene("pendulum.toml"),
+        "--end",
+        "0.1",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let c = csv.to_str().unwrap();
+    let (ok, _, err) = dalembert(&["animate", &fb, "--from", c, "--output", o]);
+    assert!(!ok && err.lines().count() == 1, "{err}");
+    assert!(
+        err.contains(&format!("{c}:1: does not match the scene: no column 'crank.x'")),
+        "{err}"
+    );
+    // A corrupted row is named by its line.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    lines[3] = lines[3].replacen(',', ",junk,", 1);
+    std::fs::write(&csv, lines.join("\n")).unwrap();
+    let (ok, _, err) = dalembert(&["animate", &scene("pendulum.toml"), "--from", c, "--output", o]);
+    assert!(
+        !ok && err.lines().count() == 1 && err.contains(&format!("{c}:4: malformed CSV")),
+        "{err}"
+    );
+}
+
+#[test]
+fn the_page_renders_the_simulated_positions_in_chromium() {
+    let Some(browser) = chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have Chromium (.ci/run installs Debian's package)"
+        );
+        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+        return;
+    };
+    let csv = tmp("render.csv");
+    let page = tmp("render.html");
+    let (ok, _, err) = dalembert(&[
+        "simulate",
+        &scene("four-bar.toml"),
+        "--end",
+        "2",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&[
+        "animate",
+        &scene("four-bar.toml"),
+        "--from",
+        csv.to_str().unwrap(),
+        "--trace",
+        "coupler:0.5,0",
+        "--output",
+        page.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let bodies = ["crank", "coupler", "rocker"];
+    let rows = positions(&csv, &bodies);
+    let at = |t: f64| rows.iter().find(|r| (r.0 - t).abs() < 1e-9).unwrap().1.clone();
+    // A screenshot's viewport is the window size; `--dump-dom` keeps room for browser chrome, so
+    // its window is enlarged by the difference (checked below through the page's own report).
+    let size = (900, 600);
+    let probe = browse(
+        &browser,
+        &format!("file://{}#t=0", page.display()),
+        size,
+        &["--dump-dom"],
+    );
+    let seen = attribute(&probe, "<body", "data-viewport").unwrap();
+    let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
+    let dump_size = (size.0, 2 * size.1 - seen_height);
+    let mut shots = Vec::new();
+    for t in [0.5, 1.5] {
+        let url = format!("file://{}#t={t}", page.display());
+        let dom = browse(&browser, &url, dump_size, &["--dump-dom"]);
+        assert_eq!(
+            attribute(&dom, "<body", "data-viewport"),
+            Some(format!("{}x{}", size.0, size.1)),
+            "the layout measured is the one photographed"
+        );
+        assert_eq!(
+            attribute(&dom, "<body", "data-status").as_deref(),
+            Some("ready"),
+            "{dom}"
+        );
+        assert_eq!(attribute(&dom, "<body", "data-errors"), None, "console errors");
+        assert_eq!(
+            attribute(&dom, "<body", "data-time").as_deref(),
+            Some(t.to_string().as_str())
+        );
+        let view = attribute(&dom, "<canvas", "data-view").unwrap();
+        let (scale, ox, oy) = (
+            json_number(&view, "scale"),
+            json_number(&view, "ox"),
+            json_number(&view, "oy"),
+        );
+        let colors: Vec<[u8; 3]> = view.split('#').skip(1).map(|c| hex(&c[..6])).collect();
+        let shot = tmp(&format!("shot-{t}.png"));
+        browse(&browser, &url, size, &[&format!("--screenshot={}", shot.display())]);
+        let png = Png::read(&shot);
+        assert_eq!((png.width, png.rgba.len() / 4 / png.width), size);
+        let to_px = move |p: [f64; 2]| (ox + scale * p[0], oy - scale * p[1]);
+        // Each body's centre of mass (the middle of its rod) is drawn in the body's colour.
+        for (k, p) in at(t).into_iter().enumerate() {
+            let (x, y) = to_px(p);
+            assert!(
+                png.has_color_near(x, y, 1, colors[k]),
+                "t = {t}: {} at ({x:.1}, {y:.1}) px is not drawn in {:?}",
+                bodies[k],
+                colors[k]
+            );
+        }
+        shots.push((png, to_px));
+    }
+    // The pictures differ where the mechanism moved: the coupler's centre at t = 1.5 s lies where
+    // nothing of the coupler was drawn at t = 0.5 s.
+    let (x0, y0) = (shots[0].1)(at(0.5)[1]);
+    let (x1, y1) = (shots[1].1)(at(1.5)[1]);
+    assert!((x1 - x0).hypot(y1 - y0) > 30.0, "the coupler moves visibly");
+    let coupler = hex("#d62728");
+    assert!(!shots[0].0.has_color_near(x1, y1, 1, coupler));
+    assert!(shots[1].0.has_color_near(x1, y1, 1, coupler));
+    let differing = shots[0]
+        .0
+        .rgba
+        .chunks(4)
+        .zip(shots[1].0.rgba.chunks(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(differing > 2000, "only {differing} pixels changed");
+}
