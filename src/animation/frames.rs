@@ -152,3 +152,25 @@ fn csv_kind(e: &csv::Error) -> String {
         _ => e.to_string(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimation_keeps_the_ends_and_spreads_evenly() {
+        let mut f = Frames::new(1);
+        for k in 0..=1000 {
+            let t = k as f64 * 1e-3;
+            f.push(t, &[t, 2.0 * t, 3.0 * t]);
+        }
+        let d = f.decimated(11);
+        assert_eq!(d.len(), 11);
+        for (i, t) in d.times.iter().enumerate() {
+            // Frames 0, 100, …, 1000 of an evenly sampled run: t = i/10 exactly as sampled.
+            assert_eq!(*t, (100 * i) as f64 * 1e-3);
+            assert_eq!(&d.poses[3 * i..3 * i + 3], &[*t, 2.0 * t, 3.0 * t]);
+        }
+        assert_eq!(f.decimated(5000), f, "short runs are kept whole");
+    }
+}

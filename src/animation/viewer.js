@@ -84,6 +84,11 @@
     return pts;
   }
   const outlines = drawing.bodies.map((_, b) => outline(b));
+  // The smallest body's extent: pins, pivots and bars stay smaller than it on screen.
+  const smallest = outlines.reduce((m, pts) => {
+    const d = 2 * Math.max(...pts.map(norm));
+    return d > 0 ? Math.min(m, d) : m;
+  }, Infinity);
 
   // Bounding box of everything drawn over the whole run, and the travel of every guide.
   let box = [Infinity, Infinity, -Infinity, -Infinity];
@@ -181,7 +186,10 @@
     ctx.fill();
     if (stroke) { ctx.lineWidth = 1.5; ctx.strokeStyle = stroke; ctx.stroke(); }
   }
-  const barWidth = () => Math.max(4, Math.min(12, 0.015 * size * view.scale));
+  const clamp = (x, lo, hi) => Math.min(hi, Math.max(lo, x));
+  const small = () => (isFinite(smallest) ? smallest * view.scale : Infinity); // px
+  const barWidth = () => clamp(Math.min(0.015 * size * view.scale, 0.12 * small()), 2, 12);
+  const pinRadius = () => clamp(0.1 * small(), 1.5, 4);
 
   function onShape(sh, p) {
     const eps = 1e-9 * size;
@@ -218,7 +226,7 @@
   }
 
   function pivot(p) {
-    const P = px(p), s = 9;
+    const P = px(p), s = clamp(0.3 * small(), 4, 9);
     ctx.beginPath();
     ctx.moveTo(P[0], P[1]);
     ctx.lineTo(P[0] - s, P[1] + 1.6 * s);
@@ -274,7 +282,7 @@
         if (b0 === null) pivot(m.points[0]);
         if (b1 === null) pivot(m.points[1]);
         const p = b1 === null ? world(b0, m.points[0]) : world(b1, m.points[1]);
-        dot(p, 4, "#fff", "#222");
+        if (small() >= 10) dot(p, pinRadius(), "#fff", "#222"); // no pins on bodies a few pixels long
       }
     }
   }

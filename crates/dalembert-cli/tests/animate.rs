@@ -351,3 +351,35 @@ fn the_page_renders_the_simulated_positions_in_chromium() {
         .count();
     assert!(differing > 2000, "only {differing} pixels changed");
 }
+
+#[test]
+fn every_shipped_scene_animates() {
+    let dir = format!("{}/../../scenes", env!("CARGO_MANIFEST_DIR"));
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let page = tmp(&format!("{}.html", path.file_stem().unwrap().to_string_lossy()));
+        let (ok, out, err) = dalembert(&[
+            "animate",
+            path.to_str().unwrap(),
+            "--end",
+            "0.5",
+            "--every",
+            "0.01",
+            "--output",
+            page.to_str().unwrap(),
+        ]);
+        assert!(ok, "{}: {err}", path.display());
+        assert!(out.contains("51 frames"), "{}: {out}", path.display());
+        let html = std::fs::read_to_string(&page).unwrap();
+        let scene = dalembert::Scene::from_path(&path).unwrap();
+        for b in &scene.drawing.bodies {
+            assert!(html.contains(&format!("\"name\":\"{}\"", b.name)), "{}", b.name);
+        }
+        count += 1;
+    }
+    assert!(count >= 8, "found {count} scenes");
+}
