@@ -4,7 +4,8 @@ use dalembert_amalgamated::Amalgamated;
 use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, Model};
 use dalembert_embedding::Embedding;
-use dalembert_integrators::{integrate, IntegrationFailure, IntegratorOptions, Sample, Statistics};
+use dalembert_integrators::{integrate_cancellable, IntegrationFailure, IntegratorOptions, Sample, Statistics};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use thiserror::Error;
 
@@ -96,8 +97,18 @@ impl Simulation {
 
     /// Runs from the current initial state, handing every output sample to `observer`.
     pub fn run(&self, observer: &mut dyn FnMut(&Sample<'_>)) -> Result<Statistics, SimulationError> {
+        self.run_cancellable(observer, &AtomicBool::new(false))
+    }
+
+    /// [`Simulation::run`] that stops after the step during which `cancel` was set (e.g. by a
+    /// Ctrl-C handler), with `IntegrationError::Interrupted` carrying the time.
+    pub fn run_cancellable(
+        &self,
+        observer: &mut dyn FnMut(&Sample<'_>),
+        cancel: &AtomicBool,
+    ) -> Result<Statistics, SimulationError> {
         let mut f = self.formulation()?;
-        Ok(integrate(
+        Ok(integrate_cancellable(
             f.as_mut(),
             self.start,
             self.end,
@@ -105,6 +116,7 @@ impl Simulation {
             &self.qd,
             &self.integrator,
             observer,
+            cancel,
         )?)
     }
 }

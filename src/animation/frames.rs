@@ -1,6 +1,7 @@
 //! The motion to play: poses of every body at a sequence of times, from a run or from a result CSV.
 
 use super::Drawing;
+use crate::output::{read_columns, ResultCsvError};
 use std::io::Read;
 
 /// Poses `[x, y, angle]` of every body at increasing times.
@@ -12,19 +13,6 @@ pub struct Frames {
     pub poses: Vec<f64>,
     /// Number of bodies.
     pub bodies: usize,
-}
-
-/// A result CSV that cannot be replayed on a scene. `Display` is one line naming the file, the
-/// line and the column at fault.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
-pub struct FramesError {
-    /// The file (or origin) name.
-    pub file: String,
-    /// 1-based line, when known.
-    pub line: Option<u64>,
-    /// What is wrong.
-    pub message: String,
 }
 
 impl Frames {
@@ -74,85 +62,27 @@ impl Frames {
     /// Reads the frames of `drawing`'s bodies from a result CSV written by `simulate` (columns `t`
     /// and `<body>.x`, `.y`, `.angle`; other columns are ignored). `origin` names the file in
     /// errors: a missing column, a field that is not a finite number, times that do not increase.
-    pub fn from_csv(reader: impl Read, drawing: &Drawing, origin: &str) -> Result<Frames, FramesError> {
-        let err = |line: Option<u64>, message: String| FramesError {
-            file: origin.to_string(),
-            line,
-            message,
-        };
-        let mut rdr = csv::ReaderBuilder::new().has_headers(true).from_reader(reader);
-        let header = rdr
-            .headers()
-            .map_err(|e| err(Some(1), format!("not a result CSV: {e}")))?
-            .clone();
-        let column = |name: &str| -> Result<usize, FramesError> {
-            header.iter().position(|h| h == name).ok_or_else(|| {
-                err(
-                    Some(1),
-                    format!(
-                        "does not match the scene: no column '{name}' (write it with `dalembert simulate --output`)"
-                    ),
-                )
-            })
-        };
-        let t_col = column("t")?;
-        let mut cols = Vec::with_capacity(3 * drawing.bodies.len());
-        for b in &drawing.bodies {
-            for c in ["x", "y", "angle"] {
-                let name = format!("{}.{c}", b.name);
-                cols.push((column(&name)?, name));
-            }
+    pub fn from_csv(reader: impl Read, drawing: &Drawing, origin: &str) -> Result<Frames, ResultCsvError> {
+        let names: Vec<String> = drawing
+            .bodies
+            .iter()
+            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
+            .collect();
+        let table = read_columns(reader, origin, &names)?;
+        if table.times.is_empty() {
+            return Err(ResultCsvError {
+                file: origin.to_string(),
+                line: None,
+                message: "has no rows to replay".into(),
+            });
         }
-        let mut frames = Frames::new(drawing.bodies.len());
-        let mut pose = vec![0.0; cols.len()];
-        let mut record = csv::StringRecord::new();
-        loop {
-            match rdr.read_record(&mut record) {
-                Ok(false) => break,
-                Ok(true) => {}
-                Err(e) => {
-                    let line = e.position().map(|p| p.line());
-                    return Err(err(line, format!("malformed CSV: {}", csv_kind(&e))));
-                }
-            }
-            let line = record.position().map(|p| p.line());
-            let number = |k: usize, name: &str| -> Result<f64, FramesError> {
-                let field = record.get(k).unwrap_or("");
-                match field.trim().parse::<f64>() {
-                    Ok(v) if v.is_finite() => Ok(v),
-                    _ => Err(err(line, format!("column '{name}' is not a finite number: '{field}'"))),
-                }
-            };
-            let t = number(t_col, "t")?;
-            if let Some(&last) = frames.times.last() {
-                if t <= last {
-                    return Err(err(line, format!("times must increase: t = {t} after {last}")));
-                }
-            }
-            for (p, (k, name)) in pose.iter_mut().zip(&cols) {
-                *p = number(*k, name)?;
-            }
-            frames.push(t, &pose);
-        }
-        if frames.is_empty() {
-            return Err(err(None, "has no rows to replay".into()));
-        }
-        Ok(frames)
+        Ok(Frames {
+            times: table.times,
+            poses: table.values,
+            bodies: drawing.bodies.len(),
+        })
     }
 }
-
-/// The cause of a CSV error without the position (reported separately).
-fn csv_kind(e: &csv::Error) -> String {
-    match e.kind() {
-        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
-            format!("{len} fields where the header has {expected_len}")
-        }
-        csv::ErrorKind::Utf8 { .. } => "not valid UTF-8".into(),
-        csv::ErrorKind::Io(io) => io.to_string(),
-        _ => e.to_string(),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

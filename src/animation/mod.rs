@@ -27,5 +27,5 @@ mod html;
 
 pub(crate) use drawing::xy;
 pub use drawing::{BodyDrawing, DrawBody, Drawing, Mark, Shape};
-pub use frames::{Frames, FramesError};
+pub use frames::Frames;
 pub use html::{Trace, TraceError, Viewer, DEFAULT_MAX_FRAMES};

@@ -49,7 +49,9 @@ pub fn run(a: Args) -> Result<(), String> {
         }
         None => {
             let mut frames = Frames::new(scene.drawing.bodies.len());
-            let result = scene.simulation().run(&mut |s| frames.push(s.t, s.q));
+            let result = scene
+                .simulation()
+                .run_cancellable(&mut |s| frames.push(s.t, s.q), crate::interrupt_flag());
             (frames, result.err().map(|e| e.to_string()))
         }
     };

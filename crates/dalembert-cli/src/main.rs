@@ -20,13 +20,32 @@ macro_rules! out {
     }};
 }
 
-/// A closed pipe ends the program successfully; any other write error is reported.
-fn stdout_failed(e: std::io::Error) -> ! {
-    if e.kind() == std::io::ErrorKind::BrokenPipe {
-        std::process::exit(0);
+/// A closed pipe (`| head`) silences the summary but the run goes on, so that files being written
+/// are completed; any other write error on stdout is reported once and the work goes on likewise.
+fn stdout_failed(e: std::io::Error) {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static REPORTED: AtomicBool = AtomicBool::new(false);
+    if e.kind() != std::io::ErrorKind::BrokenPipe && !REPORTED.swap(true, Ordering::Relaxed) {
+        eprintln!("error: writing to stdout: {e}");
     }
-    eprintln!("error: writing to stdout: {e}");
-    std::process::exit(1);
+}
+
+/// The flag set by SIGINT and SIGTERM: runs stop after the current step, finish the row they are
+/// writing and flush their output. (A second signal does not end the program at once: `timeout`
+/// and process groups can deliver one interrupt twice, which would cut the row being written.
+/// The flag is read after every step, so the stop comes within one step; Ctrl-\ still quits.)
+pub fn interrupt_flag() -> &'static std::sync::Arc<std::sync::atomic::AtomicBool> {
+    use std::sync::{atomic::AtomicBool, Arc, OnceLock};
+    static FLAG: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+    FLAG.get_or_init(|| {
+        let flag = Arc::new(AtomicBool::new(false));
+        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+            // Registration fails only for forbidden signals (not these); without it a signal
+            // keeps its default action, as before.
+            let _ = signal_hook::flag::register(sig, Arc::clone(&flag));
+        }
+        flag
+    })
 }
 
 mod animate;
@@ -81,7 +100,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            if interrupt_flag().load(std::sync::atomic::Ordering::Relaxed) {
+                ExitCode::from(130) // 128 + SIGINT, as shells report an interrupted command
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -17,37 +17,21 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let text = std::fs::read_to_string(&a.csv).map_err(|e| format!("{}: {e}", a.csv.display()))?;
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().ok_or("empty CSV")?.split(',').collect();
-    let t_col = header
-        .iter()
-        .position(|h| *h == "t")
-        .ok_or("the CSV has no column 't'")?;
-    let mut cols = Vec::new();
-    for c in &a.columns {
-        let k = header
-            .iter()
-            .position(|h| h == c)
-            .ok_or_else(|| format!("{}: no column '{c}' (columns: {})", a.csv.display(), header.join(", ")))?;
-        cols.push(k);
-    }
-    let mut series: Vec<Vec<(f64, f64)>> = vec![Vec::new(); cols.len()];
-    for (ln, line) in lines.enumerate() {
-        let vals: Vec<&str> = line.split(',').collect();
-        let parse = |k: usize| -> Result<f64, String> {
-            vals.get(k)
-                .and_then(|v| v.parse::<f64>().ok())
-                .ok_or_else(|| format!("{}:{}: column {} is not a number", a.csv.display(), ln + 2, header[k]))
-        };
-        let t = parse(t_col)?;
-        for (s, &k) in series.iter_mut().zip(&cols) {
-            let v = parse(k)?;
-            if v.is_finite() {
-                s.push((t, v));
-            }
-        }
-    }
+    let file = std::fs::File::open(&a.csv).map_err(|e| format!("{}: {e}", a.csv.display()))?;
+    let table =
+        dalembert::output::read_columns(std::io::BufReader::new(file), &a.csv.display().to_string(), &a.columns)
+            .map_err(|e| e.to_string())?;
+    let k = a.columns.len();
+    let series: Vec<Vec<(f64, f64)>> = (0..k)
+        .map(|j| {
+            table
+                .times
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| (t, table.values[i * k + j]))
+                .collect()
+        })
+        .collect();
     let all = series.iter().flatten();
     let (t0, t1) = all
         .clone()

@@ -164,7 +164,7 @@ pub fn run(a: Args) -> Result<(), String> {
             let _ = std::io::stderr().flush();
         }
     };
-    let result = sim.run(&mut observer);
+    let result = sim.run_cancellable(&mut observer, crate::interrupt_flag());
     if tty && start.elapsed().as_secs_f64() > 1.0 {
         eprintln!();
     }
@@ -172,10 +172,22 @@ pub fn run(a: Args) -> Result<(), String> {
     let stats = match result {
         Ok(stats) => stats,
         Err(e) => {
-            if let Some(c) = csv {
-                let _ = c.finish();
-            }
-            return Err(format!("{e}"));
+            // Every row computed so far is in the file, which stays well-formed.
+            let kept = match (csv, &a.output) {
+                (Some(c), Some(p)) => {
+                    let (rows, last) = (c.rows(), c.last_time());
+                    match c.finish() {
+                        Ok(_) => format!(
+                            "; {} holds the {rows} rows up to t = {}",
+                            p.display(),
+                            last.map_or("-".into(), |t| t.to_string())
+                        ),
+                        Err(w) => format!("; writing {} also failed: {w}", p.display()),
+                    }
+                }
+                _ => String::new(),
+            };
+            return Err(format!("{e}{kept}"));
         }
     };
     if let Some(c) = csv {

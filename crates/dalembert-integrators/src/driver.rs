@@ -5,6 +5,7 @@ use crate::explicit::{rk4_step, symplectic_euler_step, FixedWork};
 use crate::generalized_alpha::{GeneralizedAlpha, NotConverged};
 use crate::{ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method, Statistics};
 use dalembert_constraints::{DynamicsError, Formulation, FormulationStats};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// One output sample handed to the observer.
@@ -45,6 +46,8 @@ struct Run<'o> {
     observer_time: Duration,
     /// Work done outside the formulation (the implicit method's own Newton solves).
     extra: FormulationStats,
+    /// Set by the caller to stop the run after the current step.
+    cancel: &'o AtomicBool,
 }
 
 fn inf_norm(v: &[f64]) -> f64 {
@@ -85,6 +88,9 @@ impl Run<'_> {
         s.steps += 1;
         s.min_step_taken = s.min_step_taken.min(h);
         s.max_step_taken = s.max_step_taken.max(h);
+        if self.cancel.load(Ordering::Relaxed) {
+            return Err(IntegrationError::Interrupted { time: t });
+        }
         Ok(())
     }
 
@@ -167,6 +173,22 @@ pub fn integrate<F: Formulation + ?Sized>(
     opts: &IntegratorOptions,
     observer: &mut dyn FnMut(&Sample<'_>),
 ) -> Result<Statistics, IntegrationFailure> {
+    integrate_cancellable(f, t0, t_end, q0, qd0, opts, observer, &AtomicBool::new(false))
+}
+
+/// [`integrate`] that stops with [`IntegrationError::Interrupted`] after the first accepted step
+/// that finds `cancel` set (a signal handler or another thread sets it). The flag is read once per
+/// step; samples observed before the stop are complete.
+pub fn integrate_cancellable<F: Formulation + ?Sized>(
+    f: &mut F,
+    t0: f64,
+    t_end: f64,
+    q0: &[f64],
+    qd0: &[f64],
+    opts: &IntegratorOptions,
+    observer: &mut dyn FnMut(&Sample<'_>),
+    cancel: &AtomicBool,
+) -> Result<Statistics, IntegrationFailure> {
     let n = q0.len();
     let m = f.model().num_equations();
     let wall = Instant::now();
@@ -190,6 +212,7 @@ pub fn integrate<F: Formulation + ?Sized>(
         observer,
         observer_time: Duration::ZERO,
         extra: FormulationStats::default(),
+        cancel,
     };
     let result = run_loop(f, t0, t_end, &mut y, opts, &mut run);
     run.finish(f, wall);

@@ -35,6 +35,13 @@ pub enum IntegrationError {
     /// Invalid options.
     #[error("invalid integrator options: {0}")]
     Options(String),
+    /// The caller asked the run to stop (the cancellation flag of [`crate::integrate_cancellable`],
+    /// e.g. set on Ctrl-C); every sample up to `time` has been observed.
+    #[error("t = {time}: interrupted")]
+    Interrupted {
+        /// Time of the last accepted step.
+        time: f64,
+    },
 }
 
 /// An error together with the statistics of the run up to it.

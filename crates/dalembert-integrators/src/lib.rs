@@ -30,7 +30,7 @@ mod generalized_alpha;
 mod options;
 mod statistics;
 
-pub use driver::{integrate, Sample};
+pub use driver::{integrate, integrate_cancellable, Sample};
 pub use error::{IntegrationError, IntegrationFailure};
 pub use options::{ConstraintTreatment, IntegratorOptions, Method};
 pub use statistics::Statistics;

@@ -6,17 +6,41 @@
 //! `<joint>.torque` where the joint carries one; for every driver `<driver>.effort`; then `energy`,
 //! `constraint_violation`, `velocity_violation`. Rows are written as the run produces them.
 
+mod read;
+
+pub use read::{read_columns, ResultCsvError, ResultTable};
+
 use dalembert_constraints::{ConstraintRole, ConstraintValues, Model, Reaction};
 use dalembert_integrators::Sample;
 use std::io::{self, Write};
+use std::time::{Duration, Instant};
 
-/// Writes samples of a run of `model` as CSV rows.
+/// Longest time a complete row may wait in the buffer before it is flushed: a run killed by a
+/// signal that cannot be caught loses at most this much of its output, and never leaves half a row.
+const FLUSH_EVERY: Duration = Duration::from_millis(250);
+
+/// Writes samples of a run of `model` as CSV rows (RFC 4180: names with commas, quotes or line
+/// breaks are quoted; numbers in shortest round-trip form).
 pub struct CsvOutput<W: Write> {
     out: W,
     values: ConstraintValues,
     reactions: Vec<Reaction>,
     roles: Vec<ConstraintRole>,
     error: Option<io::Error>,
+    rows: u64,
+    last_time: Option<f64>,
+    flushed: Instant,
+}
+
+/// Writes `x` in shortest round-trip form: plain decimals for magnitudes from 1e-5 to 1e16,
+/// scientific notation outside (so 1e-300 takes 6 characters, not 302). Both read back exactly.
+pub fn write_number(w: &mut impl Write, x: f64) -> io::Result<()> {
+    let a = x.abs();
+    if a == 0.0 || !a.is_finite() || (1e-5..1e16).contains(&a) {
+        write!(w, "{x}")
+    } else {
+        write!(w, "{x:e}")
+    }
 }
 
 impl<W: Write> CsvOutput<W> {
@@ -43,14 +67,34 @@ impl<W: Write> CsvOutput<W> {
             }
         }
         cols.extend(["energy", "constraint_violation", "velocity_violation"].map(String::from));
-        writeln!(out, "{}", cols.join(","))?;
+        {
+            let mut header = csv::WriterBuilder::new()
+                .terminator(csv::Terminator::Any(b'\n'))
+                .from_writer(&mut out);
+            header.write_record(&cols)?;
+            header.flush()?;
+        }
+        out.flush()?;
         Ok(CsvOutput {
             out,
             values: sys.values(),
             reactions: vec![Reaction::default(); roles.len()],
             roles,
             error: None,
+            rows: 0,
+            last_time: None,
+            flushed: Instant::now(),
         })
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Time of the last row written.
+    pub fn last_time(&self) -> Option<f64> {
+        self.last_time
     }
 
     /// Writes one sample. I/O errors are kept and reported by [`CsvOutput::finish`].
@@ -61,42 +105,52 @@ impl<W: Write> CsvOutput<W> {
         let sys = model.constraints();
         sys.evaluate(s.t, s.q, s.qd, &mut self.values);
         sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
-        if let Err(e) = self.write_row(s) {
+        let written = self.write_row(s).and_then(|()| {
+            self.rows += 1;
+            self.last_time = Some(s.t);
+            if self.flushed.elapsed() >= FLUSH_EVERY {
+                self.flushed = Instant::now();
+                self.out.flush()?;
+            }
+            Ok(())
+        });
+        if let Err(e) = written {
             self.error = Some(e);
         }
     }
 
     fn write_row(&mut self, s: &Sample<'_>) -> io::Result<()> {
-        write!(self.out, "{}", s.t)?;
+        let out = &mut self.out;
+        write_number(out, s.t)?;
         for i in 0..s.q.len() / 3 {
-            let k = 3 * i;
-            write!(
-                self.out,
-                ",{},{},{},{},{},{}",
-                s.q[k],
-                s.q[k + 1],
-                s.q[k + 2],
-                s.qd[k],
-                s.qd[k + 1],
-                s.qd[k + 2]
-            )?;
-        }
-        for (r, role) in self.reactions.iter().zip(&self.roles) {
-            match role {
-                ConstraintRole::Joint { carries_torque } => {
-                    write!(self.out, ",{},{}", r.force.x, r.force.y)?;
-                    if *carries_torque {
-                        write!(self.out, ",{}", r.torque)?;
-                    }
-                }
-                ConstraintRole::Driver => write!(self.out, ",{}", r.effort.unwrap_or(f64::NAN))?,
+            for v in [
+                s.q[3 * i],
+                s.q[3 * i + 1],
+                s.q[3 * i + 2],
+                s.qd[3 * i],
+                s.qd[3 * i + 1],
+                s.qd[3 * i + 2],
+            ] {
+                out.write_all(b",")?;
+                write_number(out, v)?;
             }
         }
-        writeln!(
-            self.out,
-            ",{},{},{}",
-            s.energy, s.constraint_violation, s.velocity_violation
-        )
+        for (r, role) in self.reactions.iter().zip(&self.roles) {
+            let values = match role {
+                ConstraintRole::Joint { carries_torque: true } => [Some(r.force.x), Some(r.force.y), Some(r.torque)],
+                ConstraintRole::Joint { carries_torque: false } => [Some(r.force.x), Some(r.force.y), None],
+                ConstraintRole::Driver => [Some(r.effort.unwrap_or(f64::NAN)), None, None],
+            };
+            for v in values.into_iter().flatten() {
+                out.write_all(b",")?;
+                write_number(out, v)?;
+            }
+        }
+        for v in [s.energy, s.constraint_violation, s.velocity_violation] {
+            out.write_all(b",")?;
+            write_number(out, v)?;
+        }
+        out.write_all(b"\n")
     }
 
     /// Flushes and returns the first I/O error met, if any.
