@@ -3,7 +3,7 @@
 use super::error::SceneError;
 use super::format::{BodyDef, DriverDef, ForceDef, JointDef, Points, SceneFile, SimDef, ValueDef};
 use super::functions::time_function;
-use super::{IntegratorKind, RunSettings, Scene, StabilizationKind};
+use super::{unknown_name, IntegratorKind, RunSettings, Scene, StabilizationKind};
 use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
 use crate::simulation::{FormulationKind, Simulation};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
@@ -122,12 +122,24 @@ fn inertia(def: &BodyDef) -> Result<f64, String> {
     let m = def.mass;
     match (def.inertia, &def.shape) {
         (Some(j), None) => Ok(j),
-        (None, Some(s)) => match (s.rod, s.disk, s.rectangle) {
-            (Some(l), None, None) => Ok(m * l * l / 12.0),
-            (None, Some(r), None) => Ok(0.5 * m * r * r),
-            (None, None, Some([w, h])) => Ok(m * (w * w + h * h) / 12.0),
-            _ => Err("shape takes exactly one of rod = L, disk = r, rectangle = [w, h]".into()),
-        },
+        (None, Some(s)) => {
+            let positive = |v: f64, what: &str| {
+                if v.is_finite() && v > 0.0 {
+                    Ok(v)
+                } else {
+                    Err(format!("shape: {what} must be positive and finite, got {v}"))
+                }
+            };
+            match (s.rod, s.disk, s.rectangle) {
+                (Some(l), None, None) => positive(l, "rod length").map(|l| m * l * l / 12.0),
+                (None, Some(r), None) => positive(r, "disk radius").map(|r| 0.5 * m * r * r),
+                (None, None, Some([w, h])) => {
+                    let (w, h) = (positive(w, "rectangle width")?, positive(h, "rectangle height")?);
+                    Ok(m * (w * w + h * h) / 12.0)
+                }
+                _ => Err("shape takes exactly one of rod = L, disk = r, rectangle = [w, h]".into()),
+            }
+        }
         (Some(_), Some(_)) => Err("give 'inertia' or 'shape', not both".into()),
         (None, None) => Err("give 'inertia' (kg·m² about the centre of mass) or 'shape'".into()),
     }
@@ -382,11 +394,12 @@ fn driver(
                 Some("x") => Coordinate::X,
                 Some("y") => Coordinate::Y,
                 Some("angle") => Coordinate::Angle,
-                other => {
+                Some(other) => {
                     return Err(err(format!(
-                        "coordinate must be \"x\", \"y\" or \"angle\", got {other:?}"
+                        "'coordinate' must be \"x\", \"y\" or \"angle\", got \"{other}\""
                     )))
                 }
+                None => return Err(err("needs 'coordinate' (\"x\", \"y\" or \"angle\")".into())),
             };
             let v0 = b.q[id.offset() + coordinate.index()];
             Box::new(BodyCoordinate {
@@ -581,19 +594,16 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
     let d = sim.get_ref();
     let err = |m: String| b.ctx.err(Some(span.clone()), format!("[simulation]: {m}"));
     if let Some(f) = &d.formulation {
-        s.formulation = FormulationKind::parse(f)
-            .ok_or_else(|| err(format!("unknown formulation '{f}' (augmented, embedding, amalgamated)")))?;
+        s.formulation =
+            FormulationKind::parse(f).ok_or_else(|| err(unknown_name("formulation", f, FormulationKind::NAMES)))?;
     }
     if let Some(i) = &d.integrator {
-        s.integrator = IntegratorKind::parse(i).ok_or_else(|| {
-            err(format!(
-                "unknown integrator '{i}' (symplectic-euler, rk4, dopri5, generalized-alpha)"
-            ))
-        })?;
+        s.integrator =
+            IntegratorKind::parse(i).ok_or_else(|| err(unknown_name("integrator", i, IntegratorKind::NAMES)))?;
     }
     if let Some(st) = &d.stabilization {
         s.stabilization = StabilizationKind::parse(st)
-            .ok_or_else(|| err(format!("unknown stabilization '{st}' (none, baumgarte, projection)")))?;
+            .ok_or_else(|| err(unknown_name("stabilization", st, StabilizationKind::NAMES)))?;
     }
     s.end = d.end.unwrap_or(s.end);
     s.step = d.step.unwrap_or(s.step);

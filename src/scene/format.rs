@@ -1,5 +1,7 @@
 //! The TOML structure of a scene file (serde). Unknown keys are errors, so typos are caught.
 
+use super::strict;
+pub(crate) use super::strict::{Points, ValueDef};
 use serde::Deserialize;
 use toml::Spanned;
 
@@ -22,6 +24,7 @@ pub(crate) struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub(crate) struct Meta {
     pub name: Option<String>,
+    #[serde(default, deserialize_with = "strict::gravity_opt")]
     pub gravity: Option<[f64; 2]>,
 }
 
@@ -32,9 +35,11 @@ pub(crate) struct BodyDef {
     pub mass: f64,
     pub inertia: Option<f64>,
     pub shape: Option<ShapeDef>,
+    #[serde(deserialize_with = "strict::xy")]
     pub position: [f64; 2],
     #[serde(default)]
     pub angle: f64,
+    #[serde(default, deserialize_with = "strict::xy_opt")]
     pub velocity: Option<[f64; 2]>,
     pub angular_velocity: Option<f64>,
 }
@@ -44,15 +49,8 @@ pub(crate) struct BodyDef {
 pub(crate) struct ShapeDef {
     pub rod: Option<f64>,
     pub disk: Option<f64>,
+    #[serde(default, deserialize_with = "strict::xy_opt")]
     pub rectangle: Option<[f64; 2]>,
-}
-
-/// One global point, or two (for elements between two points).
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
-pub(crate) enum Points {
-    One([f64; 2]),
-    Two([[f64; 2]; 2]),
 }
 
 #[derive(Debug, Deserialize)]
@@ -63,7 +61,9 @@ pub(crate) struct JointDef {
     pub kind: String,
     pub bodies: [String; 2],
     pub at: Option<Points>,
+    #[serde(default, deserialize_with = "strict::two_points_opt")]
     pub points: Option<[[f64; 2]; 2]>,
+    #[serde(default, deserialize_with = "strict::xy_opt")]
     pub axis: Option<[f64; 2]>,
     pub length: Option<f64>,
     pub ratio: Option<f64>,
@@ -103,15 +103,6 @@ pub(crate) struct DriverDef {
     pub function: FunctionDef,
 }
 
-/// A number, a vector, or a time function.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(untagged)]
-pub(crate) enum ValueDef {
-    Number(f64),
-    Vector([f64; 2]),
-    Function(Box<FunctionDef>),
-}
-
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct ForceDef {
@@ -122,6 +113,7 @@ pub(crate) struct ForceDef {
     pub bodies: Option<[String; 2]>,
     pub joint: Option<String>,
     pub at: Option<Points>,
+    #[serde(default, deserialize_with = "strict::xy_opt")]
     pub point: Option<[f64; 2]>,
     pub value: Option<ValueDef>,
     pub fx: Option<FunctionDef>,

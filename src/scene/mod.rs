@@ -9,6 +9,7 @@ mod build;
 mod error;
 mod format;
 mod functions;
+mod strict;
 
 pub use error::SceneError;
 
@@ -66,6 +67,19 @@ pub enum StabilizationKind {
 }
 
 impl IntegratorKind {
+    /// The names a scene or the command line may use.
+    pub const NAMES: &'static [&'static str] = &["symplectic-euler", "rk4", "dopri5", "generalized-alpha"];
+
+    /// Name, as in [`IntegratorKind::NAMES`].
+    pub fn name(&self) -> &'static str {
+        match self {
+            IntegratorKind::SymplecticEuler => "symplectic-euler",
+            IntegratorKind::Rk4 => "rk4",
+            IntegratorKind::Dopri5 => "dopri5",
+            IntegratorKind::GeneralizedAlpha => "generalized-alpha",
+        }
+    }
+
     /// Parses a scene or command-line name.
     pub fn parse(s: &str) -> Option<Self> {
         Some(match s {
@@ -79,6 +93,9 @@ impl IntegratorKind {
 }
 
 impl StabilizationKind {
+    /// The names a scene or the command line may use.
+    pub const NAMES: &'static [&'static str] = &["none", "baumgarte", "projection"];
+
     /// Parses a scene or command-line name.
     pub fn parse(s: &str) -> Option<Self> {
         Some(match s {
@@ -100,6 +117,9 @@ impl StabilizationKind {
 }
 
 impl FormulationKind {
+    /// The names a scene or the command line may use.
+    pub const NAMES: &'static [&'static str] = &["augmented", "embedding", "amalgamated"];
+
     /// Parses a scene or command-line name.
     pub fn parse(s: &str) -> Option<Self> {
         Some(match s {
@@ -109,6 +129,12 @@ impl FormulationKind {
             _ => return None,
         })
     }
+}
+
+/// The one-line error for a name that is not one of `names`: `unknown integrator 'rk5' (expected
+/// symplectic-euler, rk4, dopri5, generalized-alpha)`.
+pub fn unknown_name(what: &str, value: &str, names: &[&str]) -> String {
+    format!("unknown {what} '{value}' (expected {})", names.join(", "))
 }
 
 impl RunSettings {

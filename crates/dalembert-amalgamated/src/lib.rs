@@ -132,8 +132,10 @@ impl Formulation for Amalgamated {
         let n = q.len();
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
+        self.model.check_forces(t, q, qd, &self.q_e)?;
         let sys = self.model.constraints();
         sys.evaluate(t, q, qd, &mut self.values);
+        sys.check_values(t, &self.values)?;
         if stabilization != Stabilization::None {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }

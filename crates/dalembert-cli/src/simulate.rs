@@ -2,7 +2,7 @@
 
 use dalembert::constraints::Formulation;
 use dalembert::integrators::Sample;
-use dalembert::scene::{IntegratorKind, StabilizationKind};
+use dalembert::scene::{unknown_name, IntegratorKind, StabilizationKind};
 use dalembert::{CsvOutput, FormulationKind, Scene};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -20,7 +20,9 @@ pub struct Args {
     output: Option<PathBuf>,
 }
 
-/// Flags that override a scene's `[simulation]` table (`simulate`, `animate`).
+/// Flags that override a scene's `[simulation]` table (`simulate`, `animate`). Numbers may be
+/// negative on the command line (`--step -1e-3`), so that the rule rejecting them is the one that
+/// speaks.
 #[derive(clap::Args)]
 pub struct RunArgs {
     /// augmented | embedding | amalgamated
@@ -30,22 +32,22 @@ pub struct RunArgs {
     #[arg(long)]
     integrator: Option<String>,
     /// Spectral radius at infinity of generalized-α, 0 to 1.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     rho_inf: Option<f64>,
     /// Fixed step, or initial step of dopri5 (s).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     step: Option<f64>,
     /// Relative tolerance (dopri5).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     rtol: Option<f64>,
     /// Absolute tolerance (dopri5).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     atol: Option<f64>,
     /// End time (s).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     end: Option<f64>,
     /// Output interval (s).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     every: Option<f64>,
     /// none | baumgarte | projection
     #[arg(long)]
@@ -57,10 +59,11 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
     let mut scene = Scene::from_path(path).map_err(|e| e.to_string())?;
     let s = &mut scene.settings;
     if let Some(f) = &a.formulation {
-        s.formulation = FormulationKind::parse(f).ok_or(format!("unknown formulation '{f}'"))?;
+        s.formulation =
+            FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, FormulationKind::NAMES))?;
     }
     if let Some(i) = &a.integrator {
-        s.integrator = IntegratorKind::parse(i).ok_or(format!("unknown integrator '{i}'"))?;
+        s.integrator = IntegratorKind::parse(i).ok_or_else(|| unknown_name("integrator", i, IntegratorKind::NAMES))?;
     }
     if let Some(r) = a.rho_inf {
         if !(0.0..=1.0).contains(&r) {
@@ -69,7 +72,8 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
         s.rho_inf = r;
     }
     if let Some(st) = &a.stabilization {
-        s.stabilization = StabilizationKind::parse(st).ok_or(format!("unknown stabilization '{st}'"))?;
+        s.stabilization =
+            StabilizationKind::parse(st).ok_or_else(|| unknown_name("stabilization", st, StabilizationKind::NAMES))?;
     }
     for (dst, src, what) in [
         (&mut s.step, a.step, "--step"),
@@ -84,6 +88,28 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
             }
             *dst = v;
         }
+    }
+    let ignored = |flag: &str, used_by: &str| {
+        eprintln!(
+            "warning: {flag} applies to {used_by} only; ignored with {}",
+            s.integrator.name()
+        )
+    };
+    if s.integrator != IntegratorKind::Dopri5 {
+        if a.rtol.is_some() {
+            ignored("--rtol", "dopri5");
+        }
+        if a.atol.is_some() {
+            ignored("--atol", "dopri5");
+        }
+    }
+    if s.integrator != IntegratorKind::GeneralizedAlpha && a.rho_inf.is_some() {
+        ignored("--rho-inf", "generalized-alpha");
+    }
+    if s.integrator == IntegratorKind::GeneralizedAlpha && a.stabilization.is_some() {
+        eprintln!(
+            "warning: --stabilization is ignored with generalized-alpha (it keeps the position constraints itself)"
+        );
     }
     Ok(scene)
 }
@@ -104,9 +130,11 @@ pub fn run(a: Args) -> Result<(), String> {
             "dopri5 (rtol {:e}, atol {:e}, initial step {:e} s)",
             s.rtol, s.atol, s.step
         ),
-        IntegratorKind::Rk4 => format!("rk4, step {:e} s", s.step),
-        IntegratorKind::SymplecticEuler => format!("symplectic-euler, step {:e} s", s.step),
-        IntegratorKind::GeneralizedAlpha => format!("generalized-alpha (rho_inf {}), step {:e} s", s.rho_inf, s.step),
+        IntegratorKind::Rk4 => format!("rk4, step {}", fixed_step(s)),
+        IntegratorKind::SymplecticEuler => format!("symplectic-euler, step {}", fixed_step(s)),
+        IntegratorKind::GeneralizedAlpha => {
+            format!("generalized-alpha (rho_inf {}), step {}", s.rho_inf, fixed_step(s))
+        }
     };
     outln!("scene        {}", scene.name);
     outln!(
@@ -213,6 +241,19 @@ pub fn run(a: Args) -> Result<(), String> {
         stats.max_energy_change
     );
     Ok(())
+}
+
+/// The fixed step as run: a whole number of steps spans each output interval, so a step longer
+/// than the interval (or the run) is shortened, and the summary says so.
+fn fixed_step(s: &dalembert::scene::RunSettings) -> String {
+    let span = s.output_every.min(s.end);
+    if s.step <= span * (1.0 + 1e-12) {
+        return format!("{:e} s", s.step);
+    }
+    format!(
+        "{:e} s (asked {:e} s: a fixed step never exceeds the output interval {:e} s)",
+        span, s.step, s.output_every
+    )
 }
 
 fn print_rows(model: &dalembert::constraints::Model, rows: &[(f64, Vec<f64>, f64, f64)]) {

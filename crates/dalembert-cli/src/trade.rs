@@ -2,7 +2,7 @@
 //! treatment × step (or tolerance) on one scene, measured against a tight reference run.
 
 use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
-use dalembert::scene::{IntegratorKind, StabilizationKind};
+use dalembert::scene::{unknown_name, IntegratorKind, StabilizationKind};
 use dalembert::{FormulationKind, Scene};
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -14,11 +14,11 @@ pub struct Args {
     /// Scene file (TOML).
     scene: PathBuf,
     /// End time of every run (s); default the scene's, at most 5 s.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     end: Option<f64>,
     /// Comparison interval (s); default the larger of the scene's output interval and the largest
     /// step (a fixed step is never longer than the interval between samples).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     every: Option<f64>,
     /// Formulations to try (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "augmented,embedding,amalgamated")]
@@ -34,10 +34,20 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_value = "none,baumgarte,projection")]
     treatments: Vec<String>,
     /// Steps of the fixed-step methods (s).
-    #[arg(long, value_delimiter = ',', default_value = "1e-2,3e-3,1e-3,3e-4")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1e-2,3e-3,1e-3,3e-4",
+        allow_hyphen_values = true
+    )]
     steps: Vec<f64>,
     /// Tolerances of the adaptive method (rtol = atol).
-    #[arg(long, value_delimiter = ',', default_value = "1e-4,1e-6,1e-8,1e-10")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1e-4,1e-6,1e-8,1e-10",
+        allow_hyphen_values = true
+    )]
     tolerances: Vec<f64>,
     /// Folder for trade.csv, trade.md and work-precision.svg.
     #[arg(long, default_value = "trade")]
@@ -88,9 +98,9 @@ fn samples(
 fn grid(a: &Args) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64)>, String> {
     let mut g = Vec::new();
     for f in &a.formulations {
-        let kind = FormulationKind::parse(f).ok_or(format!("unknown formulation '{f}'"))?;
+        let kind = FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, FormulationKind::NAMES))?;
         for i in &a.integrators {
-            let integ = IntegratorKind::parse(i).ok_or(format!("unknown integrator '{i}'"))?;
+            let integ = IntegratorKind::parse(i).ok_or_else(|| unknown_name("integrator", i, IntegratorKind::NAMES))?;
             match integ {
                 IntegratorKind::Dopri5 => {
                     for &tol in &a.tolerances {
@@ -115,7 +125,8 @@ fn grid(a: &Args) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64
                         Method::SymplecticEuler
                     };
                     for t in &a.treatments {
-                        let st = StabilizationKind::parse(t).ok_or(format!("unknown treatment '{t}'"))?;
+                        let st = StabilizationKind::parse(t)
+                            .ok_or_else(|| unknown_name("treatment", t, StabilizationKind::NAMES))?;
                         for &h in &a.steps {
                             let treatment = match st {
                                 StabilizationKind::None => ConstraintTreatment::None,
@@ -134,6 +145,11 @@ fn grid(a: &Args) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64
 }
 
 pub fn run(a: Args) -> Result<(), String> {
+    for (values, flag) in [(&a.steps, "--steps"), (&a.tolerances, "--tolerances")] {
+        if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(format!("{flag}: every value must be positive and finite, got {v}"));
+        }
+    }
     let scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
     let end = a.end.unwrap_or(scene.settings.end.min(5.0));
     let largest_step = a.steps.iter().cloned().fold(0.0f64, f64::max);

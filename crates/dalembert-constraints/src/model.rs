@@ -69,6 +69,34 @@ impl Model {
         MassMatrix::add_quadratic_velocity_force(&self.bodies, q, qd, q_e);
     }
 
+    /// `Ok` when the applied forces `q_e` (from [`Model::applied_forces`] at `(t, q, q̇)`) are
+    /// finite; otherwise the error names the force element whose generalized force overflows or is
+    /// not a number (found by evaluating each element alone: only on this failure path).
+    pub fn check_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &[f64]) -> Result<(), crate::DynamicsError> {
+        if q_e.iter().all(|x| x.is_finite()) {
+            return Ok(());
+        }
+        let mut one = vec![0.0; q_e.len()];
+        let what = self
+            .forces
+            .iter()
+            .find(|f| {
+                one.iter_mut().for_each(|x| *x = 0.0);
+                f.add_generalized_force(t, &self.bodies, q, qd, &mut one);
+                one.iter().any(|x| !x.is_finite())
+            })
+            .map_or_else(
+                || "quadratic-velocity force of an offset centre of mass (velocities overflow)".to_string(),
+                |f| {
+                    format!(
+                        "or overflowing generalized force of '{}' (check its parameters and the state)",
+                        f.name()
+                    )
+                },
+            );
+        Err(crate::DynamicsError::NonFinite { time: t, what })
+    }
+
     /// Total potential energy of the conservative elements at `(t, q)`.
     pub fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
         self.forces

@@ -164,6 +164,37 @@ impl ConstraintSystem {
         }
     }
 
+    /// `Ok` when every assembled value is finite; otherwise the error names the first equation
+    /// whose `C`, `C_t`, `Q_d` or Jacobian row overflows (e.g. `Q_d` with velocities near 1e200).
+    pub fn check_values(&self, t: f64, values: &ConstraintValues) -> Result<(), crate::DynamicsError> {
+        let bad_row = (0..self.num_equations())
+            .find(|&r| {
+                ![values.c[r], values.c_t[r], values.gamma[r]]
+                    .iter()
+                    .all(|x| x.is_finite())
+            })
+            .or_else(|| {
+                self.pattern
+                    .iter()
+                    .zip(&values.jacobian)
+                    .find(|(_, v)| !v.is_finite())
+                    .map(|(&(r, _), _)| r)
+            });
+        match bad_row {
+            None => Ok(()),
+            Some(r) => {
+                let e = self.equation(r);
+                Err(crate::DynamicsError::NonFinite {
+                    time: t,
+                    what: format!(
+                        "or overflowing constraint values of '{}' ({}): positions or velocities too large",
+                        e.name, e.label
+                    ),
+                })
+            }
+        }
+    }
+
     /// The Jacobian blocks of constraint `k` from assembled values: `(first, second)`, each a slice
     /// of `3 × equations` entries row by row, or `None` for the ground.
     pub fn blocks<'a>(&self, k: usize, values: &'a ConstraintValues) -> [Option<&'a [f64]>; 2] {

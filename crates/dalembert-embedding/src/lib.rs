@@ -131,7 +131,9 @@ impl Embedding {
         self.model.check_state(t, q, qd)?;
         self.mass.update(self.model.bodies(), q);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
+        self.model.check_forces(t, q, qd, &self.q_e)?;
         self.model.constraints().evaluate(t, q, qd, &mut self.values);
+        self.model.constraints().check_values(t, &self.values)?;
         Ok(())
     }
 }

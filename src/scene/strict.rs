@@ -1,0 +1,133 @@
+//! Strict readers for the scene's vectors and points: a wrong length, a non-number or a wrong shape
+//! is an error that says what was expected (serde's fixed arrays silently drop extra elements, and
+//! its untagged enums name internal types).
+
+use super::format::FunctionDef;
+use serde::de::{Deserializer, Error};
+use serde::Deserialize;
+use toml::Value;
+
+/// A TOML number (integer or float) as `f64`.
+fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Integer(i) => Some(*i as f64),
+        Value::Float(f) => Some(*f),
+        _ => None,
+    }
+}
+
+fn describe(v: &Value) -> String {
+    match v {
+        Value::String(s) => format!("the string \"{s}\""),
+        Value::Array(a) => format!("an array of {}", a.len()),
+        Value::Table(_) => "a table".into(),
+        Value::Boolean(b) => format!("{b}"),
+        Value::Datetime(d) => format!("the date {d}"),
+        Value::Integer(_) | Value::Float(_) => "a number".into(),
+    }
+}
+
+/// `[x, y]`: exactly two numbers; `what` says what was expected.
+fn pair(v: &Value, what: &str) -> Result<[f64; 2], String> {
+    match v {
+        Value::Array(a) if a.len() == 2 => match (number(&a[0]), number(&a[1])) {
+            (Some(x), Some(y)) => Ok([x, y]),
+            _ => Err(format!(
+                "expected {what}, found {} in it",
+                describe(if number(&a[0]).is_none() { &a[0] } else { &a[1] })
+            )),
+        },
+        Value::Array(a) if a.len() == 1 => Err(format!("expected {what}, got 1 element")),
+        Value::Array(a) => Err(format!("expected {what}, got {} elements", a.len())),
+        other => Err(format!("expected {what}, got {}", describe(other))),
+    }
+}
+
+/// Deserializes `[x, y]`.
+pub(crate) fn xy<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    pair(&Value::deserialize(d)?, "[x, y] (two numbers)").map_err(D::Error::custom)
+}
+
+/// Deserializes an optional `[x, y]`.
+pub(crate) fn xy_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    xy(d).map(Some)
+}
+
+/// Deserializes an optional `[gx, gy]` gravity: a third component is refused with the reason.
+pub(crate) fn gravity_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    let v = Value::deserialize(d)?;
+    if let Value::Array(a) = &v {
+        if a.len() == 3 {
+            return Err(D::Error::custom(
+                "expected [gx, gy]: scenes are planar (a 3-vector gravity will mean a spatial scene once spatial bodies exist)",
+            ));
+        }
+    }
+    pair(&v, "[gx, gy] (two numbers)").map(Some).map_err(D::Error::custom)
+}
+
+/// Deserializes an optional `[[x1, y1], [x2, y2]]`.
+pub(crate) fn two_points_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f64; 2]; 2]>, D::Error> {
+    two_points(&Value::deserialize(d)?).map(Some).map_err(D::Error::custom)
+}
+
+fn two_points(v: &Value) -> Result<[[f64; 2]; 2], String> {
+    const WHAT: &str = "two points [[x1, y1], [x2, y2]]";
+    match v {
+        Value::Array(a) if a.len() == 2 => {
+            let p = |k: usize| pair(&a[k], "each point as [x, y] (two numbers)").map_err(|e| format!("{WHAT}: {e}"));
+            Ok([p(0)?, p(1)?])
+        }
+        other => Err(format!("expected {WHAT}, got {}", describe(other))),
+    }
+}
+
+/// One global point, or two (for elements between two points).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Points {
+    One([f64; 2]),
+    Two([[f64; 2]; 2]),
+}
+
+impl<'de> Deserialize<'de> for Points {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        let nested = matches!(&v, Value::Array(a) if a.first().is_some_and(|e| e.is_array()));
+        if nested {
+            two_points(&v).map(Points::Two)
+        } else {
+            pair(&v, "a point [x, y] or two points [[x1, y1], [x2, y2]]").map(Points::One)
+        }
+        .map_err(D::Error::custom)
+    }
+}
+
+/// A number, a vector, or a time function.
+#[derive(Debug, Clone)]
+pub(crate) enum ValueDef {
+    Number(f64),
+    Vector([f64; 2]),
+    Function(Box<FunctionDef>),
+}
+
+impl<'de> Deserialize<'de> for ValueDef {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        if let Some(x) = number(&v) {
+            return Ok(ValueDef::Number(x));
+        }
+        match v {
+            Value::Array(_) => pair(&v, "[x, y] (two numbers)")
+                .map(ValueDef::Vector)
+                .map_err(D::Error::custom),
+            Value::Table(_) => v
+                .try_into::<FunctionDef>()
+                .map(|f| ValueDef::Function(Box::new(f)))
+                .map_err(|e| D::Error::custom(format!("function table: {}", e.message().trim()))),
+            other => Err(D::Error::custom(format!(
+                "expected a number, [x, y] or a function table {{ kind = ... }}, got {}",
+                describe(&other)
+            ))),
+        }
+    }
+}
