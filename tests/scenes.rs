@@ -81,7 +81,10 @@ fn malformed_toml_reports_line_and_column() {
     let e = error_of(&format!(
         "{BASE}\n[[joints]]\nname = \"x\"\ntype = \"revolute\"\nbodies = \"arm\"\n"
     ));
-    assert!(e.starts_with("bad.toml:") && e.contains("array"), "{e}");
+    assert!(
+        e.starts_with("bad.toml:17:10:") && e.contains("expected two body names") && e.contains("the string \"arm\""),
+        "{e}"
+    );
 }
 
 #[test]

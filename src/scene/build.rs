@@ -330,6 +330,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     // Forces.
     let mut forces: Vec<Box<dyn ForceElement>> = Vec::new();
     if let Some(g) = file.scene.as_ref().and_then(|s| s.gravity) {
+        if !g.iter().all(|x| x.is_finite()) {
+            return Err(b.ctx.err(None, format!("[scene] gravity must be finite, got {g:?}")));
+        }
         forces.push(Box::new(Gravity::new(v2(g))));
     }
     for sf in &file.forces {
@@ -573,7 +576,10 @@ fn force(
             )))
         }
     };
-    element.validate(b.q.len() / 3).map_err(|e| err(e.to_string()))?;
+    // The element's own message names it ("force '…': …").
+    element
+        .validate(b.q.len() / 3)
+        .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
     Ok((element, mark))
 }
 

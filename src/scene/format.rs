@@ -59,6 +59,7 @@ pub(crate) struct JointDef {
     pub name: String,
     #[serde(rename = "type")]
     pub kind: String,
+    #[serde(deserialize_with = "strict::two_names")]
     pub bodies: [String; 2],
     pub at: Option<Points>,
     #[serde(default, deserialize_with = "strict::two_points_opt")]
@@ -98,6 +99,7 @@ pub(crate) struct DriverDef {
     pub body: Option<String>,
     pub coordinate: Option<String>,
     pub joint: Option<String>,
+    #[serde(default, deserialize_with = "strict::two_names_opt")]
     pub bodies: Option<[String; 2]>,
     pub at: Option<Points>,
     pub function: FunctionDef,
@@ -110,6 +112,7 @@ pub(crate) struct ForceDef {
     #[serde(rename = "type")]
     pub kind: String,
     pub body: Option<String>,
+    #[serde(default, deserialize_with = "strict::two_names_opt")]
     pub bodies: Option<[String; 2]>,
     pub joint: Option<String>,
     pub at: Option<Points>,

@@ -66,6 +66,29 @@ pub(crate) fn gravity_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64
     pair(&v, "[gx, gy] (two numbers)").map(Some).map_err(D::Error::custom)
 }
 
+/// Deserializes `[first, second]`: exactly two names.
+pub(crate) fn two_names<'de, D: Deserializer<'de>>(d: D) -> Result<[String; 2], D::Error> {
+    let v = Value::deserialize(d)?;
+    const WHAT: &str = "two body names [\"first\", \"second\"]";
+    match &v {
+        Value::Array(a) if a.len() == 2 => match (&a[0], &a[1]) {
+            (Value::String(x), Value::String(y)) => Ok([x.clone(), y.clone()]),
+            (x, y) => Err(format!(
+                "expected {WHAT}, found {} in it",
+                describe(if matches!(x, Value::String(_)) { y } else { x })
+            )),
+        },
+        Value::Array(a) => Err(format!("expected {WHAT}, got {} elements", a.len())),
+        other => Err(format!("expected {WHAT}, got {}", describe(other))),
+    }
+    .map_err(D::Error::custom)
+}
+
+/// Deserializes an optional `[first, second]` pair of names.
+pub(crate) fn two_names_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[String; 2]>, D::Error> {
+    two_names(d).map(Some)
+}
+
 /// Deserializes an optional `[[x1, y1], [x2, y2]]`.
 pub(crate) fn two_points_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f64; 2]; 2]>, D::Error> {
     two_points(&Value::deserialize(d)?).map(Some).map_err(D::Error::custom)

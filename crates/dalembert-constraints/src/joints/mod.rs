@@ -49,7 +49,7 @@ pub(crate) fn check_direction(name: &str, v: Vec2) -> Result<(), ModelError> {
         Ok(())
     } else {
         Err(ModelError::InvalidParameter {
-            element: format!("'{name}'"),
+            element: format!("joint '{name}'"),
             what: "axis/direction must be a finite non-zero vector".into(),
         })
     }

@@ -43,7 +43,7 @@ impl ForceElement for PointForce {
 
     fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
         check_body(&self.name, self.body, bodies)?;
-        self.fx.validate(&self.name)?;
-        self.fy.validate(&self.name)
+        self.fx.validate(&format!("force '{}'", self.name))?;
+        self.fy.validate(&format!("force '{}'", self.name))
     }
 }

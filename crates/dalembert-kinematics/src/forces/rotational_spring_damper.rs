@@ -50,7 +50,7 @@ impl ForceElement for RotationalSpringDamper {
             .all(|x| x.is_finite());
         if !ok || self.stiffness < 0.0 || self.damping < 0.0 {
             return Err(crate::ModelError::InvalidParameter {
-                element: self.name.clone(),
+                element: format!("force '{}'", self.name),
                 what: "stiffness and damping must be finite and non-negative".into(),
             });
         }

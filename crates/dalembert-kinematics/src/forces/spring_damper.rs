@@ -71,12 +71,12 @@ impl ForceElement for SpringDamper {
             .all(|x| x.is_finite());
         if !ok || self.stiffness < 0.0 || self.damping < 0.0 || self.free_length < 0.0 {
             return Err(crate::ModelError::InvalidParameter {
-                element: self.name.clone(),
+                element: format!("force '{}'", self.name),
                 what: "stiffness, damping and free length must be finite and non-negative".into(),
             });
         }
         if let Some(a) = &self.actuator {
-            a.validate(&self.name)?;
+            a.validate(&format!("force '{}'", self.name))?;
         }
         Ok(())
     }

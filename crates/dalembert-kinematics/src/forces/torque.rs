@@ -41,6 +41,6 @@ impl ForceElement for Torque {
     fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
         check_body(&self.name, self.body, bodies)?;
         check_body(&self.name, self.reaction_body, bodies)?;
-        self.value.validate(&self.name)
+        self.value.validate(&format!("force '{}'", self.name))
     }
 }
