@@ -29,4 +29,4 @@ pub use dalembert_kinematics as kinematics;
 
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError};
-pub use simulation::{FormulationKind, Simulation, SimulationError};
+pub use simulation::{energy_warning, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION};

@@ -18,6 +18,10 @@ pub struct Args {
     /// Write the results as CSV (streamed: rows before a failure are kept).
     #[arg(long)]
     output: Option<PathBuf>,
+    /// Fail (exit 1) instead of warning when a conservative model's energy changes by more than
+    /// 1 % of its energy scale.
+    #[arg(long)]
+    strict: bool,
 }
 
 /// Flags that override a scene's `[simulation]` table (`simulate`, `animate`). Numbers may be
@@ -169,7 +173,10 @@ pub fn run(a: Args) -> Result<(), String> {
     let tty = std::io::stderr().is_terminal();
     let mut last_bar = Instant::now();
     let end = s.end;
+    let energy0 = rows_energy0(&model, &scene);
+    let mut largest_kinetic = 0.0f64;
     let mut observer = |smp: &Sample<'_>| {
+        largest_kinetic = largest_kinetic.max(model.kinetic_energy(smp.q, smp.qd));
         if let Some(c) = csv.as_mut() {
             c.write(&model, smp);
         }
@@ -240,7 +247,20 @@ pub fn run(a: Args) -> Result<(), String> {
         stats.max_velocity_violation,
         stats.max_energy_change
     );
+    if model.is_conservative() {
+        if let Some(w) = dalembert::energy_warning(stats.max_energy_change, largest_kinetic.max(energy0.abs())) {
+            if a.strict {
+                return Err(w);
+            }
+            eprintln!("warning: {w}");
+        }
+    }
     Ok(())
+}
+
+/// `T + V` of the scene's initial state.
+fn rows_energy0(model: &dalembert::constraints::Model, scene: &Scene) -> f64 {
+    model.kinetic_energy(&scene.q, &scene.qd) + model.potential_energy(0.0, &scene.q)
 }
 
 /// The fixed step as run: a whole number of steps spans each output interval, so a step longer

@@ -97,6 +97,17 @@ impl Model {
         Err(crate::DynamicsError::NonFinite { time: t, what })
     }
 
+    /// True when `T + V` is a first integral of the exact motion: every force element is
+    /// conservative and no constraint is driven (a driver does work).
+    pub fn is_conservative(&self) -> bool {
+        self.forces.iter().all(|f| f.is_conservative())
+            && self
+                .constraints
+                .constraints()
+                .iter()
+                .all(|c| c.role() != crate::ConstraintRole::Driver)
+    }
+
     /// Total potential energy of the conservative elements at `(t, q)`.
     pub fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
         self.forces

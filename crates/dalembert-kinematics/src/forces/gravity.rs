@@ -34,6 +34,10 @@ impl ForceElement for Gravity {
         }
     }
 
+    fn is_conservative(&self) -> bool {
+        true
+    }
+
     fn potential_energy(&self, _t: f64, bodies: &[Body], q: &[f64]) -> Option<f64> {
         let mut v = 0.0;
         for (i, b) in bodies.iter().enumerate() {

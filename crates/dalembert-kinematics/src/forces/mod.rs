@@ -36,6 +36,12 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
         None
     }
 
+    /// True when the element does no work beyond its potential: `T + V` is then conserved by the
+    /// exact motion (gravity, springs without damping or actuator). Default `false`.
+    fn is_conservative(&self) -> bool {
+        false
+    }
+
     /// Checks that every body the element refers to exists in a model of `bodies` moving bodies.
     fn validate(&self, _bodies: usize) -> Result<(), crate::ModelError> {
         Ok(())

@@ -37,6 +37,10 @@ impl ForceElement for RotationalSpringDamper {
         add_torque(self.bodies.0, -tau, q_e);
     }
 
+    fn is_conservative(&self) -> bool {
+        self.damping == 0.0
+    }
+
     fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
         let (phi, _) = self.angle(q, &[]);
         Some(0.5 * self.stiffness * phi * phi)

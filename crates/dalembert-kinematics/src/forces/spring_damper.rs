@@ -58,6 +58,10 @@ impl ForceElement for SpringDamper {
         add_point_force(self.bodies.1, &pj, -e * f, q_e);
     }
 
+    fn is_conservative(&self) -> bool {
+        self.damping == 0.0 && self.actuator.is_none()
+    }
+
     fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
         let (_, _, len, _, _) = self.geometry(q, &[]);
         Some(0.5 * self.stiffness * (len - self.free_length).powi(2))
