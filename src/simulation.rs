@@ -43,7 +43,11 @@ pub const ENERGY_WARNING_FRACTION: f64 = 1e-2;
 /// [`ENERGY_WARNING_FRACTION`] of the scale.
 pub fn energy_warning(change: f64, scale: f64) -> Option<String> {
     let limit = ENERGY_WARNING_FRACTION * scale;
-    (!(change <= limit)).then(|| {
+    // A NaN change is reported too.
+    let within = change
+        .partial_cmp(&limit)
+        .is_some_and(|o| o != std::cmp::Ordering::Greater);
+    (!within).then(|| {
         format!(
             "the energy of this conservative model changed by {change:.3e} J, more than {:.0} % of its energy scale {scale:.3e} J: the run is not trustworthy (try a smaller step, projection, or another integrator)",
             100.0 * ENERGY_WARNING_FRACTION

@@ -128,6 +128,7 @@ impl Formulation for Amalgamated {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
+        self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         self.model.check_state(t, q, qd)?;
         let n = q.len();
         self.mass.update(self.model.bodies(), q);

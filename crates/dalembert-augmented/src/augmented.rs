@@ -242,6 +242,7 @@ impl Formulation for Augmented {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
+        self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         self.load(t, q, qd)?;
         let n = q.len();
         let sys = self.model.constraints();

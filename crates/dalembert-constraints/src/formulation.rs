@@ -123,6 +123,16 @@ pub enum DynamicsError {
     /// A kinematic analysis (projection, position recovery) failed.
     #[error(transparent)]
     Kinematics(#[from] crate::ConstraintError),
+    /// A slice handed to a formulation has the wrong length.
+    #[error("{what} has length {got}, the model needs {expected}")]
+    WrongLength {
+        /// Which argument.
+        what: &'static str,
+        /// The length the model needs.
+        expected: usize,
+        /// The length given.
+        got: usize,
+    },
     /// A factorization reported an error.
     #[error("t = {time}: factorization failed: {what}")]
     Factorization {

@@ -138,6 +138,7 @@ impl Model {
     /// `Ok` when every position and velocity is finite; otherwise the error names the body and the
     /// coordinate.
     pub fn check_state(&self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), crate::DynamicsError> {
+        self.check_lengths(&[("q", q.len()), ("q̇", qd.len())], &[])?;
         for (v, what) in [(q, "position"), (qd, "velocity")] {
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
                 let coord = ["x", "y", "angle"][i % 3];
@@ -149,6 +150,26 @@ impl Model {
             }
         }
         Ok(())
+    }
+
+    /// `Ok` when every coordinate-sized slice (`(name, length)` in `coordinates`) has `n` entries
+    /// and every equation-sized one (`equations`) has `m`; otherwise the error names the first
+    /// slice that does not (a caller's mistake reported instead of an index panic).
+    pub fn check_lengths(
+        &self,
+        coordinates: &[(&'static str, usize)],
+        equations: &[(&'static str, usize)],
+    ) -> Result<(), crate::DynamicsError> {
+        let (n, m) = (self.num_coordinates(), self.num_equations());
+        let wrong = coordinates
+            .iter()
+            .map(|&(w, l)| (w, l, n))
+            .chain(equations.iter().map(|&(w, l)| (w, l, m)))
+            .find(|&(_, l, e)| l != e);
+        match wrong {
+            None => Ok(()),
+            Some((what, got, expected)) => Err(crate::DynamicsError::WrongLength { what, expected, got }),
+        }
     }
 
     /// Kinetic energy `½ q̇ᵀ M q̇`, computed body by body without building `M` (no trigonometry

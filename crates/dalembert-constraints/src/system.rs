@@ -39,8 +39,12 @@ impl ConstraintSystem {
         let mut entry_offsets = vec![0];
         let mut pattern = Vec::new();
         for c in &constraints {
-            c.validate()?;
             let name = c.name().to_string();
+            // Bodies first: a joint built against a body the model lacks is named as such.
+            for body in c.bodies() {
+                dalembert_kinematics::forces::check_body(&format!("constraint '{name}'"), body, bodies)?;
+            }
+            c.validate()?;
             let ne = c.num_equations();
             if !(1..=crate::MAX_EQUATIONS).contains(&ne) {
                 return Err(ConstraintError::EquationCount { name, count: ne });
@@ -48,9 +52,6 @@ impl ConstraintSystem {
             let [a, b] = c.bodies();
             if a == b {
                 return Err(ConstraintError::SameBody { name });
-            }
-            for body in [a, b] {
-                dalembert_kinematics::forces::check_body(&format!("constraint '{name}'"), body, bodies)?;
             }
             let r0 = *row_offsets.last().unwrap_or(&0);
             for body in [a, b] {

@@ -157,6 +157,7 @@ impl Formulation for Embedding {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
+        self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         self.load(t, q, qd)?;
         let sys = self.model.constraints();
         let n = q.len();

@@ -21,7 +21,7 @@ pub struct Gear {
 impl Gear {
     /// A gear pair meshing at configuration `q`.
     pub fn new(name: impl Into<String>, bodies: [BodyRef; 2], ratio: f64, q: &[f64]) -> Self {
-        let a = |b| BodyState::of(b, q, &[]).angle;
+        let a = |b| super::pose_or_ground(b, q).angle;
         Gear {
             name: name.into(),
             bodies,

@@ -21,16 +21,32 @@ pub use rigid::Rigid;
 
 use dalembert_kinematics::{point::local_point, BodyRef, BodyState, ModelError, Vec2};
 
-/// The local coordinates, in `body`'s frame at configuration `q`, of global point `p`.
-pub fn local_point_of(body: BodyRef, q: &[f64], p: Vec2) -> Vec2 {
-    let s = BodyState::of(body, q, &[]);
-    local_point(s.position, s.angle, p)
+/// The pose of `body` in `q`, or `None` for a body whose coordinates `q` does not hold (the
+/// model's constructor then reports the unknown body by name).
+fn pose(body: BodyRef, q: &[f64]) -> Option<BodyState> {
+    match body {
+        BodyRef::Body(id) if q.len() < id.offset() + 3 => None,
+        _ => Some(BodyState::of(body, q, &[])),
+    }
 }
 
-/// The local components, in `body`'s frame at configuration `q`, of global direction `v`.
+/// The pose of `body` in `q` for a joint constructor, the ground's for a body outside `q` (the
+/// joint is then refused by [`crate::Model::new`], naming it, instead of panicking here).
+pub(crate) fn pose_or_ground(body: BodyRef, q: &[f64]) -> BodyState {
+    pose(body, q).unwrap_or(BodyState::GROUND)
+}
+
+/// The local coordinates, in `body`'s frame at configuration `q`, of global point `p`. A body
+/// outside `q` gets `p` unchanged: no panic here, and [`crate::Model::new`] names the joint that
+/// refers to a body the model does not have.
+pub fn local_point_of(body: BodyRef, q: &[f64], p: Vec2) -> Vec2 {
+    pose(body, q).map_or(p, |s| local_point(s.position, s.angle, p))
+}
+
+/// The local components, in `body`'s frame at configuration `q`, of global direction `v` (`v`
+/// unchanged for a body outside `q`, as in [`local_point_of`]).
 pub fn local_direction_of(body: BodyRef, q: &[f64], v: Vec2) -> Vec2 {
-    let s = BodyState::of(body, q, &[]);
-    dalembert_kinematics::rotation(s.angle).transpose() * v
+    pose(body, q).map_or(v, |s| dalembert_kinematics::rotation(s.angle).transpose() * v)
 }
 
 pub(crate) fn check_finite(name: &str, what: &str, xs: &[f64]) -> Result<(), ModelError> {

@@ -29,8 +29,8 @@ pub struct Prismatic {
 impl Prismatic {
     /// A prismatic joint through global point `p` along global direction `axis`, in configuration `q`.
     pub fn at(name: impl Into<String>, bodies: [BodyRef; 2], p: Vec2, axis: Vec2, q: &[f64]) -> Self {
-        let si = BodyState::of(bodies[0], q, &[]);
-        let sj = BodyState::of(bodies[1], q, &[]);
+        let si = super::pose_or_ground(bodies[0], q);
+        let sj = super::pose_or_ground(bodies[1], q);
         Prismatic {
             name: name.into(),
             points: [

@@ -40,8 +40,8 @@ impl RackPinion {
             radius,
             reference: [0.0, 0.0],
         };
-        let si = BodyState::of(bodies[0], q, &[]);
-        let sj = BodyState::of(bodies[1], q, &[]);
+        let si = super::pose_or_ground(bodies[0], q);
+        let sj = super::pose_or_ground(bodies[1], q);
         j.reference = [j.travel(&si, &sj), si.angle - sj.angle];
         j
     }

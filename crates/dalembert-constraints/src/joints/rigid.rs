@@ -19,8 +19,8 @@ pub struct Rigid {
 impl Rigid {
     /// A weld at global point `p`, holding the relative angle of configuration `q`.
     pub fn at(name: impl Into<String>, bodies: [BodyRef; 2], p: Vec2, q: &[f64]) -> Self {
-        let si = BodyState::of(bodies[0], q, &[]);
-        let sj = BodyState::of(bodies[1], q, &[]);
+        let si = super::pose_or_ground(bodies[0], q);
+        let sj = super::pose_or_ground(bodies[1], q);
         Rigid {
             name: name.into(),
             points: [
