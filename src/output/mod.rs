@@ -30,6 +30,9 @@ pub struct CsvOutput<W: Write> {
     rows: u64,
     last_time: Option<f64>,
     flushed: Instant,
+    /// The row being formatted: handed to the writer whole, so that the file receives complete
+    /// rows only (a buffered writer passes on whole rows when it fills).
+    row: Vec<u8>,
 }
 
 /// Writes `x` in shortest round-trip form: plain decimals for magnitudes from 1e-5 to 1e16,
@@ -84,6 +87,7 @@ impl<W: Write> CsvOutput<W> {
             rows: 0,
             last_time: None,
             flushed: Instant::now(),
+            row: Vec::new(),
         })
     }
 
@@ -120,7 +124,8 @@ impl<W: Write> CsvOutput<W> {
     }
 
     fn write_row(&mut self, s: &Sample<'_>) -> io::Result<()> {
-        let out = &mut self.out;
+        let out = &mut self.row;
+        out.clear();
         write_number(out, s.t)?;
         for i in 0..s.q.len() / 3 {
             for v in [
@@ -150,7 +155,8 @@ impl<W: Write> CsvOutput<W> {
             out.write_all(b",")?;
             write_number(out, v)?;
         }
-        out.write_all(b"\n")
+        out.write_all(b"\n")?;
+        self.out.write_all(&self.row)
     }
 
     /// Flushes and returns the first I/O error met, if any.

@@ -6,7 +6,7 @@ use std::io::Read;
 /// A result CSV that cannot be read as asked. `Display` is one line naming the file, the line and
 /// the column at fault.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}{}: {message}", line.map(|l| format!(":{l}")).unwrap_or_default())]
+#[error("{}{}: {}", crate::scene::one_line(file), line.map(|l| format!(":{l}")).unwrap_or_default(), crate::scene::one_line(message))]
 pub struct ResultCsvError {
     /// The file (or origin) name.
     pub file: String,

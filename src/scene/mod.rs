@@ -11,7 +11,7 @@ mod format;
 mod functions;
 mod strict;
 
-pub use error::SceneError;
+pub use error::{one_line, SceneError};
 
 use crate::simulation::{FormulationKind, Simulation};
 use dalembert_constraints::{Model, Stabilization};

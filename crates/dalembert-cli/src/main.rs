@@ -109,7 +109,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            // Every message on one line, whatever user text it quotes.
+            eprintln!("error: {}", dalembert::scene::one_line(&e));
             if interrupt_flag().load(std::sync::atomic::Ordering::Relaxed) {
                 ExitCode::from(130) // 128 + SIGINT, as shells report an interrupted command
             } else {

@@ -5,6 +5,7 @@
 
 pub mod anchors;
 pub mod closed_form;
+pub mod fuzz;
 pub mod generator;
 pub mod jet;
 pub mod mechanisms;
