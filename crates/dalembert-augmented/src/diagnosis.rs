@@ -14,8 +14,10 @@ const RANK_TOLERANCE: f64 = 1e-9;
 /// or else a generic singular system.
 pub(crate) fn diagnose(t: f64, model: &Model, vals: &ConstraintValues, pivot_tolerance: f64) -> DynamicsError {
     let sys = model.constraints();
-    if !sys.analyse_structure(vals, RANK_TOLERANCE).is_full_rank() {
-        return sys.redundancy_error(t, vals);
+    match sys.analyse_structure(vals, RANK_TOLERANCE) {
+        Ok(s) if s.is_full_rank() => {}
+        Ok(_) => return sys.redundancy_error(t, vals),
+        Err(e) => return e.into(),
     }
     model.singular_mass_error(
         t,
@@ -36,7 +38,7 @@ pub(crate) fn minimum_norm_solve(
     n: usize,
 ) -> Result<(), DynamicsError> {
     let sys = model.constraints();
-    let s = sys.analyse_structure(vals, RANK_TOLERANCE);
+    let s = sys.analyse_structure(vals, RANK_TOLERANCE)?;
     let rows = &s.independent_rows;
     let r = rows.len();
     let jac = sys.jacobian_dense(vals);

@@ -42,7 +42,7 @@ impl InverseDynamics {
         sys.solve_positions(0.0, &mut q, &options)?;
         let mut vals = sys.values();
         sys.evaluate(0.0, &q, &[], &mut vals);
-        let s = sys.analyse_structure(&vals, options.rank_tolerance);
+        let s = sys.analyse_structure(&vals, options.rank_tolerance)?;
         if s.degrees_of_freedom != 0 {
             return Err(DynamicsError::Singular {
                 time: 0.0,

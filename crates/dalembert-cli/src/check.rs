@@ -10,7 +10,7 @@ pub fn run(path: &Path) -> Result<(), String> {
     let sys = model.constraints();
     let mut vals = sys.values();
     sys.evaluate(0.0, &scene.q, &scene.qd, &mut vals);
-    let s = sys.analyse_structure(&vals, 1e-9);
+    let s = sys.analyse_structure(&vals, 1e-9).map_err(|e| e.to_string())?;
     outln!("scene        {}", scene.name);
     outln!(
         "model        {} bodies, {} coordinates, {} constraint equations (rank {}), {} degree(s) of freedom",

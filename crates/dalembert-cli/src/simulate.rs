@@ -127,7 +127,9 @@ pub fn run(a: Args) -> Result<(), String> {
         let sys = model.constraints();
         let mut v = sys.values();
         sys.evaluate(0.0, &scene.q, &[], &mut v);
-        sys.analyse_structure(&v, 1e-9).degrees_of_freedom
+        sys.analyse_structure(&v, 1e-9)
+            .map_err(|e| e.to_string())?
+            .degrees_of_freedom
     };
     let method = match s.integrator {
         IntegratorKind::Dopri5 => format!(

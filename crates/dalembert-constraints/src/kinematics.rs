@@ -13,8 +13,23 @@
 //! Redundant rows are left out of the solve and then checked: if the dropped equations are not
 //! satisfied (rank loss with inconsistent equations: a toggle, a dead centre, a locked mechanism) the
 //! analysis returns [`ConstraintError::Singular`] naming the equations involved.
+//!
+//! Models with [`SPARSE_FROM`] coordinates or more take the sparse path first: `Δ = W C_qᵀ y` with
+//! `(C_q W C_qᵀ) y = rhs` by sparse Cholesky ([`SparseGram`], `W` the squared column scales), plus
+//! one step of iterative refinement; cost and memory linear in the model's size for chains and
+//! trees. A rank-deficient `C_q` falls back to the dense path when it fits in memory, and is
+//! otherwise reported as [`ConstraintError::TooLarge`].
 
-use crate::structure::column_rank;
+use crate::gram::SparseGram;
+use crate::structure::{column_rank, dense_fits, SPARSE_FROM};
+
+/// Why a minimum-norm step failed.
+enum StepError {
+    /// The dropped (redundant) rows are not satisfied; the numerical rank.
+    Inconsistent(usize),
+    /// The dense fallback would not fit in memory.
+    TooLarge(ConstraintError),
+}
 use crate::{ConstraintError, ConstraintSystem, ConstraintValues};
 use faer::Mat;
 
@@ -65,7 +80,25 @@ impl ConstraintSystem {
         delta: &mut [f64],
         opts: &KinematicOptions,
         scale: Option<&[f64]>,
-    ) -> Result<f64, (usize, Vec<usize>)> {
+        gram: &mut Option<SparseGram>,
+    ) -> Result<f64, StepError> {
+        if self.num_coordinates() >= SPARSE_FROM {
+            if gram.is_none() {
+                *gram = SparseGram::new(self).ok();
+            }
+            if let Some(g) = gram.as_mut() {
+                if let Some(worst) = self.min_norm_step_sparse(g, values, rhs, delta, scale) {
+                    return Ok(worst);
+                }
+            }
+        }
+        if !dense_fits(self.num_equations(), self.num_coordinates()) {
+            return Err(StepError::TooLarge(ConstraintError::TooLarge {
+                what: "kinematic analysis".into(),
+                rows: self.num_equations(),
+                cols: self.num_coordinates(),
+            }));
+        }
         let mut a = self.jacobian_dense(values);
         if let Some(s) = scale {
             for j in 0..a.ncols() {
@@ -104,9 +137,53 @@ impl ConstraintSystem {
         let scale = inf_norm(rhs).max(1e-300);
         let worst = res.iter().zip(rhs).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         if rank < m && worst > opts.consistency_tolerance * scale.max(1.0) {
-            return Err((rank, order));
+            return Err(StepError::Inconsistent(rank));
         }
         Ok(worst)
+    }
+
+    /// The sparse minimum-norm step; `None` when `C_q W C_qᵀ` is singular to working precision
+    /// (then the dense path decides, naming the equations involved).
+    fn min_norm_step_sparse(
+        &self,
+        gram: &mut SparseGram,
+        values: &ConstraintValues,
+        rhs: &[f64],
+        delta: &mut [f64],
+        scale: Option<&[f64]>,
+    ) -> Option<f64> {
+        let m = self.num_equations();
+        let w = |b: usize| {
+            let s = |k: usize| scale.map_or(1.0, |s| s[3 * b + k] * s[3 * b + k]);
+            nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(s(0), s(1), s(2)))
+        };
+        // Up to 1e12 the refined step is accurate; a duplicated equation gives 1e15 or more (see
+        // `analyse_structure`), and the dense path then names the dependent equations.
+        gram.factor(&values.jacobian, w, 1e12).ok()?;
+        let mut y = vec![0.0; m];
+        let mut r = rhs.to_vec();
+        let mut step = vec![0.0; delta.len()];
+        delta.iter_mut().for_each(|d| *d = 0.0);
+        // Δ += W Cᵀ G⁻¹ r, twice: the second pass refines with the residual r = rhs − C Δ.
+        for _ in 0..2 {
+            y.copy_from_slice(&r);
+            gram.solve_in_place(&mut y);
+            step.iter_mut().for_each(|v| *v = 0.0);
+            self.jacobian_transpose_mul_add(values, 1.0, &y, &mut step);
+            for (i, (d, v)) in delta.iter_mut().zip(&step).enumerate() {
+                *d += v * scale.map_or(1.0, |s| s[i] * s[i]);
+            }
+            self.jacobian_mul(values, delta, &mut r);
+            r.iter_mut().zip(rhs).for_each(|(ri, b)| *ri = b - *ri);
+        }
+        Some(inf_norm(&r))
+    }
+
+    fn step_error(&self, t: f64, values: &ConstraintValues, e: StepError, opts: &KinematicOptions) -> ConstraintError {
+        match e {
+            StepError::Inconsistent(rank) => self.singular(t, values, rank, opts),
+            StepError::TooLarge(e) => e,
+        }
     }
 
     fn singular(&self, t: f64, values: &ConstraintValues, rank: usize, opts: &KinematicOptions) -> ConstraintError {
@@ -136,6 +213,7 @@ impl ConstraintSystem {
         let mut values = self.values();
         let mut delta = vec![0.0; q.len()];
         let mut rhs = vec![0.0; self.num_equations()];
+        let mut gram = None;
         for it in 0..=opts.max_iterations {
             self.evaluate(t, q, &[], &mut values);
             let res = inf_norm(&values.c);
@@ -160,7 +238,11 @@ impl ConstraintSystem {
                 consistency_tolerance: f64::INFINITY,
                 ..*opts
             };
-            let _ = self.min_norm_step(&values, &rhs, &mut delta, &relaxed, None);
+            if let Err(StepError::TooLarge(e)) =
+                self.min_norm_step(&values, &rhs, &mut delta, &relaxed, None, &mut gram)
+            {
+                return Err(e);
+            }
             q.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
         }
         let violated = values
@@ -206,8 +288,8 @@ impl ConstraintSystem {
         self.velocity_residual(&values, qd, &mut rhs);
         rhs.iter_mut().for_each(|r| *r = -*r);
         let mut delta = vec![0.0; q.len()];
-        self.min_norm_step(&values, &rhs, &mut delta, opts, scale.as_deref())
-            .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;
+        self.min_norm_step(&values, &rhs, &mut delta, opts, scale.as_deref(), &mut None)
+            .map_err(|e| self.step_error(t, &values, e, opts))?;
         qd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
         Ok(())
     }
@@ -227,8 +309,8 @@ impl ConstraintSystem {
         self.jacobian_mul(&values, qdd, &mut rhs);
         rhs.iter_mut().zip(&values.gamma).for_each(|(r, g)| *r = g - *r);
         let mut delta = vec![0.0; q.len()];
-        self.min_norm_step(&values, &rhs, &mut delta, opts, None)
-            .map_err(|(rank, _)| self.singular(t, &values, rank, opts))?;
+        self.min_norm_step(&values, &rhs, &mut delta, opts, None, &mut None)
+            .map_err(|e| self.step_error(t, &values, e, opts))?;
         qdd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
         Ok(())
     }

@@ -21,6 +21,7 @@ pub mod constraint;
 pub mod drivers;
 pub mod error;
 pub mod formulation;
+pub mod gram;
 pub mod joints;
 pub mod kinematics;
 pub mod model;

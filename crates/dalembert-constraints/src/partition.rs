@@ -309,7 +309,10 @@ impl PartitionTracker {
 impl ConstraintSystem {
     /// The error for a rank-deficient `C_q` at `values`: rank, and the equations in the dependent set.
     pub fn redundancy_error(&self, t: f64, values: &ConstraintValues) -> crate::DynamicsError {
-        let s = self.analyse_structure(values, 1e-9);
+        let s = match self.analyse_structure(values, 1e-9) {
+            Ok(s) => s,
+            Err(e) => return e.into(),
+        };
         crate::DynamicsError::RedundantConstraints {
             time: t,
             rank: s.rank,
