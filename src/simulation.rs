@@ -2,6 +2,7 @@
 
 use dalembert_amalgamated::Amalgamated;
 use dalembert_augmented::{Augmented, AugmentedOptions};
+use dalembert_constraints::structure::dense_fits;
 use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, Model};
 use dalembert_embedding::Embedding;
 use dalembert_integrators::{integrate_cancellable, IntegrationFailure, IntegratorOptions, Sample, Statistics};
@@ -110,6 +111,29 @@ impl Simulation {
 
     /// Builds the chosen formulation.
     pub fn formulation(&self) -> Result<Box<dyn Formulation>, SimulationError> {
+        // The embedding and amalgamated formulations still partition the coordinates on a dense
+        // C_q (m × n) and the embedding keeps a dense B_i (n × dof): refuse models whose dense
+        // matrices would not fit, naming the size, instead of failing in the allocator.
+        let (n, m) = (self.model.num_coordinates(), self.model.num_equations());
+        let too_large = match self.formulation {
+            FormulationKind::Augmented => None,
+            _ if !dense_fits(m, n) => Some((m, n)),
+            FormulationKind::Embedding if !dense_fits(n, n.saturating_sub(m)) => Some((n, n - m)),
+            _ => None,
+        };
+        if let Some((rows, cols)) = too_large {
+            return Err(SimulationError::Setup(DynamicsError::Kinematics(
+                ConstraintError::TooLarge {
+                    what: format!(
+                        "the {} formulation (dense coordinate partitioning)",
+                        self.formulation.name()
+                    ),
+                    hint: "use the augmented formulation, which is sparse",
+                    rows,
+                    cols,
+                },
+            )));
+        }
         Ok(match self.formulation {
             FormulationKind::Augmented => Box::new(Augmented::new(self.model.clone(), AugmentedOptions::default())?),
             FormulationKind::Embedding => Box::new(Embedding::with_defaults(self.model.clone())),

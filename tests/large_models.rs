@@ -143,3 +143,34 @@ fn redundant_large_models_fall_back_to_the_dense_analysis_or_say_why_not() {
         .unwrap_err();
     assert!(matches!(err, ConstraintError::TooLarge { .. }), "{err}");
 }
+
+#[test]
+fn dense_formulations_refuse_models_they_cannot_hold() {
+    use dalembert::integrators::{IntegratorOptions, Method};
+    use dalembert::{FormulationKind, Simulation, SimulationError};
+    let (model, q) = chain(40_000);
+    let n = q.len();
+    let mut sim = Simulation {
+        model: std::sync::Arc::new(model),
+        q,
+        qd: vec![0.0; n],
+        start: 0.0,
+        end: 1.0,
+        formulation: FormulationKind::Embedding,
+        integrator: IntegratorOptions::fixed(Method::Rk4, 1e-3, 1e-2),
+        velocity_weights: None,
+    };
+    for kind in [FormulationKind::Embedding, FormulationKind::Amalgamated] {
+        sim.formulation = kind;
+        match sim.formulation() {
+            Err(e @ SimulationError::Setup(_)) => assert!(
+                e.to_string().ends_with("a dense 80000 × 120000 matrix (71.5 GiB) would be needed; use the augmented formulation, which is sparse"),
+                "{e}"
+            ),
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("{} accepted a 40 000-body model", kind.name()),
+        }
+    }
+    sim.formulation = FormulationKind::Augmented;
+    assert!(sim.formulation().is_ok(), "the sparse augmented formulation takes it");
+}

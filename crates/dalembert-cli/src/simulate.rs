@@ -133,8 +133,10 @@ pub fn run(a: Args) -> Result<(), String> {
     };
     let method = match s.integrator {
         IntegratorKind::Dopri5 => format!(
-            "dopri5 (rtol {:e}, atol {:e}, initial step {:e} s)",
-            s.rtol, s.atol, s.step
+            "dopri5 (rtol {}, atol {}, initial step {} s)",
+            short(s.rtol),
+            short(s.atol),
+            short(s.step)
         ),
         IntegratorKind::Rk4 => format!("rk4, step {}", fixed_step(s)),
         IntegratorKind::SymplecticEuler => format!("symplectic-euler, step {}", fixed_step(s)),
@@ -265,17 +267,32 @@ fn rows_energy0(model: &dalembert::constraints::Model, scene: &Scene) -> f64 {
     model.kinetic_energy(&scene.q, &scene.qd) + model.potential_energy(0.0, &scene.q)
 }
 
-/// The fixed step as run: a whole number of steps spans each output interval, so a step longer
-/// than the interval (or the run) is shortened, and the summary says so.
+/// The fixed step as run: a whole number of steps spans each output interval, so a step that does
+/// not divide the interval (or is longer than it) is shortened, and the summary says so.
 fn fixed_step(s: &dalembert::scene::RunSettings) -> String {
     let span = s.output_every.min(s.end);
-    if s.step <= span * (1.0 + 1e-12) {
-        return format!("{:e} s", s.step);
+    let taken = span / (span / s.step - 1e-9).ceil().max(1.0);
+    if (taken - s.step).abs() <= 1e-9 * s.step {
+        return format!("{} s", short(s.step));
     }
     format!(
-        "{:e} s (asked {:e} s: a fixed step never exceeds the output interval {:e} s)",
-        span, s.step, s.output_every
+        "{} s (asked {} s: a whole number of steps spans each output interval of {} s)",
+        short(taken),
+        short(s.step),
+        short(s.output_every)
     )
+}
+
+/// `x` in scientific notation with at most 10 significant digits and no trailing zeros
+/// (`1e-3`, `2.5e-3`, never `1.0000000000000002e-3`).
+pub fn short(x: f64) -> String {
+    let text = format!("{x:.9e}");
+    match text.split_once('e') {
+        Some((mantissa, exp)) if mantissa.contains('.') => {
+            format!("{}e{exp}", mantissa.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => text,
+    }
 }
 
 fn print_rows(model: &dalembert::constraints::Model, rows: &[(f64, Vec<f64>, f64, f64)]) {
@@ -311,4 +328,17 @@ fn truncate(s: &str, n: usize) -> String {
 /// A formulation for `check` and `inverse`.
 pub fn formulation(scene: &Scene) -> Result<Box<dyn Formulation>, String> {
     scene.simulation().formulation().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::short;
+
+    #[test]
+    fn steps_print_short() {
+        assert_eq!(short(1.0000000000000002e-3), "1e-3");
+        assert_eq!(short(0.01 / 4.0), "2.5e-3");
+        assert_eq!(short(5.0), "5e0");
+        assert_eq!(short(1.0 / 3.0), "3.333333333e-1");
+    }
 }

@@ -90,12 +90,14 @@ pub enum ConstraintError {
         /// Equations in the dependent set (left null space of `C_q`).
         involved: Vec<EquationRef>,
     },
-    /// A dense analysis would need more memory than is reasonable: the model is large and its
-    /// constraint Jacobian is rank deficient, which only the dense analyses handle so far.
-    #[error("{what}: a dense {rows} × {cols} matrix ({:.1} GiB) would be needed; models this large are analysed only when their constraints are independent (no redundant equations, no singular position)", (*.rows as f64) * (*.cols as f64) * 8.0 / 1073741824.0)]
+    /// A dense matrix would need more memory than is reasonable (more than
+    /// [`crate::structure::DENSE_LIMIT_BYTES`]): the analysis or formulation refuses the model.
+    #[error("{what}: a dense {rows} × {cols} matrix ({:.1} GiB) would be needed; {hint}", (*.rows as f64) * (*.cols as f64) * 8.0 / 1073741824.0)]
     TooLarge {
         /// The analysis.
         what: String,
+        /// What to do instead.
+        hint: &'static str,
         /// Rows of the dense matrix.
         rows: usize,
         /// Columns of the dense matrix.

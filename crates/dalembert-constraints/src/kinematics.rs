@@ -95,6 +95,7 @@ impl ConstraintSystem {
         if !dense_fits(self.num_equations(), self.num_coordinates()) {
             return Err(StepError::TooLarge(ConstraintError::TooLarge {
                 what: "kinematic analysis".into(),
+                hint: crate::structure::RANK_DEFICIENT_HINT,
                 rows: self.num_equations(),
                 cols: self.num_coordinates(),
             }));

@@ -20,6 +20,10 @@ pub const SPARSE_FROM: usize = 600;
 /// Largest dense matrix the analyses allocate: 1 GiB.
 pub const DENSE_LIMIT_BYTES: usize = 1 << 30;
 
+/// Why a large model reached a dense analysis, and what it needs.
+pub(crate) const RANK_DEFICIENT_HINT: &str =
+    "models this large are analysed only when their constraints are independent (no redundant equations, no singular position)";
+
 /// True when a dense `rows × cols` matrix of `f64` stays within [`DENSE_LIMIT_BYTES`].
 pub fn dense_fits(rows: usize, cols: usize) -> bool {
     rows.checked_mul(cols)
@@ -94,6 +98,7 @@ impl ConstraintSystem {
         if !dense_fits(n, m) {
             return Err(ConstraintError::TooLarge {
                 what: "structure analysis".into(),
+                hint: RANK_DEFICIENT_HINT,
                 rows: n,
                 cols: m,
             });
