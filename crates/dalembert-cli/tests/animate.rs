@@ -8,27 +8,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn dalembert(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dalembert"))
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
-fn scene(name: &str) -> String {
-    format!("{}/../../scenes/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("dalembert-animate-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+mod common;
+use common::{dalembert, scene, tmp};
 
 fn chromium() -> Option<PathBuf> {
     if let Some(p) = std::env::var_os("DALEMBERT_CHROMIUM") {

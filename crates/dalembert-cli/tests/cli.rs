@@ -1,28 +1,7 @@
 //! The `dalembert` command end to end: exit codes, summaries, the CSV columns, plots.
 
-use std::process::Command;
-
-fn dalembert(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dalembert"))
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
-fn scene(name: &str) -> String {
-    format!("{}/../../scenes/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("dalembert-cli-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+mod common;
+use common::{dalembert, scene, tmp};
 
 #[test]
 fn simulate_writes_the_documented_csv_columns() {

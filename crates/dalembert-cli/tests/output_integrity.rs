@@ -5,15 +5,8 @@ use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-fn scene(name: &str) -> String {
-    format!("{}/../../scenes/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmp(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("dalembert-integrity-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
+mod common;
+use common::{scene, tmp};
 
 /// Rows of a CSV file, failing on any row whose field count differs from the header's (RFC 4180
 /// parsing: a cut last row is caught).
