@@ -52,6 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         start: 0.0,
         end: 10.0,
         formulation: FormulationKind::Augmented,
+        redundancy: Default::default(),
         integrator: IntegratorOptions::fixed(Method::Rk4, h, 0.5).with_treatment(ConstraintTreatment::None),
         velocity_weights: None,
     };

@@ -3,8 +3,10 @@
 use dalembert_amalgamated::Amalgamated;
 use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::structure::dense_fits;
-use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, Model};
-use dalembert_embedding::Embedding;
+use dalembert_constraints::{
+    ConstraintError, DynamicsError, Formulation, KinematicOptions, Model, RedundancyTreatment,
+};
+use dalembert_embedding::{Embedding, EmbeddingOptions};
 use dalembert_integrators::{integrate_cancellable, IntegrationFailure, IntegratorOptions, Sample, Statistics};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -85,6 +87,9 @@ pub struct Simulation {
     pub end: f64,
     /// Formulation.
     pub formulation: FormulationKind,
+    /// Redundant constraint equations: an error naming them (default), or solved on an
+    /// independent set with minimum-norm multipliers (`docs/sign-conventions.md`).
+    pub redundancy: RedundancyTreatment,
     /// Integrator settings.
     pub integrator: IntegratorOptions,
     /// Weights of the initial velocities in [`Simulation::assemble`]: a coordinate whose velocity
@@ -134,10 +139,23 @@ impl Simulation {
                 },
             )));
         }
+        let redundancy = self.redundancy;
         Ok(match self.formulation {
-            FormulationKind::Augmented => Box::new(Augmented::new(self.model.clone(), AugmentedOptions::default())?),
-            FormulationKind::Embedding => Box::new(Embedding::with_defaults(self.model.clone())),
-            FormulationKind::Amalgamated => Box::new(Amalgamated::with_defaults(self.model.clone())),
+            FormulationKind::Augmented => Box::new(Augmented::new(
+                self.model.clone(),
+                AugmentedOptions {
+                    redundancy,
+                    ..Default::default()
+                },
+            )?),
+            FormulationKind::Embedding => Box::new(Embedding::new(
+                self.model.clone(),
+                EmbeddingOptions {
+                    redundancy,
+                    ..Default::default()
+                },
+            )),
+            FormulationKind::Amalgamated => Box::new(Amalgamated::new(self.model.clone(), redundancy)),
         })
     }
 

@@ -157,6 +157,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
         start: 0.0,
         end: 1.0,
         formulation: FormulationKind::Embedding,
+        redundancy: Default::default(),
         integrator: IntegratorOptions::fixed(Method::Rk4, 1e-3, 1e-2),
         velocity_weights: None,
     };

@@ -41,6 +41,7 @@ fn every_method_runs_on_every_formulation() {
                 start: 0.0,
                 end: 0.5,
                 formulation: kind,
+                redundancy: Default::default(),
                 integrator: opts,
                 velocity_weights: None,
             };

@@ -355,6 +355,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         start: 0.0,
         end: settings.end,
         formulation: settings.formulation,
+        redundancy: settings.redundancy,
         integrator: settings.integrator_options(),
         velocity_weights: Some(weights),
     };
@@ -594,6 +595,7 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
         rtol: 1e-8,
         atol: 1e-10,
         rho_inf: 0.8,
+        redundancy: Default::default(),
     };
     let Some(sim) = sim else { return Ok(s) };
     let span = sim.span();
@@ -606,6 +608,10 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
     if let Some(i) = &d.integrator {
         s.integrator =
             IntegratorKind::parse(i).ok_or_else(|| err(unknown_name("integrator", i, IntegratorKind::NAMES)))?;
+    }
+    if let Some(r) = &d.redundant {
+        s.redundancy = super::parse_redundancy(r)
+            .ok_or_else(|| err(unknown_name("redundancy treatment", r, super::REDUNDANCY_NAMES)))?;
     }
     if let Some(st) = &d.stabilization {
         s.stabilization = StabilizationKind::parse(st)

@@ -140,4 +140,5 @@ pub(crate) struct SimDef {
     pub rtol: Option<f64>,
     pub atol: Option<f64>,
     pub rho_inf: Option<f64>,
+    pub redundant: Option<String>,
 }

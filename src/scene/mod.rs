@@ -14,7 +14,7 @@ mod strict;
 pub use error::{one_line, SceneError};
 
 use crate::simulation::{FormulationKind, Simulation};
-use dalembert_constraints::{Model, Stabilization};
+use dalembert_constraints::{Model, RedundancyTreatment, Stabilization};
 use dalembert_integrators::{ConstraintTreatment, IntegratorOptions, Method};
 use std::path::Path;
 use std::sync::Arc;
@@ -40,6 +40,9 @@ pub struct RunSettings {
     pub atol: f64,
     /// Spectral radius at infinity of generalized-α. Default 0.8.
     pub rho_inf: f64,
+    /// Redundant constraints (`redundant = "error" | "minimum-norm"`). Default: an error naming
+    /// them.
+    pub redundancy: RedundancyTreatment,
 }
 
 /// The integrators a scene can name.
@@ -131,6 +134,18 @@ impl FormulationKind {
     }
 }
 
+/// The names of the redundancy treatments in scenes and on the command line.
+pub const REDUNDANCY_NAMES: &[&str] = &["error", "minimum-norm"];
+
+/// Parses a redundancy treatment name (`error`, `minimum-norm`).
+pub fn parse_redundancy(s: &str) -> Option<RedundancyTreatment> {
+    match s {
+        "error" => Some(RedundancyTreatment::Error),
+        "minimum-norm" => Some(RedundancyTreatment::MinimumNorm),
+        _ => None,
+    }
+}
+
 /// The one-line error for a name that is not one of `names`: `unknown integrator 'rk5' (expected
 /// symplectic-euler, rk4, dopri5, generalized-alpha)`.
 pub fn unknown_name(what: &str, value: &str, names: &[&str]) -> String {
@@ -199,6 +214,7 @@ impl Scene {
             start: 0.0,
             end: self.settings.end,
             formulation: self.settings.formulation,
+            redundancy: self.settings.redundancy,
             integrator: self.settings.integrator_options(),
             velocity_weights: None,
         }

@@ -90,20 +90,16 @@ pub(crate) fn minimum_norm_solve(
             });
         }
     }
-    let jt = jac.transpose().to_owned();
-    let pinv = jt
-        .svd()
-        .map_err(|e| DynamicsError::Factorization {
+    let f: Vec<f64> = (0..n).map(|c| f[(c, 0)]).collect();
+    let lambda = sys
+        .minimum_norm_multipliers(vals, &f)
+        .ok_or(DynamicsError::Factorization {
             time: t,
-            what: format!("SVD: {e:?}"),
-        })?
-        .pseudoinverse();
-    let lambda = &pinv * &f;
+            what: "minimum-norm multipliers: the constraint force is not in the range of C_qᵀ".into(),
+        })?;
     for i in 0..n {
         x[i] = sol[(i, 0)];
     }
-    for row in 0..m {
-        x[n + row] = lambda[(row, 0)];
-    }
+    x[n..n + m].copy_from_slice(&lambda);
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! `dalembert check`.
 
-use dalembert::constraints::{ConstraintRole, Reaction, Stabilization};
+use dalembert::constraints::{ConstraintRole, Reaction, RedundancyTreatment, Stabilization};
 use dalembert::Scene;
 use std::path::Path;
 
@@ -23,12 +23,17 @@ pub fn run(path: &Path) -> Result<(), String> {
     let mut problems = Vec::new();
     if !s.redundant.is_empty() {
         let list: Vec<String> = s.redundant.iter().map(|e| e.to_string()).collect();
-        outln!("redundant    {}", list.join(", "));
-        problems.push(format!(
-            "{} redundant constraint equation(s): {}",
-            s.redundant.len(),
-            list.join(", ")
-        ));
+        if scene.settings.redundancy == RedundancyTreatment::MinimumNorm {
+            // Asked for: solved on an independent set, reactions by the minimum-norm distribution.
+            outln!("redundant    {} (minimum-norm treatment)", list.join(", "));
+        } else {
+            outln!("redundant    {}", list.join(", "));
+            problems.push(format!(
+                "{} redundant constraint equation(s): {} (set `redundant = \"minimum-norm\"` in [simulation] or pass --redundant minimum-norm to solve with minimum-norm reactions)",
+                s.redundant.len(),
+                list.join(", ")
+            ));
+        }
     }
     let max_c = vals.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     outln!("assembled    largest |C| = {max_c:.2e}");

@@ -56,6 +56,10 @@ pub struct RunArgs {
     /// none | baumgarte | projection
     #[arg(long)]
     stabilization: Option<String>,
+    /// Redundant constraints: error | minimum-norm (solve on an independent set; minimum-norm
+    /// reactions)
+    #[arg(long)]
+    redundant: Option<String>,
 }
 
 /// Loads the scene and applies the command-line overrides.
@@ -74,6 +78,10 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
             return Err(format!("--rho-inf must lie in [0, 1], got {r}"));
         }
         s.rho_inf = r;
+    }
+    if let Some(r) = &a.redundant {
+        s.redundancy = dalembert::scene::parse_redundancy(r)
+            .ok_or_else(|| unknown_name("redundancy treatment", r, dalembert::scene::REDUNDANCY_NAMES))?;
     }
     if let Some(st) = &a.stabilization {
         s.stabilization =

@@ -343,7 +343,7 @@ impl ConstraintSystem {
                 .minimum_norm_multipliers(values, &f)
                 .ok_or(crate::DynamicsError::Factorization {
                     time: t,
-                    what: "SVD of C_qᵀ failed".into(),
+                    what: "minimum-norm multipliers: the constraint force is not in the range of C_qᵀ".into(),
                 })?;
             lambda.copy_from_slice(&mn);
         }
