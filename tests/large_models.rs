@@ -175,3 +175,27 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
     sim.formulation = FormulationKind::Augmented;
     assert!(sim.formulation().is_ok(), "the sparse augmented formulation takes it");
 }
+
+#[test]
+fn generalized_alpha_refuses_models_its_dense_matrix_cannot_hold() {
+    use dalembert::integrators::{IntegratorOptions, Method};
+    use dalembert::{FormulationKind, Simulation};
+    let (model, q) = chain(40_000);
+    let n = q.len();
+    let sim = Simulation {
+        model: std::sync::Arc::new(model),
+        q,
+        qd: vec![0.0; n],
+        start: 0.0,
+        end: 1e-3,
+        formulation: FormulationKind::Augmented,
+        redundancy: Default::default(),
+        integrator: IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 1e-3),
+        velocity_weights: None,
+    };
+    let err = sim.run(&mut |_| {}).unwrap_err().to_string();
+    assert!(
+        err.contains("generalized-alpha keeps a dense 200000 × 200000 iteration matrix (298.0 GiB)"),
+        "{err}"
+    );
+}

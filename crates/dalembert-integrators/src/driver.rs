@@ -294,6 +294,15 @@ fn run_loop<F: Formulation + ?Sized>(
         }
         Method::GeneralizedAlpha { rho_inf } => {
             let n = run.n;
+            // Its iteration matrix is dense (n + m)²: refuse sizes it cannot hold, by name,
+            // instead of failing in the allocator.
+            let k = n + run.lambda.len();
+            if !dalembert_constraints::structure::dense_fits(k, k) {
+                return Err(IntegrationError::Options(format!(
+                    "generalized-alpha keeps a dense {k} × {k} iteration matrix ({:.1} GiB); use rk4 or dopri5 for models this large",
+                    (k as f64) * (k as f64) * 8.0 / 1073741824.0
+                )));
+            }
             let (q0, qd0) = y.split_at(n);
             f.accelerations(
                 t0,
