@@ -118,6 +118,12 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
     if s.integrator != IntegratorKind::GeneralizedAlpha && a.rho_inf.is_some() {
         ignored("--rho-inf", "generalized-alpha");
     }
+    if s.integrator == IntegratorKind::GeneralizedAlpha && s.rho_inf > 0.99 {
+        eprintln!(
+            "warning: rho_inf = {} leaves the index-3 form without numerical damping: the velocity constraints drift and the run can fail (docs/integrators.md); 0.99 or less is stable",
+            s.rho_inf
+        );
+    }
     if s.integrator == IntegratorKind::GeneralizedAlpha && a.stabilization.is_some() {
         eprintln!(
             "warning: --stabilization is ignored with generalized-alpha (it keeps the position constraints itself)"
