@@ -15,10 +15,13 @@
 //!
 //! The mathematics is in `docs/` and in each crate's documentation.
 
+pub mod analysis;
 pub mod animation;
 pub mod output;
 pub mod scene;
 pub mod simulation;
+pub mod sweep;
+pub mod trade;
 
 pub use dalembert_amalgamated as amalgamated;
 pub use dalembert_augmented as augmented;
@@ -27,6 +30,7 @@ pub use dalembert_embedding as embedding;
 pub use dalembert_integrators as integrators;
 pub use dalembert_kinematics as kinematics;
 
+pub use analysis::{CheckReport, Recording};
 pub use output::CsvOutput;
-pub use scene::{Scene, SceneError};
+pub use scene::{Scene, SceneError, SceneValue};
 pub use simulation::{energy_warning, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION};

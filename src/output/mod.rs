@@ -7,10 +7,12 @@
 //! `constraint_violation`, `velocity_violation`. Rows are written as the run produces them.
 
 mod read;
+mod table;
 
 pub use read::{read_columns, ResultCsvError, ResultTable};
+pub use table::{Recorder, Rows, Table};
 
-use dalembert_constraints::{ConstraintRole, ConstraintValues, Model, Reaction};
+use dalembert_constraints::Model;
 use dalembert_integrators::Sample;
 use std::io::{self, Write};
 use std::time::{Duration, Instant};
@@ -23,9 +25,8 @@ const FLUSH_EVERY: Duration = Duration::from_millis(250);
 /// breaks are quoted; numbers in shortest round-trip form).
 pub struct CsvOutput<W: Write> {
     out: W,
-    values: ConstraintValues,
-    reactions: Vec<Reaction>,
-    roles: Vec<ConstraintRole>,
+    rows_of: Rows,
+    numbers: Vec<f64>,
     error: Option<io::Error>,
     rows: u64,
     last_time: Option<f64>,
@@ -49,40 +50,19 @@ pub fn write_number(w: &mut impl Write, x: f64) -> io::Result<()> {
 impl<W: Write> CsvOutput<W> {
     /// Writes the header for `model` and returns the writer.
     pub fn new(model: &Model, mut out: W) -> io::Result<Self> {
-        let mut cols = vec!["t".to_string()];
-        for b in model.bodies() {
-            for c in ["x", "y", "angle", "vx", "vy", "omega"] {
-                cols.push(format!("{}.{c}", b.name));
-            }
-        }
-        let sys = model.constraints();
-        let roles: Vec<ConstraintRole> = sys.constraints().iter().map(|c| c.role()).collect();
-        for (c, role) in sys.constraints().iter().zip(&roles) {
-            match role {
-                ConstraintRole::Joint { carries_torque } => {
-                    cols.push(format!("{}.fx", c.name()));
-                    cols.push(format!("{}.fy", c.name()));
-                    if *carries_torque {
-                        cols.push(format!("{}.torque", c.name()));
-                    }
-                }
-                ConstraintRole::Driver => cols.push(format!("{}.effort", c.name())),
-            }
-        }
-        cols.extend(["energy", "constraint_violation", "velocity_violation"].map(String::from));
+        let rows_of = Rows::new(model);
         {
             let mut header = csv::WriterBuilder::new()
                 .terminator(csv::Terminator::Any(b'\n'))
                 .from_writer(&mut out);
-            header.write_record(&cols)?;
+            header.write_record(rows_of.names())?;
             header.flush()?;
         }
         out.flush()?;
         Ok(CsvOutput {
             out,
-            values: sys.values(),
-            reactions: vec![Reaction::default(); roles.len()],
-            roles,
+            numbers: Vec::with_capacity(rows_of.names().len()),
+            rows_of,
             error: None,
             rows: 0,
             last_time: None,
@@ -106,10 +86,9 @@ impl<W: Write> CsvOutput<W> {
         if self.error.is_some() {
             return;
         }
-        let sys = model.constraints();
-        sys.evaluate(s.t, s.q, s.qd, &mut self.values);
-        sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
-        let written = self.write_row(s).and_then(|()| {
+        self.numbers.clear();
+        self.rows_of.push(model, s, &mut self.numbers);
+        let written = self.write_row().and_then(|()| {
             self.rows += 1;
             self.last_time = Some(s.t);
             if self.flushed.elapsed() >= FLUSH_EVERY {
@@ -123,36 +102,13 @@ impl<W: Write> CsvOutput<W> {
         }
     }
 
-    fn write_row(&mut self, s: &Sample<'_>) -> io::Result<()> {
+    fn write_row(&mut self) -> io::Result<()> {
         let out = &mut self.row;
         out.clear();
-        write_number(out, s.t)?;
-        for i in 0..s.q.len() / 3 {
-            for v in [
-                s.q[3 * i],
-                s.q[3 * i + 1],
-                s.q[3 * i + 2],
-                s.qd[3 * i],
-                s.qd[3 * i + 1],
-                s.qd[3 * i + 2],
-            ] {
+        for (k, &v) in self.numbers.iter().enumerate() {
+            if k > 0 {
                 out.write_all(b",")?;
-                write_number(out, v)?;
             }
-        }
-        for (r, role) in self.reactions.iter().zip(&self.roles) {
-            let values = match role {
-                ConstraintRole::Joint { carries_torque: true } => [Some(r.force.x), Some(r.force.y), Some(r.torque)],
-                ConstraintRole::Joint { carries_torque: false } => [Some(r.force.x), Some(r.force.y), None],
-                ConstraintRole::Driver => [Some(r.effort.unwrap_or(f64::NAN)), None, None],
-            };
-            for v in values.into_iter().flatten() {
-                out.write_all(b",")?;
-                write_number(out, v)?;
-            }
-        }
-        for v in [s.energy, s.constraint_violation, s.velocity_violation] {
-            out.write_all(b",")?;
             write_number(out, v)?;
         }
         out.write_all(b"\n")?;

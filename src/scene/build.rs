@@ -368,6 +368,8 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         qd: sim.qd,
         settings,
         drawing,
+        source: text.to_string(),
+        origin: origin.to_string(),
     })
 }
 

@@ -9,9 +9,13 @@ mod build;
 mod error;
 mod format;
 mod functions;
+mod overrides;
 mod strict;
+mod values;
 
 pub use error::{one_line, SceneError};
+pub use overrides::{RunOverrides, Spelling};
+pub use values::SceneValue;
 
 use crate::simulation::{FormulationKind, Simulation};
 use dalembert_constraints::{Model, RedundancyTreatment, Stabilization};
@@ -189,6 +193,11 @@ pub struct Scene {
     /// What the scene looks like (shapes, attachment points, pins, guides, springs), for
     /// [`crate::animation`].
     pub drawing: crate::animation::Drawing,
+    /// The TOML text the scene was built from ([`Scene::with_values`] edits it; a scene sent to
+    /// another process is this text).
+    pub source: String,
+    /// The name of the scene's origin in errors (the file's path).
+    pub origin: String,
 }
 
 impl Scene {

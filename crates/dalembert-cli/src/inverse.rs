@@ -1,8 +1,6 @@
-//! `dalembert inverse`.
+//! `dalembert inverse`: [`dalembert::Scene::inverse`] printed and written as CSV.
 
-use dalembert::augmented::InverseDynamics;
-use dalembert::constraints::KinematicOptions;
-use dalembert::integrators::Sample;
+use dalembert::output::Rows;
 use dalembert::{CsvOutput, Scene};
 use std::path::PathBuf;
 
@@ -30,7 +28,6 @@ pub fn run(a: Args) -> Result<(), String> {
     if !(end > 0.0 && every > 0.0) {
         return Err("--end and --every must be positive".into());
     }
-    let inv = InverseDynamics::new(model.clone(), &scene.q, KinematicOptions::default()).map_err(|e| e.to_string())?;
     let mut csv = match &a.output {
         Some(p) => {
             let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
@@ -38,58 +35,41 @@ pub fn run(a: Args) -> Result<(), String> {
         }
         None => None,
     };
-    let sys = model.constraints();
-    let drivers: Vec<usize> = (0..sys.constraints().len())
-        .filter(|&k| sys.constraints()[k].role() == dalembert::constraints::ConstraintRole::Driver)
+    let drivers = scene.drivers();
+    let mut rows = Rows::new(&model);
+    let effort_cols: Vec<usize> = drivers
+        .iter()
+        .filter_map(|d| rows.names().iter().position(|n| *n == format!("{d}.effort")))
         .collect();
     outln!("scene        {}", scene.name);
     out!("{:>9}", "t [s]");
-    for &k in &drivers {
-        out!(" {:>16}", format!("{}.effort", sys.constraints()[k].name()));
+    for d in &drivers {
+        out!(" {:>16}", format!("{d}.effort"));
     }
     outln!();
     let steps = (end / every - 1e-9).ceil() as usize;
     let every_row = (steps / 10).max(1);
-    let mut q = scene.q.clone();
-    let (mut c, mut cd) = (vec![0.0; model.num_equations()], vec![0.0; model.num_equations()]);
-    let mut vals = sys.values();
-    for i in 0..=steps {
-        let t = (i as f64 * every).min(end);
-        let sol = inv.solve(t, &q).map_err(|e| {
-            if let Some(c) = csv.take() {
-                let _ = c.finish();
-            }
-            e.to_string()
-        })?;
-        q.clone_from(&sol.q);
-        sys.evaluate(t, &sol.q, &sol.qd, &mut vals);
-        c.copy_from_slice(&vals.c);
-        sys.velocity_residual(&vals, &sol.qd, &mut cd);
-        let energy = model.kinetic_energy(&sol.q, &sol.qd) + model.potential_energy(t, &sol.q);
-        let inf = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let sample = Sample {
-            t,
-            q: &sol.q,
-            qd: &sol.qd,
-            qdd: &sol.qdd,
-            lambda: &sol.lambda,
-            constraint_violation: inf(&c),
-            velocity_violation: inf(&cd),
-            energy,
-        };
+    let mut i = 0;
+    let mut row = Vec::new();
+    let res = scene.inverse(end, every, &mut |s| {
         if let Some(w) = csv.as_mut() {
-            w.write(&model, &sample);
+            w.write(&model, s);
         }
         if i % every_row == 0 || i == steps {
-            out!("{t:9.4}");
-            for &k in &drivers {
-                out!(" {:16.6}", sol.reactions[k].effort.unwrap_or(f64::NAN));
+            row.clear();
+            rows.push(&model, s, &mut row);
+            out!("{:9.4}", s.t);
+            for &k in &effort_cols {
+                out!(" {:16.6}", row[k]);
             }
             outln!();
         }
-    }
-    if let Some(w) = csv {
-        w.finish().map_err(|e| format!("writing CSV: {e}"))?;
+        i += 1;
+    });
+    let finished = csv.map(|w| w.finish());
+    res.map_err(|e| e.to_string())?;
+    if let Some(Err(e)) = finished {
+        return Err(format!("writing CSV: {e}"));
     }
     Ok(())
 }

@@ -53,6 +53,7 @@ mod check;
 mod inverse;
 mod plot;
 mod simulate;
+mod sweep;
 mod trade;
 
 use clap::{Parser, Subcommand};
@@ -82,6 +83,8 @@ enum Command {
     Plot(plot::Args),
     /// Measure the speed–accuracy trade over formulations, integrators, treatments and steps.
     Trade(trade::Args),
+    /// Run a scene for every combination of parameter values, in parallel (--set path=v1,v2).
+    Sweep(sweep::Args),
     /// Write a self-contained HTML animation of a scene's motion (or of a saved run, --from).
     Animate(animate::Args),
 }
@@ -105,6 +108,7 @@ fn main() -> ExitCode {
         Command::Plot(a) => plot::run(a),
         Command::Trade(a) => trade::run(a),
         Command::Animate(a) => animate::run(a),
+        Command::Sweep(a) => sweep::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

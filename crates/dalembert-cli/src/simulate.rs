@@ -1,9 +1,8 @@
 //! `dalembert simulate`.
 
-use dalembert::constraints::Formulation;
 use dalembert::integrators::Sample;
-use dalembert::scene::{unknown_name, IntegratorKind, StabilizationKind};
-use dalembert::{CsvOutput, FormulationKind, Scene};
+use dalembert::scene::{IntegratorKind, RunOverrides, Spelling};
+use dalembert::{CsvOutput, Scene};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -62,73 +61,26 @@ pub struct RunArgs {
     redundant: Option<String>,
 }
 
-/// Loads the scene and applies the command-line overrides.
+/// Loads the scene and applies the command-line overrides (warnings printed).
 pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
     let mut scene = Scene::from_path(path).map_err(|e| e.to_string())?;
-    let s = &mut scene.settings;
-    if let Some(f) = &a.formulation {
-        s.formulation =
-            FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, FormulationKind::NAMES))?;
-    }
-    if let Some(i) = &a.integrator {
-        s.integrator = IntegratorKind::parse(i).ok_or_else(|| unknown_name("integrator", i, IntegratorKind::NAMES))?;
-    }
-    if let Some(r) = a.rho_inf {
-        if !(0.0..=1.0).contains(&r) {
-            return Err(format!("--rho-inf must lie in [0, 1], got {r}"));
-        }
-        s.rho_inf = r;
-    }
-    if let Some(r) = &a.redundant {
-        s.redundancy = dalembert::scene::parse_redundancy(r)
-            .ok_or_else(|| unknown_name("redundancy treatment", r, dalembert::scene::REDUNDANCY_NAMES))?;
-    }
-    if let Some(st) = &a.stabilization {
-        s.stabilization =
-            StabilizationKind::parse(st).ok_or_else(|| unknown_name("stabilization", st, StabilizationKind::NAMES))?;
-    }
-    for (dst, src, what) in [
-        (&mut s.step, a.step, "--step"),
-        (&mut s.rtol, a.rtol, "--rtol"),
-        (&mut s.atol, a.atol, "--atol"),
-        (&mut s.end, a.end, "--end"),
-        (&mut s.output_every, a.every, "--every"),
-    ] {
-        if let Some(v) = src {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{what} must be positive, got {v}"));
-            }
-            *dst = v;
-        }
-    }
-    let ignored = |flag: &str, used_by: &str| {
-        eprintln!(
-            "warning: {flag} applies to {used_by} only; ignored with {}",
-            s.integrator.name()
-        )
+    let o = RunOverrides {
+        formulation: a.formulation.clone(),
+        integrator: a.integrator.clone(),
+        rho_inf: a.rho_inf,
+        step: a.step,
+        rtol: a.rtol,
+        atol: a.atol,
+        end: a.end,
+        every: a.every,
+        stabilization: a.stabilization.clone(),
+        redundant: a.redundant.clone(),
     };
-    if s.integrator != IntegratorKind::Dopri5 {
-        if a.rtol.is_some() {
-            ignored("--rtol", "dopri5");
-        }
-        if a.atol.is_some() {
-            ignored("--atol", "dopri5");
-        }
+    let (settings, warnings) = o.apply(&scene.settings, Spelling::Flags)?;
+    for w in warnings {
+        eprintln!("warning: {w}");
     }
-    if s.integrator != IntegratorKind::GeneralizedAlpha && a.rho_inf.is_some() {
-        ignored("--rho-inf", "generalized-alpha");
-    }
-    if s.integrator == IntegratorKind::GeneralizedAlpha && s.rho_inf > 0.99 {
-        eprintln!(
-            "warning: rho_inf = {} leaves the index-3 form without numerical damping: the velocity constraints drift and the run can fail (docs/integrators.md); 0.99 or less is stable",
-            s.rho_inf
-        );
-    }
-    if s.integrator == IntegratorKind::GeneralizedAlpha && a.stabilization.is_some() {
-        eprintln!(
-            "warning: --stabilization is ignored with generalized-alpha (it keeps the position constraints itself)"
-        );
-    }
+    scene.settings = settings;
     Ok(scene)
 }
 
@@ -337,11 +289,6 @@ fn truncate(s: &str, n: usize) -> String {
     } else {
         s.chars().take(n - 1).collect::<String>() + "…"
     }
-}
-
-/// A formulation for `check` and `inverse`.
-pub fn formulation(scene: &Scene) -> Result<Box<dyn Formulation>, String> {
-    scene.simulation().formulation().map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

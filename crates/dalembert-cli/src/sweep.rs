@@ -1,0 +1,107 @@
+//! `dalembert sweep`: one scene run for every combination of values, on all cores.
+
+use dalembert::sweep::{cartesian, split_list, sweep, write_csv, Output};
+use dalembert::{Scene, SceneValue};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `sweep`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// A parameter and its values, `path=v1,v2,…` (e.g. `bodies.slider.mass=1,2,4`); repeat for
+    /// more parameters: every combination is run.
+    #[arg(long = "set", required = true, allow_hyphen_values = true)]
+    set: Vec<String>,
+    /// End time of every run (s); default the scene's.
+    #[arg(long, allow_hyphen_values = true)]
+    end: Option<f64>,
+    /// Outputs (comma-separated): a column's final value (`slider.x`), `max:`/`min:`/`mean:`/
+    /// `maxabs:` a column, or `statistics.steps`, `statistics.evaluations`,
+    /// `statistics.max_constraint_violation`, `statistics.max_energy_change`. Default: the final
+    /// value of every position column.
+    #[arg(long, value_delimiter = ',')]
+    outputs: Vec<String>,
+    /// Threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Write one row per run as CSV (parameters, outputs, wall time, error).
+    #[arg(long)]
+    output: Option<PathBuf>,
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    if let Some(end) = a.end {
+        if !(end.is_finite() && end > 0.0) {
+            return Err(format!("--end must be positive, got {end}"));
+        }
+    }
+    if a.threads == Some(0) {
+        return Err("--threads must be at least 1".into());
+    }
+    let mut parameters = Vec::new();
+    for s in &a.set {
+        let (path, values) = s
+            .split_once('=')
+            .ok_or_else(|| format!("--set '{s}': expected path=v1,v2,… (e.g. bodies.slider.mass=1,2,4)"))?;
+        let values: Vec<SceneValue> = split_list(values).into_iter().map(SceneValue::parse).collect();
+        // Each path checked against the scene, so that a typo fails before any run (a value that
+        // breaks a rule fails its own runs only).
+        scene.check_path(path).map_err(|e| format!("--set: {e}"))?;
+        parameters.push((path.to_string(), values));
+    }
+    let names: Vec<String> = if a.outputs.is_empty() {
+        scene
+            .model
+            .bodies()
+            .iter()
+            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
+            .collect()
+    } else {
+        a.outputs.clone()
+    };
+    let outputs = names
+        .iter()
+        .map(|n| Output::parse(&scene, n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let runs = cartesian(&parameters);
+    let start = Instant::now();
+    let rows = sweep(&scene, &runs, a.end, &outputs, a.threads, crate::interrupt_flag())?;
+    let wall = start.elapsed().as_secs_f64();
+    let paths: Vec<String> = parameters.iter().map(|(p, _)| p.clone()).collect();
+    match &a.output {
+        Some(p) => {
+            let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            write_csv(std::io::BufWriter::new(f), &paths, &names, &rows)
+                .map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+        None => {
+            let mut buf = Vec::new();
+            write_csv(&mut buf, &paths, &names, &rows).map_err(|e| e.to_string())?;
+            out!("{}", String::from_utf8_lossy(&buf));
+        }
+    }
+    let failed = rows.iter().filter(|r| r.error.is_some()).count();
+    let busy: f64 = rows.iter().map(|r| r.wall_time).sum();
+    eprintln!(
+        "{} runs ({failed} failed) in {wall:.3} s on {} threads ({:.2} ms of work per run, speed-up {:.2}){}",
+        rows.len(),
+        a.threads.unwrap_or_else(rayon_threads),
+        1e3 * busy / rows.len().max(1) as f64,
+        busy / wall.max(1e-12),
+        a.output
+            .as_ref()
+            .map(|p| format!("; wrote {}", p.display()))
+            .unwrap_or_default()
+    );
+    if crate::interrupt_flag().load(std::sync::atomic::Ordering::Relaxed) {
+        return Err("interrupted; runs not started are marked \"cancelled\"".into());
+    }
+    Ok(())
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}

@@ -1,0 +1,98 @@
+"""Type stubs of the native module (kept in step with crates/dalembert-python/src)."""
+
+from os import PathLike
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class SceneError(ValueError):
+    """A scene that cannot be read, built or changed as asked (one line: file, line, element)."""
+
+class IntegrationError(RuntimeError):
+    """A run that stopped early."""
+
+    time: Optional[float]
+    run: "Run"
+
+class Run:
+    """The rows of a run; columns as in the CSV of ``dalembert simulate``."""
+
+    @property
+    def t(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def columns(self) -> List[str]: ...
+    @property
+    def data(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def statistics(self) -> Dict[str, Union[int, float]]: ...
+    @property
+    def warning(self) -> Optional[str]: ...
+    def __getitem__(self, name: str) -> npt.NDArray[np.float64]: ...
+    def __contains__(self, name: str) -> bool: ...
+    def __len__(self) -> int: ...
+    def to_pandas(self) -> Any: ...
+    def plot(self, *columns: str, ax: Any = None) -> Any: ...
+    def animate(self, path: Union[str, PathLike[str]], max_frames: int = 2400) -> None: ...
+
+class Scene:
+    """A mechanism and its run settings, assembled; immutable and picklable."""
+
+    @staticmethod
+    def load(path: Union[str, PathLike[str]]) -> "Scene": ...
+    @staticmethod
+    def from_toml(text: str, origin: str = "<string>") -> "Scene": ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def source(self) -> str: ...
+    @property
+    def origin(self) -> str: ...
+    @property
+    def columns(self) -> List[str]: ...
+    @property
+    def bodies(self) -> List[str]: ...
+    @property
+    def constraints(self) -> List[str]: ...
+    @property
+    def settings(self) -> Dict[str, Union[str, float]]: ...
+    def with_values(self, values: Dict[str, Any]) -> "Scene": ...
+    def check(self) -> Dict[str, Any]: ...
+    def simulate(
+        self,
+        *,
+        end: Optional[float] = None,
+        formulation: Optional[str] = None,
+        integrator: Optional[str] = None,
+        step: Optional[float] = None,
+        every: Optional[float] = None,
+        stabilization: Optional[str] = None,
+        rtol: Optional[float] = None,
+        atol: Optional[float] = None,
+        rho_inf: Optional[float] = None,
+        redundant: Optional[str] = None,
+        strict: bool = False,
+    ) -> Run: ...
+    def inverse(self, end: Optional[float] = None, every: Optional[float] = None) -> Run: ...
+    def trade(
+        self,
+        *,
+        formulations: Optional[List[str]] = None,
+        integrators: Optional[List[str]] = None,
+        treatments: Optional[List[str]] = None,
+        steps: Optional[List[float]] = None,
+        tolerances: Optional[List[float]] = None,
+        end: Optional[float] = None,
+        every: Optional[float] = None,
+    ) -> List[Dict[str, Any]]: ...
+    def animate(self, path: Union[str, PathLike[str]], max_frames: int = 2400) -> None: ...
+
+def sweep_runs(
+    scene: Scene,
+    runs: List[Dict[str, Any]],
+    outputs: List[str],
+    end: Optional[float] = None,
+    threads: Optional[int] = None,
+) -> List[Tuple[List[float], float, Optional[str]]]: ...

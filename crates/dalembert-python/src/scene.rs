@@ -1,0 +1,420 @@
+//! `dalembert.Scene`: load, change, check, simulate, inverse dynamics, trade; and the native
+//! sweep chunk runner.
+
+use crate::convert::scene_value;
+use crate::errors::{IntegrationError, SceneError};
+use crate::interrupt;
+use crate::run::PyRun;
+use dalembert::output::Rows;
+use dalembert::scene::{RunOverrides, Spelling};
+use dalembert::sweep::{run_one, sweep, Assignment, Output};
+use dalembert::trade::{trade, TradeGrid};
+use dalembert::Scene;
+use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+use std::sync::Arc;
+
+/// A mechanism and its run settings, loaded from a scene file (TOML, `docs/scenes.md`) and
+/// assembled. Scenes are immutable: `with_values` returns a changed copy. They pickle as their
+/// TOML text, so they can be sent to other processes (sweeps on executors).
+#[pyclass(name = "Scene", module = "dalembert", frozen)]
+pub struct PyScene {
+    pub inner: Arc<Scene>,
+}
+
+fn scene_error(e: impl std::fmt::Display) -> PyErr {
+    SceneError::new_err(dalembert::scene::one_line(&e.to_string()).into_owned())
+}
+
+fn warn(py: Python<'_>, message: &str) -> PyResult<()> {
+    let warnings = py.import("warnings")?;
+    let kw = PyDict::new(py);
+    kw.set_item("stacklevel", 2)?;
+    warnings.call_method("warn", (message,), Some(&kw))?;
+    Ok(())
+}
+
+/// The exception for a run that stopped at `time` after computing `run`'s rows.
+fn integration_error(py: Python<'_>, message: String, time: Option<f64>, run: PyRun) -> PyResult<PyErr> {
+    let err = IntegrationError::new_err(dalembert::scene::one_line(&message).into_owned());
+    let value = err.value(py);
+    value.setattr("time", time)?;
+    value.setattr("run", Py::new(py, run)?)?;
+    Ok(err)
+}
+
+/// An interrupt raised while a run went on, with the rows so far attached as `run`.
+fn interrupted(py: Python<'_>, e: PyErr, run: PyRun) -> PyResult<PyErr> {
+    if e.is_instance_of::<PyKeyboardInterrupt>(py) {
+        e.value(py).setattr("run", Py::new(py, run)?)?;
+    }
+    Ok(e)
+}
+
+#[pymethods]
+impl PyScene {
+    /// Reads, builds and assembles a scene file. Raises SceneError naming the line at fault.
+    #[staticmethod]
+    fn load(path: std::path::PathBuf) -> PyResult<Self> {
+        let s = Scene::from_path(&path).map_err(scene_error)?;
+        Ok(PyScene { inner: Arc::new(s) })
+    }
+
+    /// Builds and assembles a scene from TOML text; `origin` names it in errors.
+    #[staticmethod]
+    #[pyo3(signature = (text, origin="<string>"))]
+    fn from_toml(text: &str, origin: &str) -> PyResult<Self> {
+        let s = Scene::from_toml(text, origin).map_err(scene_error)?;
+        Ok(PyScene { inner: Arc::new(s) })
+    }
+
+    /// The scene's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+
+    /// The TOML text the scene was built from.
+    #[getter]
+    fn source(&self) -> String {
+        self.inner.source.clone()
+    }
+
+    /// Where the scene came from (its path), as errors name it.
+    #[getter]
+    fn origin(&self) -> String {
+        self.inner.origin.clone()
+    }
+
+    /// The columns a run of this scene has (`t`, positions, velocities, reactions, efforts, …).
+    #[getter]
+    fn columns(&self) -> Vec<String> {
+        Rows::new(&self.inner.model).names().to_vec()
+    }
+
+    /// Names of the moving bodies.
+    #[getter]
+    fn bodies(&self) -> Vec<String> {
+        self.inner.model.bodies().iter().map(|b| b.name.clone()).collect()
+    }
+
+    /// Names of the joints and drivers, in the order of their reaction columns.
+    #[getter]
+    fn constraints(&self) -> Vec<String> {
+        self.inner
+            .model
+            .constraints()
+            .constraints()
+            .iter()
+            .map(|c| c.name().to_string())
+            .collect()
+    }
+
+    /// The run settings of the scene's `[simulation]` table, defaults filled in.
+    #[getter]
+    fn settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = &self.inner.settings;
+        let d = PyDict::new(py);
+        d.set_item("end", s.end)?;
+        d.set_item("formulation", s.formulation.name())?;
+        d.set_item("integrator", s.integrator.name())?;
+        d.set_item("step", s.step)?;
+        d.set_item("every", s.output_every)?;
+        d.set_item("stabilization", s.stabilization.name())?;
+        d.set_item("rtol", s.rtol)?;
+        d.set_item("atol", s.atol)?;
+        d.set_item("rho_inf", s.rho_inf)?;
+        d.set_item(
+            "redundant",
+            match s.redundancy {
+                dalembert::constraints::RedundancyTreatment::MinimumNorm => "minimum-norm",
+                _ => "error",
+            },
+        )?;
+        Ok(d)
+    }
+
+    /// A copy with values changed by path, e.g. `{"bodies.slider.mass": 2.0,
+    /// "forces.return-spring.stiffness": 80.0, "simulation.end": 2.0}`; rebuilt and re-assembled.
+    fn with_values(&self, values: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let pairs = assignment(values)?;
+        let refs: Vec<(&str, dalembert::SceneValue)> = pairs.iter().map(|(p, v)| (p.as_str(), v.clone())).collect();
+        let s = self.inner.with_values(&refs).map_err(scene_error)?;
+        Ok(PyScene { inner: Arc::new(s) })
+    }
+
+    /// Degrees of freedom, rank, redundant equations, assembly residual, and the accelerations
+    /// and reactions at t = 0, as `dalembert check` prints them. `problems` lists what keeps the
+    /// scene from running as written (empty when it can).
+    fn check<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let scene = self.inner.clone();
+        let r = py.detach(move || scene.check()).map_err(scene_error)?;
+        let d = PyDict::new(py);
+        d.set_item("scene", &r.scene)?;
+        d.set_item("bodies", r.bodies)?;
+        d.set_item("coordinates", r.coordinates)?;
+        d.set_item("equations", r.equations)?;
+        d.set_item("rank", r.rank)?;
+        d.set_item("dof", r.degrees_of_freedom)?;
+        d.set_item("redundant", &r.redundant)?;
+        d.set_item("minimum_norm", r.minimum_norm)?;
+        d.set_item("max_violation", r.max_violation)?;
+        let acc = PyDict::new(py);
+        if let Ok(qdd) = &r.accelerations {
+            for (n, v) in r.coordinate_names.iter().zip(qdd) {
+                acc.set_item(n, v)?;
+            }
+        }
+        d.set_item("accelerations", acc)?;
+        let reactions = PyDict::new(py);
+        for (n, v) in &r.reactions {
+            reactions.set_item(n, v)?;
+        }
+        d.set_item("reactions", reactions)?;
+        d.set_item("problems", r.problems())?;
+        Ok(d)
+    }
+
+    /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
+    /// line's flags do). Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
+    /// so far) when the run stops early; with `strict=True` also when a conservative model's
+    /// energy drifts by more than 1 % (otherwise a warning). The GIL is released during the run,
+    /// and Ctrl-C stops it within one step (KeyboardInterrupt, rows so far in `.run`).
+    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, rtol=None, atol=None, rho_inf=None, redundant=None, strict=false))]
+    fn simulate(
+        &self,
+        py: Python<'_>,
+        end: Option<f64>,
+        formulation: Option<String>,
+        integrator: Option<String>,
+        step: Option<f64>,
+        every: Option<f64>,
+        stabilization: Option<String>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        rho_inf: Option<f64>,
+        redundant: Option<String>,
+        strict: bool,
+    ) -> PyResult<PyRun> {
+        let o = RunOverrides {
+            formulation,
+            integrator,
+            rho_inf,
+            step,
+            rtol,
+            atol,
+            end,
+            every,
+            stabilization,
+            redundant,
+        };
+        let (settings, warnings) = o
+            .apply(&self.inner.settings, Spelling::Keywords)
+            .map_err(PyValueError::new_err)?;
+        for w in &warnings {
+            warn(py, w)?;
+        }
+        let mut scene = (*self.inner).clone();
+        scene.settings = settings;
+        let scene = Arc::new(scene);
+        let (rec, raised) = {
+            let scene = scene.clone();
+            interrupt::run(py, move |cancel| scene.record(cancel))
+        };
+        let time = rec.table.column("t").and_then(|t| t.last().copied());
+        match rec.outcome {
+            Ok(stats) => {
+                let run = PyRun {
+                    table: rec.table,
+                    statistics: Some(stats),
+                    warning: rec.warning.clone(),
+                    scene,
+                };
+                if let Some(e) = raised {
+                    return Err(interrupted(py, e, run)?);
+                }
+                if let Some(w) = &rec.warning {
+                    if strict {
+                        return Err(integration_error(py, w.clone(), time, run)?);
+                    }
+                    warn(py, w)?;
+                }
+                Ok(run)
+            }
+            Err(e) => {
+                let run = PyRun {
+                    table: rec.table,
+                    statistics: None,
+                    warning: None,
+                    scene,
+                };
+                match raised {
+                    Some(r) => Err(interrupted(py, r, run)?),
+                    None => Err(integration_error(py, e.to_string(), time, run)?),
+                }
+            }
+        }
+    }
+
+    /// Inverse dynamics of a fully driven scene on the grid 0, every, …, end (the scene's end and
+    /// output interval by default): a Run whose `<driver>.effort` columns are the driving forces
+    /// and whose reaction columns are the joint reactions. Raises IntegrationError (with `.run`)
+    /// when the kinematics fail part way.
+    #[pyo3(signature = (end=None, every=None))]
+    fn inverse(&self, py: Python<'_>, end: Option<f64>, every: Option<f64>) -> PyResult<PyRun> {
+        let end = end.unwrap_or(self.inner.settings.end);
+        let every = every.unwrap_or(self.inner.settings.output_every);
+        let scene = self.inner.clone();
+        let (table, res) = py.detach(move || scene.inverse_table(end, every));
+        let time = table.column("t").and_then(|t| t.last().copied());
+        let run = PyRun {
+            table,
+            statistics: None,
+            warning: None,
+            scene: self.inner.clone(),
+        };
+        match res {
+            Ok(()) => Ok(run),
+            Err(e) => Err(integration_error(py, e.to_string(), time, run)?),
+        }
+    }
+
+    /// The speed–accuracy trade of `dalembert trade`: one dict per run of the grid (method,
+    /// parameter, time_s, evaluations, error, max_constraint_violation, max_energy_change,
+    /// status, pareto). Arguments default to the command line's grid.
+    #[pyo3(signature = (*, formulations=None, integrators=None, treatments=None, steps=None, tolerances=None, end=None, every=None))]
+    fn trade<'py>(
+        &self,
+        py: Python<'py>,
+        formulations: Option<Vec<String>>,
+        integrators: Option<Vec<String>>,
+        treatments: Option<Vec<String>>,
+        steps: Option<Vec<f64>>,
+        tolerances: Option<Vec<f64>>,
+        end: Option<f64>,
+        every: Option<f64>,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let d = TradeGrid::default();
+        let grid = TradeGrid {
+            formulations: formulations.unwrap_or(d.formulations),
+            integrators: integrators.unwrap_or(d.integrators),
+            treatments: treatments.unwrap_or(d.treatments),
+            steps: steps.unwrap_or(d.steps),
+            tolerances: tolerances.unwrap_or(d.tolerances),
+            end,
+            every,
+        };
+        let scene = self.inner.clone();
+        let t = py
+            .detach(move || trade(&scene, &grid, &mut |_, _| {}))
+            .map_err(PyValueError::new_err)?;
+        let out = PyList::empty(py);
+        for (i, r) in t.runs.iter().enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("method", &r.method)?;
+            d.set_item("parameter", r.parameter)?;
+            d.set_item("time_s", r.time_s)?;
+            d.set_item("evaluations", r.evaluations)?;
+            d.set_item("error", r.error)?;
+            d.set_item("max_constraint_violation", r.constraint)?;
+            d.set_item("max_energy_change", r.energy)?;
+            d.set_item("status", &r.status)?;
+            d.set_item("pareto", t.front.contains(&i))?;
+            out.append(d)?;
+        }
+        Ok(out)
+    }
+
+    /// Writes a self-contained HTML animation of a simulation with the scene's settings.
+    #[pyo3(signature = (path, max_frames=2400))]
+    fn animate(&self, py: Python<'_>, path: std::path::PathBuf, max_frames: usize) -> PyResult<()> {
+        let run = self.simulate(py, None, None, None, None, None, None, None, None, None, None, false)?;
+        run.animate_to(&path, max_frames)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<dalembert.Scene '{}' from {}: {} bodies>",
+            self.inner.name,
+            self.inner.origin,
+            self.inner.model.bodies().len()
+        )
+    }
+
+    /// Pickled as its TOML text and origin.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        let ctor = py.get_type::<PyScene>().getattr("from_toml")?;
+        let args = PyTuple::new(py, [self.inner.source.clone(), self.inner.origin.clone()])?;
+        PyTuple::new(py, [ctor, args.into_any()])
+    }
+}
+
+/// `(path, value)` pairs from a dict of path → value.
+fn assignment(values: &Bound<'_, PyDict>) -> PyResult<Assignment> {
+    values
+        .iter()
+        .map(|(k, v)| {
+            let path: String = k.extract()?;
+            let value = scene_value(&v, &path)?;
+            Ok((path, value))
+        })
+        .collect()
+}
+
+/// Runs `runs` (a list of dicts path → value) of `scene` on `threads` threads (all cores when
+/// None), the GIL released. Returns one `(outputs, wall_time_s, error)` tuple per run, in order.
+/// Raises SceneError when a path or an output name does not exist (before any run).
+#[pyfunction]
+#[pyo3(signature = (scene, runs, outputs, end=None, threads=None))]
+pub fn sweep_runs<'py>(
+    py: Python<'py>,
+    scene: &PyScene,
+    runs: Vec<Bound<'py, PyDict>>,
+    outputs: Vec<String>,
+    end: Option<f64>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyList>> {
+    let s = scene.inner.clone();
+    if let Some(e) = end {
+        if !(e.is_finite() && e > 0.0) {
+            return Err(PyValueError::new_err(format!("end must be positive, got {e}")));
+        }
+    }
+    if threads == Some(0) {
+        return Err(PyValueError::new_err("threads must be at least 1"));
+    }
+    let parsed = outputs
+        .iter()
+        .map(|n| Output::parse(&s, n))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(SceneError::new_err)?;
+    let assignments = runs.iter().map(assignment).collect::<PyResult<Vec<_>>>()?;
+    let mut paths: Vec<&str> = assignments.iter().flatten().map(|(p, _)| p.as_str()).collect();
+    paths.sort_unstable();
+    paths.dedup();
+    for p in paths {
+        s.check_path(p).map_err(scene_error)?;
+    }
+    let rows = if assignments.len() == 1 && threads == Some(1) {
+        // One run on this thread: no pool to start.
+        let a = &assignments[0];
+        let (row, raised) = interrupt::run(py, |_| run_one(&s, a, end, &parsed));
+        if let Some(e) = raised {
+            return Err(e);
+        }
+        vec![row]
+    } else {
+        let (rows, raised) = interrupt::run(py, |cancel| sweep(&s, &assignments, end, &parsed, threads, cancel));
+        if let Some(e) = raised {
+            return Err(e);
+        }
+        rows.map_err(PyValueError::new_err)?
+    };
+    let out = PyList::empty(py);
+    for r in rows {
+        let item = (r.outputs, r.wall_time, r.error);
+        out.append(item)?;
+    }
+    Ok(out)
+}

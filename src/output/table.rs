@@ -1,0 +1,157 @@
+//! The columns of a run's output, and a run kept in memory (the Python package, sweeps).
+//!
+//! [`Rows`] names the columns of a model's output and fills one row of numbers from a sample; the
+//! CSV writer and the in-memory [`Table`] both use it, so a column means the same thing in a file,
+//! a numpy array and a sweep.
+
+use dalembert_constraints::{ConstraintRole, ConstraintValues, Model, Reaction};
+use dalembert_integrators::Sample;
+
+/// The output columns of one model and the scratch space to compute a row (allocation-free after
+/// construction).
+#[derive(Debug, Clone)]
+pub struct Rows {
+    names: Vec<String>,
+    roles: Vec<ConstraintRole>,
+    values: ConstraintValues,
+    reactions: Vec<Reaction>,
+}
+
+impl Rows {
+    /// The columns of `model` (see the module documentation of [`crate::output`]).
+    pub fn new(model: &Model) -> Self {
+        let mut names = vec!["t".to_string()];
+        for b in model.bodies() {
+            for c in ["x", "y", "angle", "vx", "vy", "omega"] {
+                names.push(format!("{}.{c}", b.name));
+            }
+        }
+        let sys = model.constraints();
+        let roles: Vec<ConstraintRole> = sys.constraints().iter().map(|c| c.role()).collect();
+        for (c, role) in sys.constraints().iter().zip(&roles) {
+            match role {
+                ConstraintRole::Joint { carries_torque } => {
+                    names.push(format!("{}.fx", c.name()));
+                    names.push(format!("{}.fy", c.name()));
+                    if *carries_torque {
+                        names.push(format!("{}.torque", c.name()));
+                    }
+                }
+                ConstraintRole::Driver => names.push(format!("{}.effort", c.name())),
+            }
+        }
+        names.extend(["energy", "constraint_violation", "velocity_violation"].map(String::from));
+        Rows {
+            names,
+            values: sys.values(),
+            reactions: vec![Reaction::default(); roles.len()],
+            roles,
+        }
+    }
+
+    /// Column names, `t` first.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Appends the row of sample `s` (one number per column) to `row`: positions and velocities,
+    /// the reactions from the sample's multipliers, energy and constraint violations.
+    pub fn push(&mut self, model: &Model, s: &Sample<'_>, row: &mut Vec<f64>) {
+        let sys = model.constraints();
+        sys.evaluate(s.t, s.q, s.qd, &mut self.values);
+        sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
+        row.push(s.t);
+        for i in 0..s.q.len() / 3 {
+            row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
+            row.extend_from_slice(&s.qd[3 * i..3 * i + 3]);
+        }
+        for (r, role) in self.reactions.iter().zip(&self.roles) {
+            match role {
+                ConstraintRole::Joint { carries_torque } => {
+                    row.extend_from_slice(&[r.force.x, r.force.y]);
+                    if *carries_torque {
+                        row.push(r.torque);
+                    }
+                }
+                ConstraintRole::Driver => row.push(r.effort.unwrap_or(f64::NAN)),
+            }
+        }
+        row.extend_from_slice(&[s.energy, s.constraint_violation, s.velocity_violation]);
+    }
+}
+
+/// A run's output in memory: named columns, one row per output sample (row-major).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    /// Column names, `t` first.
+    pub columns: Vec<String>,
+    /// `rows × columns.len()` numbers, row after row.
+    pub data: Vec<f64>,
+}
+
+impl Table {
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.data.len().checked_div(self.columns.len()).unwrap_or(0)
+    }
+
+    /// Index of column `name`.
+    pub fn index(&self, name: &str) -> Option<usize> {
+        self.columns.iter().position(|c| c == name)
+    }
+
+    /// The values of column `name`, one per row, or `None` when there is no such column.
+    pub fn column(&self, name: &str) -> Option<Vec<f64>> {
+        let k = self.index(name)?;
+        Some(self.data.iter().skip(k).step_by(self.columns.len()).copied().collect())
+    }
+
+    /// Row `i`.
+    pub fn row(&self, i: usize) -> &[f64] {
+        let w = self.columns.len();
+        &self.data[i * w..(i + 1) * w]
+    }
+
+    /// The one-line error for a column that does not exist, listing the columns that do.
+    pub fn unknown_column(&self, name: &str) -> String {
+        crate::scene::unknown_name(
+            "column",
+            name,
+            &self.columns.iter().map(String::as_str).collect::<Vec<_>>(),
+        )
+    }
+}
+
+/// Collects the samples of a run of `model` into a [`Table`].
+#[derive(Debug, Clone)]
+pub struct Recorder {
+    rows: Rows,
+    table: Table,
+}
+
+impl Recorder {
+    /// An empty table with the columns of `model`.
+    pub fn new(model: &Model) -> Self {
+        let rows = Rows::new(model);
+        let table = Table {
+            columns: rows.names().to_vec(),
+            data: Vec::new(),
+        };
+        Recorder { rows, table }
+    }
+
+    /// Appends sample `s`.
+    pub fn record(&mut self, model: &Model, s: &Sample<'_>) {
+        self.rows.push(model, s, &mut self.table.data);
+    }
+
+    /// The table so far.
+    pub fn table(&self) -> &Table {
+        &self.table
+    }
+
+    /// The table.
+    pub fn into_table(self) -> Table {
+        self.table
+    }
+}

@@ -1,0 +1,298 @@
+//! Parameter sweeps: many runs of one scene with values changed by path
+//! ([`Scene::with_values`]), on all local cores (rayon). One run's failure is its row's error and
+//! never loses the other rows. The Python package distributes the same runs over any executor
+//! (`docs/sweeps.md`).
+
+use crate::output::Rows;
+use crate::{Scene, SceneValue};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// One run's assignments: `(path, value)` pairs.
+pub type Assignment = Vec<(String, SceneValue)>;
+
+/// How an output column is summarized over a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Summary {
+    /// The value at the end of the run.
+    Final,
+    /// The largest value over the output samples.
+    Max,
+    /// The smallest value over the output samples.
+    Min,
+    /// The mean over the output samples.
+    Mean,
+    /// The largest absolute value over the output samples.
+    MaxAbs,
+}
+
+/// A run statistic a sweep can report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Statistic {
+    /// Accepted steps.
+    Steps,
+    /// Right-hand-side evaluations.
+    Evaluations,
+    /// Largest `|C|` after any step.
+    MaxConstraintViolation,
+    /// Largest `|E − E₀|` (J).
+    MaxEnergyChange,
+}
+
+/// One requested output of a sweep, parsed from its name: `slider.x` (final value),
+/// `max:slider.x`, `min:…`, `mean:…`, `maxabs:…`, or `statistics.steps`, `statistics.evaluations`,
+/// `statistics.max_constraint_violation`, `statistics.max_energy_change`.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// A column summarized over the run.
+    Column {
+        /// Index of the column in the output row.
+        index: usize,
+        /// How.
+        summary: Summary,
+    },
+    /// A run statistic.
+    Statistic(Statistic),
+}
+
+const STATISTICS: &[(&str, Statistic)] = &[
+    ("statistics.steps", Statistic::Steps),
+    ("statistics.evaluations", Statistic::Evaluations),
+    ("statistics.max_constraint_violation", Statistic::MaxConstraintViolation),
+    ("statistics.max_energy_change", Statistic::MaxEnergyChange),
+];
+
+impl Output {
+    /// Parses `name` against the output columns of `scene`; the error is one line listing what
+    /// exists.
+    pub fn parse(scene: &Scene, name: &str) -> Result<Output, String> {
+        if let Some(&(_, s)) = STATISTICS.iter().find(|(n, _)| *n == name) {
+            return Ok(Output::Statistic(s));
+        }
+        let (summary, column) = match name.split_once(':') {
+            Some(("max", c)) => (Summary::Max, c),
+            Some(("min", c)) => (Summary::Min, c),
+            Some(("mean", c)) => (Summary::Mean, c),
+            Some(("maxabs", c)) => (Summary::MaxAbs, c),
+            Some(("final", c)) => (Summary::Final, c),
+            Some((s, _)) => {
+                return Err(crate::scene::unknown_name(
+                    "summary",
+                    s,
+                    &["final", "max", "min", "mean", "maxabs"],
+                ))
+            }
+            None => (Summary::Final, name),
+        };
+        let rows = Rows::new(&scene.model);
+        match rows.names().iter().position(|n| n == column) {
+            Some(index) => Ok(Output::Column { index, summary }),
+            None => {
+                let mut known: Vec<&str> = rows.names().iter().map(String::as_str).collect();
+                known.extend(STATISTICS.iter().map(|(n, _)| *n));
+                Err(crate::scene::unknown_name("output", column, &known))
+            }
+        }
+    }
+}
+
+/// One run of a sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepRow {
+    /// The values set for this run.
+    pub assignment: Assignment,
+    /// One number per requested output (NaN when the run failed).
+    pub outputs: Vec<f64>,
+    /// Wall time of the whole run, building the scene included (s).
+    pub wall_time: f64,
+    /// Why the run failed (the scene could not be built with these values, or the run stopped).
+    pub error: Option<String>,
+}
+
+/// The cartesian product of `parameters` (`path`, values), the first parameter varying slowest.
+pub fn cartesian(parameters: &[(String, Vec<SceneValue>)]) -> Vec<Assignment> {
+    let mut out: Vec<Assignment> = vec![Vec::new()];
+    for (path, values) in parameters {
+        out = out
+            .into_iter()
+            .flat_map(|a| {
+                values.iter().map(move |v| {
+                    let mut b = a.clone();
+                    b.push((path.clone(), v.clone()));
+                    b
+                })
+            })
+            .collect();
+    }
+    out
+}
+
+/// Runs `scene` with `assignment` to `end` (the scene's end when `None`) and summarizes `outputs`.
+pub fn run_one(scene: &Scene, assignment: &Assignment, end: Option<f64>, outputs: &[Output]) -> SweepRow {
+    let start = Instant::now();
+    let pairs: Vec<(&str, SceneValue)> = assignment.iter().map(|(p, v)| (p.as_str(), v.clone())).collect();
+    let result = scene.with_values(&pairs).map_err(|e| e.to_string()).and_then(|s| {
+        let mut sim = s.simulation();
+        if let Some(end) = end {
+            sim.end = end;
+        }
+        let mut rows = Rows::new(&s.model);
+        let mut row = Vec::with_capacity(rows.names().len());
+        let mut acc: Vec<(f64, usize)> = vec![(f64::NAN, 0); outputs.len()];
+        let model = s.model.clone();
+        let stats = sim
+            .run(&mut |smp| {
+                row.clear();
+                rows.push(&model, smp, &mut row);
+                for (o, a) in outputs.iter().zip(acc.iter_mut()) {
+                    if let Output::Column { index, summary } = o {
+                        let v = row[*index];
+                        let first = a.1 == 0;
+                        a.0 = match summary {
+                            Summary::Final => v,
+                            _ if first && *summary != Summary::MaxAbs => v,
+                            Summary::Max => a.0.max(v),
+                            Summary::Min => a.0.min(v),
+                            Summary::Mean => a.0 + v,
+                            Summary::MaxAbs if first => v.abs(),
+                            Summary::MaxAbs => a.0.max(v.abs()),
+                        };
+                        a.1 += 1;
+                    }
+                }
+            })
+            .map_err(|e| e.to_string())?;
+        Ok(outputs
+            .iter()
+            .zip(&acc)
+            .map(|(o, &(v, count))| match o {
+                Output::Column {
+                    summary: Summary::Mean, ..
+                } => v / count as f64,
+                Output::Column { .. } => v,
+                Output::Statistic(Statistic::Steps) => stats.steps as f64,
+                Output::Statistic(Statistic::Evaluations) => stats.evaluations as f64,
+                Output::Statistic(Statistic::MaxConstraintViolation) => stats.max_constraint_violation,
+                Output::Statistic(Statistic::MaxEnergyChange) => stats.max_energy_change,
+            })
+            .collect::<Vec<f64>>())
+    });
+    let (outputs, error) = match result {
+        Ok(v) => (v, None),
+        Err(e) => (vec![f64::NAN; outputs.len()], Some(e)),
+    };
+    SweepRow {
+        assignment: assignment.clone(),
+        outputs,
+        wall_time: start.elapsed().as_secs_f64(),
+        error,
+    }
+}
+
+/// Runs every assignment on `threads` threads (all cores when `None`), in parallel, rows in the
+/// order of `runs`. A run not started when `cancel` is set is a row with the error "cancelled".
+pub fn sweep(
+    scene: &Scene,
+    runs: &[Assignment],
+    end: Option<f64>,
+    outputs: &[Output],
+    threads: Option<usize>,
+    cancel: &AtomicBool,
+) -> Result<Vec<SweepRow>, String> {
+    use rayon::prelude::*;
+    let work = || {
+        runs.par_iter()
+            .map(|a| {
+                if cancel.load(Ordering::Relaxed) {
+                    SweepRow {
+                        assignment: a.clone(),
+                        outputs: vec![f64::NAN; outputs.len()],
+                        wall_time: 0.0,
+                        error: Some("cancelled".into()),
+                    }
+                } else {
+                    run_one(scene, a, end, outputs)
+                }
+            })
+            .collect()
+    };
+    match threads {
+        None => Ok(work()),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build()
+            .map(|pool| pool.install(work))
+            .map_err(|e| format!("cannot start {n} threads: {e}")),
+    }
+}
+
+/// Writes sweep rows as CSV: one column per parameter path, one per output, `wall_time_s` and
+/// `error` (empty for a run that finished). Numbers in shortest round-trip form.
+pub fn write_csv(
+    out: impl std::io::Write,
+    parameters: &[String],
+    outputs: &[String],
+    rows: &[SweepRow],
+) -> std::io::Result<()> {
+    let mut w = csv::WriterBuilder::new()
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(out);
+    let mut header: Vec<&str> = parameters.iter().map(String::as_str).collect();
+    header.extend(outputs.iter().map(String::as_str));
+    header.extend(["wall_time_s", "error"]);
+    w.write_record(&header)?;
+    let number = |x: f64| {
+        let mut b = Vec::new();
+        // Writing to a Vec cannot fail.
+        let _ = crate::output::write_number(&mut b, x);
+        String::from_utf8_lossy(&b).into_owned()
+    };
+    for r in rows {
+        let mut rec: Vec<String> = parameters
+            .iter()
+            .map(|p| {
+                r.assignment
+                    .iter()
+                    .find(|(q, _)| q == p)
+                    .map(|(_, v)| match v {
+                        SceneValue::Number(x) => number(*x),
+                        SceneValue::Text(s) => s.clone(),
+                        other => other.to_string(),
+                    })
+                    .unwrap_or_default()
+            })
+            .collect();
+        rec.extend(r.outputs.iter().map(|&x| number(x)));
+        rec.push(number(r.wall_time));
+        rec.push(
+            r.error
+                .as_deref()
+                .map(|e| crate::scene::one_line(e).into_owned())
+                .unwrap_or_default(),
+        );
+        w.write_record(&rec)?;
+    }
+    w.flush()
+}
+
+/// Splits a command-line list `1,2,[0,-9.81]` at the commas outside brackets and quotes.
+pub fn split_list(text: &str) -> Vec<&str> {
+    let (mut depth, mut quoted, mut start) = (0i32, false, 0);
+    let mut out = Vec::new();
+    for (i, c) in text.char_indices() {
+        match c {
+            '"' => quoted = !quoted,
+            '[' if !quoted => depth += 1,
+            ']' if !quoted => depth -= 1,
+            ',' if !quoted && depth == 0 => {
+                out.push(text[start..i].trim());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push(text[start..].trim());
+    out
+}

@@ -1,0 +1,262 @@
+//! The speed–accuracy trade of `dalembert trade`: every formulation × integrator × constraint
+//! treatment × step (or tolerance) on one scene, measured against a tight reference run
+//! (Dormand–Prince at rtol = atol = 1e-12 with projection, augmented). The command line writes and
+//! plots it; the Python package returns it.
+
+use crate::scene::{unknown_name, IntegratorKind, StabilizationKind};
+use crate::{FormulationKind, Scene};
+use dalembert_integrators::{ConstraintTreatment, IntegratorOptions, Method};
+
+/// The grid of settings to try. [`TradeGrid::default`] is the command line's default grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TradeGrid {
+    /// Formulation names.
+    pub formulations: Vec<String>,
+    /// Integrator names.
+    pub integrators: Vec<String>,
+    /// Constraint treatments of the fixed-step explicit methods.
+    pub treatments: Vec<String>,
+    /// Steps of the fixed-step methods (s).
+    pub steps: Vec<f64>,
+    /// Tolerances of the adaptive method (rtol = atol).
+    pub tolerances: Vec<f64>,
+    /// End time of every run (s); `None`: the scene's, at most 5 s.
+    pub end: Option<f64>,
+    /// Comparison interval (s); `None`: the larger of the scene's output interval and the largest
+    /// step.
+    pub every: Option<f64>,
+}
+
+impl Default for TradeGrid {
+    fn default() -> Self {
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
+        TradeGrid {
+            formulations: names(FormulationKind::NAMES),
+            integrators: names(IntegratorKind::NAMES),
+            treatments: names(StabilizationKind::NAMES),
+            steps: vec![1e-2, 3e-3, 1e-3, 3e-4],
+            tolerances: vec![1e-4, 1e-6, 1e-8, 1e-10],
+            end: None,
+            every: None,
+        }
+    }
+}
+
+/// One run of the grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TradeRun {
+    /// `formulation/integrator/treatment`.
+    pub method: String,
+    /// Step (fixed-step methods) or tolerance (dopri5).
+    pub parameter: f64,
+    /// Wall time of the integration loop (s); NaN for a failed run.
+    pub time_s: f64,
+    /// Right-hand-side evaluations.
+    pub evaluations: u64,
+    /// Largest deviation of any coordinate or velocity from the reference at the comparison
+    /// times; `None` for a failed run.
+    pub error: Option<f64>,
+    /// Largest `|C|`.
+    pub constraint: f64,
+    /// Largest `|ΔE|` (J).
+    pub energy: f64,
+    /// `ok`, or the failure.
+    pub status: String,
+}
+
+/// The outcome of [`trade`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trade {
+    /// End time of every run (s).
+    pub end: f64,
+    /// Comparison interval (s).
+    pub every: f64,
+    /// Every run of the grid, in grid order.
+    pub runs: Vec<TradeRun>,
+    /// Indices of the runs on the Pareto front (no other run both faster and more accurate),
+    /// fastest first.
+    pub front: Vec<usize>,
+}
+
+impl Trade {
+    /// The fastest run whose error is within `band`.
+    pub fn best_within(&self, band: f64) -> Option<&TradeRun> {
+        self.runs
+            .iter()
+            .filter(|r| r.error.is_some_and(|e| e <= band))
+            .min_by(|x, y| x.time_s.total_cmp(&y.time_s))
+    }
+}
+
+/// Wall time, evaluations, largest |C| and largest energy change of a finished run.
+type Outcome = (f64, u64, f64, f64);
+
+/// Samples `[q, q̇]` at the comparison times, and the outcome or the failure.
+fn samples(
+    scene: &Scene,
+    kind: FormulationKind,
+    opts: IntegratorOptions,
+    end: f64,
+) -> (Vec<Vec<f64>>, Result<Outcome, String>) {
+    let mut sim = scene.simulation();
+    sim.formulation = kind;
+    sim.integrator = opts;
+    sim.end = end;
+    let mut out = Vec::new();
+    let res = sim.run(&mut |s| out.push([s.q, s.qd].concat()));
+    let r = res
+        .map(|st| {
+            (
+                st.wall_time.as_secs_f64(),
+                st.evaluations,
+                st.max_constraint_violation,
+                st.max_energy_change,
+            )
+        })
+        .map_err(|e| e.to_string());
+    (out, r)
+}
+
+/// The runs of `g`: formulation, label, options and parameter. Unknown names are one-line errors.
+fn runs_of(g: &TradeGrid) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64)>, String> {
+    for (values, what) in [(&g.steps, "steps"), (&g.tolerances, "tolerances")] {
+        if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(format!("{what}: every value must be positive and finite, got {v}"));
+        }
+    }
+    let mut out = Vec::new();
+    for f in &g.formulations {
+        let kind = FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, FormulationKind::NAMES))?;
+        for i in &g.integrators {
+            let integ = IntegratorKind::parse(i).ok_or_else(|| unknown_name("integrator", i, IntegratorKind::NAMES))?;
+            match integ {
+                IntegratorKind::Dopri5 => {
+                    for &tol in &g.tolerances {
+                        let m = Method::DormandPrince { rtol: tol, atol: tol };
+                        let mut o = IntegratorOptions::fixed(m, 1e-3, 1.0)
+                            .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-10 });
+                        // Steps limited only by the tolerance (dense output gives the samples).
+                        o.max_step = f64::INFINITY;
+                        out.push((kind, format!("{f}/dopri5/projection"), o, tol));
+                    }
+                }
+                IntegratorKind::GeneralizedAlpha => {
+                    for &h in &g.steps {
+                        let o = IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, h, 1.0);
+                        out.push((kind, format!("{f}/generalized-alpha"), o, h));
+                    }
+                }
+                IntegratorKind::Rk4 | IntegratorKind::SymplecticEuler => {
+                    let m = if integ == IntegratorKind::Rk4 {
+                        Method::Rk4
+                    } else {
+                        Method::SymplecticEuler
+                    };
+                    for t in &g.treatments {
+                        let st = StabilizationKind::parse(t)
+                            .ok_or_else(|| unknown_name("treatment", t, StabilizationKind::NAMES))?;
+                        for &h in &g.steps {
+                            let treatment = match st {
+                                StabilizationKind::None => ConstraintTreatment::None,
+                                StabilizationKind::Baumgarte => ConstraintTreatment::baumgarte_for_step(h),
+                                StabilizationKind::Projection => ConstraintTreatment::Projection { tolerance: 1e-10 },
+                            };
+                            let o = IntegratorOptions::fixed(m, h, 1.0).with_treatment(treatment);
+                            out.push((kind, format!("{f}/{}/{t}", m.name()), o, h));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the grid `g` on `scene`; `progress(done, total)` is called after every run. Errors: a name
+/// or value of the grid that is not valid, or a reference run that fails (each grid run that
+/// fails is a row with its status instead).
+pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize)) -> Result<Trade, String> {
+    let grid = runs_of(g)?;
+    let end = g.end.unwrap_or(scene.settings.end.min(5.0));
+    let largest_step = g.steps.iter().cloned().fold(0.0f64, f64::max);
+    let every = g.every.unwrap_or(scene.settings.output_every.max(largest_step));
+    if !(end.is_finite() && end > 0.0 && every.is_finite() && every > 0.0) {
+        return Err("--end and --every must be positive".into());
+    }
+    let with_every = |mut o: IntegratorOptions| {
+        o.output_every = every;
+        if o.max_step.is_finite() {
+            o.max_step = every;
+        }
+        o
+    };
+    let ref_opts = with_every(
+        IntegratorOptions::fixed(
+            Method::DormandPrince {
+                rtol: 1e-12,
+                atol: 1e-12,
+            },
+            1e-4,
+            1.0,
+        )
+        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-12 }),
+    );
+    let (reference, status) = samples(scene, FormulationKind::Augmented, ref_opts, end);
+    status.map_err(|e| format!("reference run failed: {e}"))?;
+    let total = grid.len();
+    let mut runs = Vec::with_capacity(total);
+    for (k, (kind, method, opts, parameter)) in grid.into_iter().enumerate() {
+        let (got, res) = samples(scene, kind, with_every(opts), end);
+        runs.push(match res {
+            Ok((time_s, evaluations, constraint, energy)) => TradeRun {
+                method,
+                parameter,
+                time_s,
+                evaluations,
+                error: Some(
+                    got.iter()
+                        .zip(&reference)
+                        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+                        .fold(0.0f64, f64::max),
+                ),
+                constraint,
+                energy,
+                status: "ok".into(),
+            },
+            Err(e) => TradeRun {
+                method,
+                parameter,
+                time_s: f64::NAN,
+                evaluations: 0,
+                error: None,
+                constraint: f64::NAN,
+                energy: f64::NAN,
+                status: e,
+            },
+        });
+        progress(k + 1, total);
+    }
+    let front = pareto(&runs);
+    Ok(Trade {
+        end,
+        every,
+        runs,
+        front,
+    })
+}
+
+/// Indices of the runs on the Pareto front (no other run both faster and more accurate).
+fn pareto(runs: &[TradeRun]) -> Vec<usize> {
+    let mut ok: Vec<usize> = (0..runs.len()).filter(|&i| runs[i].error.is_some()).collect();
+    ok.sort_by(|&a, &b| runs[a].time_s.total_cmp(&runs[b].time_s));
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in ok {
+        let e = runs[i].error.unwrap_or(f64::INFINITY);
+        if e < best {
+            best = e;
+            front.push(i);
+        }
+    }
+    front
+}
