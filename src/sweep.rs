@@ -296,3 +296,38 @@ pub fn split_list(text: &str) -> Vec<&str> {
     out.push(text[start..].trim());
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lists_split_outside_brackets_and_quotes() {
+        assert_eq!(split_list("1,2, 4"), ["1", "2", "4"]);
+        assert_eq!(split_list("[0,-9.81],[0,-1.62]"), ["[0,-9.81]", "[0,-1.62]"]);
+        assert_eq!(split_list("\"a,b\",c"), ["\"a,b\"", "c"]);
+    }
+
+    #[test]
+    fn values_read_as_toml_or_text() {
+        assert_eq!(SceneValue::parse("2"), SceneValue::Integer(2));
+        assert_eq!(SceneValue::parse("1.5e3"), SceneValue::Number(1500.0));
+        assert_eq!(SceneValue::parse("rk4"), SceneValue::Text("rk4".into()));
+        assert_eq!(
+            SceneValue::parse("[0, -9.81]"),
+            SceneValue::List(vec![SceneValue::Integer(0), SceneValue::Number(-9.81)])
+        );
+    }
+
+    #[test]
+    fn cartesian_product_first_path_slowest() {
+        let p = vec![
+            ("a".to_string(), vec![SceneValue::Integer(1), SceneValue::Integer(2)]),
+            ("b".to_string(), vec![SceneValue::Integer(3), SceneValue::Integer(4), SceneValue::Integer(5)]),
+        ];
+        let runs = cartesian(&p);
+        assert_eq!(runs.len(), 6);
+        assert_eq!(runs[1], vec![("a".into(), SceneValue::Integer(1)), ("b".into(), SceneValue::Integer(4))]);
+        assert_eq!(runs[3][0].1, SceneValue::Integer(2));
+    }
+}
