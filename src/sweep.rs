@@ -323,11 +323,20 @@ mod tests {
     fn cartesian_product_first_path_slowest() {
         let p = vec![
             ("a".to_string(), vec![SceneValue::Integer(1), SceneValue::Integer(2)]),
-            ("b".to_string(), vec![SceneValue::Integer(3), SceneValue::Integer(4), SceneValue::Integer(5)]),
+            (
+                "b".to_string(),
+                vec![SceneValue::Integer(3), SceneValue::Integer(4), SceneValue::Integer(5)],
+            ),
         ];
         let runs = cartesian(&p);
         assert_eq!(runs.len(), 6);
-        assert_eq!(runs[1], vec![("a".into(), SceneValue::Integer(1)), ("b".into(), SceneValue::Integer(4))]);
+        assert_eq!(
+            runs[1],
+            vec![
+                ("a".into(), SceneValue::Integer(1)),
+                ("b".into(), SceneValue::Integer(4))
+            ]
+        );
         assert_eq!(runs[3][0].1, SceneValue::Integer(2));
     }
 }
