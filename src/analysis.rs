@@ -85,7 +85,7 @@ impl Scene {
         let mut vals = sys.values();
         sys.evaluate(0.0, &self.q, &self.qd, &mut vals);
         let s = sys.analyse_structure(&vals, 1e-9)?;
-        let rows = Rows::new(model);
+        let mut rows = Rows::new(model);
         let coordinate_names = model
             .bodies()
             .iter()
@@ -115,7 +115,6 @@ impl Scene {
                     energy: 0.0,
                 };
                 let mut row = Vec::new();
-                let mut rows = rows;
                 rows.push(model, &sample, &mut row);
                 let first = 1 + 2 * n;
                 let last = row.len() - 3;

@@ -149,15 +149,20 @@ pub fn run_one(scene: &Scene, assignment: &Assignment, end: Option<f64>, outputs
                 for (o, a) in outputs.iter().zip(acc.iter_mut()) {
                     if let Output::Column { index, summary } = o {
                         let v = row[*index];
-                        let first = a.1 == 0;
-                        a.0 = match summary {
-                            Summary::Final => v,
-                            _ if first && *summary != Summary::MaxAbs => v,
-                            Summary::Max => a.0.max(v),
-                            Summary::Min => a.0.min(v),
-                            Summary::Mean => a.0 + v,
-                            Summary::MaxAbs if first => v.abs(),
-                            Summary::MaxAbs => a.0.max(v.abs()),
+                        a.0 = if a.1 == 0 {
+                            if *summary == Summary::MaxAbs {
+                                v.abs()
+                            } else {
+                                v
+                            }
+                        } else {
+                            match summary {
+                                Summary::Final => v,
+                                Summary::Max => a.0.max(v),
+                                Summary::Min => a.0.min(v),
+                                Summary::Mean => a.0 + v,
+                                Summary::MaxAbs => a.0.max(v.abs()),
+                            }
                         };
                         a.1 += 1;
                     }
