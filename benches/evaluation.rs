@@ -7,6 +7,7 @@
 use criterion::{BenchmarkId, Criterion};
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
+use dalembert::constraints::MultibodySystem as _;
 use dalembert::constraints::{Formulation, Stabilization};
 use dalembert::embedding::Embedding;
 use dalembert_testkit::closed_form::DoublePendulum;

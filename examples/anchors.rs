@@ -10,6 +10,7 @@
 //! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once.
 
 use dalembert::augmented::Augmented;
+use dalembert::constraints::MultibodySystem as _;
 use dalembert::constraints::{Formulation, Stabilization};
 use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
 use dalembert_testkit::anchors::state_errors;

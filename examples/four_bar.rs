@@ -5,6 +5,7 @@
 //!
 //! Run: `cargo run --release --example four_bar`
 
+use dalembert::constraints::ConstraintSet as _;
 use dalembert::constraints::{Constraint, Model, Reaction, Revolute};
 use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};

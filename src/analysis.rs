@@ -3,6 +3,7 @@
 //! ([`Scene::inverse`]) and a simulation kept in memory ([`Scene::record`]). The command line and
 //! the Python package print or convert these; neither computes anything of its own.
 
+use crate::constraints::{ConstraintSet as _, MultibodySystem as _};
 use crate::output::{Recorder, Rows, Table};
 use crate::simulation::SimulationError;
 use crate::Scene;

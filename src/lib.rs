@@ -29,6 +29,7 @@ pub use dalembert_constraints as constraints;
 pub use dalembert_embedding as embedding;
 pub use dalembert_integrators as integrators;
 pub use dalembert_kinematics as kinematics;
+pub use dalembert_system as system;
 
 pub use analysis::{CheckReport, Recording};
 pub use output::CsvOutput;

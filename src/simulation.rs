@@ -1,5 +1,6 @@
 //! A model, a formulation and an integrator, run together.
 
+use crate::constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert_amalgamated::Amalgamated;
 use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::structure::dense_fits;

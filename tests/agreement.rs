@@ -12,6 +12,7 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
+use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert::constraints::{Formulation, Reaction, Stabilization};
 use dalembert::embedding::{Embedding, EmbeddingOptions, Multipliers};
 use dalembert_testkit::generator::{build, BodySpec, LoopSpec, Spec, SpringSpec};

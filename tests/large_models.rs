@@ -2,6 +2,7 @@
 //! as the dense ones, computed here independently; rank-deficient models too large for the dense
 //! fallback get an error naming the size, not an allocation panic.
 
+use dalembert::constraints::ConstraintSet as _;
 use dalembert::constraints::{Constraint, ConstraintError, KinematicOptions, Model, Revolute};
 use dalembert::kinematics::{BodyId, BodyRef, Vec2};
 use dalembert_testkit::mechanisms;

@@ -55,11 +55,11 @@ fn wrong_slice_lengths_are_errors_in_every_formulation() {
     for mut f in formulations {
         let (mut qdd, mut lambda) = (vec![0.0; 3], vec![0.0; 2]);
         let qd = [0.0; 3];
-        // (q, q̇, length of q̈, length of λ, the slice at fault, its length)
+        // (q, v = q̇, length of q̈, length of λ, the slice at fault (the seam calls velocities v), its length)
         type Case<'a> = (&'a [f64], &'a [f64], usize, usize, &'static str, usize);
         let cases: [Case; 4] = [
             (&q[..2], &qd, 3, 2, "q", 2),
-            (&q, &qd[..1], 3, 2, "q̇", 1),
+            (&q, &qd[..1], 3, 2, "v", 1),
             (&q, &qd, 4, 2, "q̈", 4),
             (&q, &qd, 3, 1, "λ", 1),
         ];

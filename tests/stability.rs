@@ -4,6 +4,7 @@
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
 use dalembert::constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Stabilization};
+use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert::embedding::{Embedding, EmbeddingOptions};
 use dalembert::integrators::{integrate, ConstraintTreatment, IntegrationError, IntegratorOptions, Method, Statistics};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Vec2};

@@ -4,6 +4,7 @@
 //! CSV writer and the in-memory [`Table`] both use it, so a column means the same thing in a file,
 //! a numpy array and a sweep.
 
+use crate::constraints::ConstraintSet as _;
 use dalembert_constraints::{ConstraintRole, ConstraintValues, Model, Reaction};
 use dalembert_integrators::Sample;
 

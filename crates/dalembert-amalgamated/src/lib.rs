@@ -12,18 +12,17 @@
 //! `Q_c = −C_qᵀ λ` on the dependent columns: `C_qdᵀ λ_R = −Q_c,d`.
 //!
 //! The velocity transformation and its partition are shared with the embedding formulation
-//! (`dalembert_constraints::partition`). The system (size `3n − r`) is solved with dense LU for
+//! (`dalembert_system::partition`). The system (size `3n − r`) is solved with dense LU for
 //! small models and with faer's sparse LU above 150 unknowns (measured: chain of 16, 112 unknowns,
 //! dense 70 µs vs sparse 86 µs; chain of 64, dense 2.56 ms vs sparse 0.76 ms); the sparse pattern
 //! (with `B_i` full in its dependent rows) depends only on the partition, so its symbolic analysis
 //! is redone only at a re-partition. (A symmetric indefinite sparse factorization would halve the work; faer's needs
 //! regularisation on this matrix, see `shared/LINALG-NOTES.md`.)
 
-use dalembert_constraints::{
-    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, PartitionTracker, RedundancyTreatment,
-    Stabilization,
+use dalembert_system::{
+    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
+    RedundancyTreatment, Stabilization,
 };
-use dalembert_kinematics::MassMatrix;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use std::sync::Arc;
@@ -36,10 +35,10 @@ const DENSE_LIMIT: usize = 150;
 
 /// The amalgamated formulation of a model.
 pub struct Amalgamated {
-    model: Arc<Model>,
+    model: Arc<dyn MultibodySystem>,
     redundancy: RedundancyTreatment,
     tracker: PartitionTracker,
-    mass: MassMatrix,
+    mass: BlockDiagonal,
     values: ConstraintValues,
     q_e: Vec<f64>,
     cdot: Vec<f64>,
@@ -58,11 +57,11 @@ impl std::fmt::Debug for Amalgamated {
 
 impl Amalgamated {
     /// Sets up the formulation; `redundancy` as in the augmented formulation.
-    pub fn new(model: Arc<Model>, redundancy: RedundancyTreatment) -> Self {
-        let n = model.num_coordinates();
+    pub fn new(model: Arc<dyn MultibodySystem>, redundancy: RedundancyTreatment) -> Self {
+        let n = model.layout().n_v();
         let m = model.num_equations();
         Amalgamated {
-            mass: model.mass_matrix(&vec![0.0; n]),
+            mass: model.mass_storage(),
             values: model.constraints().values(),
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
@@ -76,7 +75,7 @@ impl Amalgamated {
     }
 
     /// With redundant constraints treated as errors.
-    pub fn with_defaults(model: Arc<Model>) -> Self {
+    pub fn with_defaults(model: Arc<dyn MultibodySystem>) -> Self {
         Self::new(model, RedundancyTreatment::Error)
     }
 
@@ -90,12 +89,8 @@ impl Amalgamated {
     fn dense_matrix(&self, n: usize, ni: usize, b: &Mat<f64>) -> Mat<f64> {
         let dim = 2 * n + ni;
         let mut k = Mat::<f64>::zeros(dim, dim);
-        for (bi, blk) in self.mass.blocks().iter().enumerate() {
-            for r in 0..3 {
-                for c in 0..3 {
-                    k[(3 * bi + r, 3 * bi + c)] = blk[(r, c)];
-                }
-            }
+        for (r, c, v) in self.mass.entries() {
+            k[(r, c)] = v;
         }
         for i in 0..n {
             k[(i, n + i)] = -1.0;
@@ -114,8 +109,8 @@ impl Formulation for Amalgamated {
         "amalgamated"
     }
 
-    fn model(&self) -> &Model {
-        &self.model
+    fn system(&self) -> &dyn MultibodySystem {
+        &*self.model
     }
 
     fn accelerations(
@@ -130,8 +125,8 @@ impl Formulation for Amalgamated {
         self.stats.evaluations += 1;
         self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         self.model.check_state(t, q, qd)?;
-        let n = q.len();
-        self.mass.update(self.model.bodies(), q);
+        let n = qd.len();
+        self.model.mass(q, &mut self.mass);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.check_forces(t, q, qd, &self.q_e)?;
         let sys = self.model.constraints();
@@ -172,7 +167,7 @@ impl Formulation for Amalgamated {
                 .as_ref()
                 .is_none_or(|s| s.independent != partition.independent)
             {
-                self.sparse = SparseSystem::new(n, &partition);
+                self.sparse = SparseSystem::new(&self.mass, &partition);
             }
             match self.sparse.as_mut() {
                 Some(sp) => {

@@ -1,32 +1,15 @@
 //! The augmented formulation type and its [`Formulation`] implementation.
 
 use crate::diagnosis::{diagnose, minimum_norm_solve};
-use crate::kkt::{kkt_mul, kkt_scale, DenseKkt, KktSolver, SchurKkt, SparseKkt, SparseSchurKkt};
-use dalembert_constraints::{
-    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, RedundancyTreatment, Stabilization,
+use dalembert_system::linalg::saddle_point::{kkt_mul, kkt_scale};
+use dalembert_system::linalg::SaddlePoint;
+use dalembert_system::{
+    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
+    RedundancyTreatment, Stabilization,
 };
-use dalembert_kinematics::MassMatrix;
 use std::sync::Arc;
 
-/// Which linear-algebra back end solves the saddle-point system.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Backend {
-    /// Up to [`AugmentedOptions::dense_limit`] unknowns: the Schur complement when the mass blocks
-    /// allow it (positive definite or diagonal), dense LU otherwise; above it the sparse Schur
-    /// complement when every mass block is positive definite, sparse LU otherwise.
-    #[default]
-    Auto,
-    /// Dense LU with partial pivoting of the whole saddle-point matrix.
-    Dense,
-    /// Range space: Cholesky of `S = C_q M⁻¹ C_qᵀ`, with a small reduced system for coordinates
-    /// without inertia (needs mass blocks that are positive definite, or diagonal).
-    Schur,
-    /// Sparse LU of the saddle-point matrix with a symbolic analysis reused across evaluations.
-    Sparse,
-    /// Sparse Cholesky of `S = C_q M⁻¹ C_qᵀ` (positive definite mass blocks), symbolic analysis
-    /// reused: linear cost for chains.
-    SparseSchur,
-}
+pub use dalembert_system::linalg::Backend;
 
 /// Settings of the augmented formulation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,12 +40,13 @@ impl Default for AugmentedOptions {
     }
 }
 
-/// The augmented (Lagrange multiplier) formulation of a model.
+/// The augmented (Lagrange multiplier) formulation of a system.
 pub struct Augmented {
-    model: Arc<Model>,
+    model: Arc<dyn MultibodySystem>,
     options: AugmentedOptions,
-    solver: KktSolver,
-    mass: MassMatrix,
+    solver: SaddlePoint,
+    mass: BlockDiagonal,
+    mass_loaded: bool,
     values: ConstraintValues,
     q_e: Vec<f64>,
     cdot: Vec<f64>,
@@ -82,53 +66,27 @@ impl std::fmt::Debug for Augmented {
 }
 
 impl Augmented {
-    /// Sets up the formulation: workspaces, and for the sparse back end the symbolic analysis.
-    pub fn new(model: Arc<Model>, options: AugmentedOptions) -> Result<Self, DynamicsError> {
-        let n = model.num_coordinates();
+    /// Sets up the formulation: workspaces, and for the sparse back ends the symbolic analysis.
+    pub fn new(model: Arc<dyn MultibodySystem>, options: AugmentedOptions) -> Result<Self, DynamicsError> {
+        let n = model.layout().n_v();
         let m = model.num_equations();
-        let schur_ok = crate::kkt::schur_applicable(model.bodies(), m);
-        let spd = model.bodies().iter().all(|b| b.mass > 0.0 && b.inertia > 0.0);
-        let backend = match options.backend {
-            Backend::Auto if n + m > options.dense_limit && spd => Backend::SparseSchur,
-            Backend::Auto if n + m > options.dense_limit => Backend::Sparse,
-            Backend::Auto if schur_ok => Backend::Schur,
-            Backend::Auto => Backend::Dense,
-            Backend::Schur if !schur_ok => {
-                return Err(DynamicsError::Singular {
-                    time: 0.0,
-                    what: "the Schur back end needs mass blocks that are positive definite or diagonal".into(),
-                })
-            }
-            other => other,
-        };
-        let solver = if backend == Backend::Dense {
-            KktSolver::Dense(Box::new(DenseKkt::new(n, m, options.pivot_tolerance)))
-        } else if backend == Backend::SparseSchur {
-            if !spd {
-                return Err(DynamicsError::Singular {
-                    time: 0.0,
-                    what: "the sparse Schur back end needs every body's mass and inertia positive".into(),
-                });
-            }
-            KktSolver::SparseSchur(Box::new(
-                SparseSchurKkt::new(model.constraints(), options.pivot_tolerance)
-                    .map_err(|e| DynamicsError::Factorization { time: 0.0, what: e.0 })?,
-            ))
-        } else if backend == Backend::Schur {
-            KktSolver::Schur(Box::new(SchurKkt::new(
-                model.constraints(),
-                model.bodies(),
-                options.pivot_tolerance,
-            )))
-        } else {
-            KktSolver::Sparse(Box::new(
-                SparseKkt::new(model.constraints(), options.pivot_tolerance)
-                    .map_err(|e| DynamicsError::Factorization { time: 0.0, what: e.0 })?,
-            ))
-        };
-        let q0 = vec![0.0; n];
+        let mut mass = model.mass_storage();
+        model.mass(&vec![0.0; model.layout().n_q()], &mut mass);
+        let solver = SaddlePoint::new(
+            options.backend,
+            &mass,
+            model.mass_is_constant(),
+            model.constraints(),
+            options.dense_limit,
+            options.pivot_tolerance,
+        )
+        .map_err(|e| DynamicsError::Factorization {
+            time: 0.0,
+            what: e.to_string(),
+        })?;
         Ok(Augmented {
-            mass: model.mass_matrix(&q0),
+            mass,
+            mass_loaded: false,
             values: model.constraints().values(),
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
@@ -143,11 +101,11 @@ impl Augmented {
     }
 
     /// With default options.
-    pub fn with_defaults(model: Arc<Model>) -> Result<Self, DynamicsError> {
+    pub fn with_defaults(model: Arc<dyn MultibodySystem>) -> Result<Self, DynamicsError> {
         Self::new(model, AugmentedOptions::default())
     }
 
-    /// The back end in use: `"dense"`, `"schur"` or `"sparse"`.
+    /// The back end in use: `"dense"`, `"schur"`, `"sparse"` or `"sparse-schur"`.
     pub fn backend_name(&self) -> &'static str {
         self.solver.name()
     }
@@ -162,10 +120,10 @@ impl Augmented {
     fn factor_and_solve(&mut self, t: f64) -> Result<(), DynamicsError> {
         let sys = self.model.constraints();
         self.stats.factorizations += 1;
-        let factored = self.solver.factor(&self.mass, sys, &self.values);
+        let factored = self.solver.factor(&self.mass, sys.pattern(), &self.values);
         if factored.is_ok() {
             self.x.copy_from_slice(&self.b);
-            self.solver.solve(sys, &mut self.x);
+            self.solver.solve(sys.pattern(), &mut self.x);
             // Every back end checks its pivots (or a condition probe) when factoring, so a
             // well-conditioned solve is accepted as is; an ill-conditioned Schur complement gets the
             // residual check and one refinement step below.
@@ -193,7 +151,7 @@ impl Augmented {
                     return Ok(());
                 }
                 if refinement == 0 {
-                    self.solver.solve(sys, &mut self.r);
+                    self.solver.solve(sys.pattern(), &mut self.r);
                     for (x, d) in self.x.iter_mut().zip(&self.r) {
                         *x += d;
                     }
@@ -204,17 +162,20 @@ impl Augmented {
         }
         match self.options.redundancy {
             RedundancyTreatment::MinimumNorm => {
-                let n = self.model.num_coordinates();
-                minimum_norm_solve(t, &self.model, &self.mass, &self.values, &self.b, &mut self.x, n)
+                let n = self.model.layout().n_v();
+                minimum_norm_solve(t, &*self.model, &self.mass, &self.values, &self.b, &mut self.x, n)
             }
-            RedundancyTreatment::Error => Err(diagnose(t, &self.model, &self.values, self.options.pivot_tolerance)),
+            RedundancyTreatment::Error => Err(diagnose(t, &*self.model, &self.values, self.options.pivot_tolerance)),
         }
     }
 
     /// Evaluates `M`, `Q_e` and the constraints at `(t, q, q̇)` into the workspaces.
     fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
         self.model.check_state(t, q, qd)?;
-        self.mass.update(self.model.bodies(), q);
+        if !(self.mass_loaded && self.model.mass_is_constant()) {
+            self.model.mass(q, &mut self.mass);
+            self.mass_loaded = true;
+        }
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.check_forces(t, q, qd, &self.q_e)?;
         self.model.constraints().evaluate(t, q, qd, &mut self.values);
@@ -228,8 +189,8 @@ impl Formulation for Augmented {
         "augmented"
     }
 
-    fn model(&self) -> &Model {
-        &self.model
+    fn system(&self) -> &dyn MultibodySystem {
+        &*self.model
     }
 
     fn accelerations(
@@ -244,7 +205,7 @@ impl Formulation for Augmented {
         self.stats.evaluations += 1;
         self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         self.load(t, q, qd)?;
-        let n = q.len();
+        let n = qd.len();
         let sys = self.model.constraints();
         if stabilization != Stabilization::None {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
@@ -256,8 +217,7 @@ impl Formulation for Augmented {
         qdd.copy_from_slice(&self.x[..n]);
         lambda.copy_from_slice(&self.x[n..]);
         if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
-            let what = format!("acceleration of body '{}'", self.model.bodies()[i / 3].name);
-            return Err(DynamicsError::NonFinite { time: t, what });
+            return Err(self.model.non_finite_acceleration(t, i));
         }
         Ok(())
     }
@@ -271,7 +231,7 @@ impl Formulation for Augmented {
     /// `[M C_qᵀ; C_q 0] [Δq̇; μ] = [0; −(C_q q̇ + C_t)]`.
     fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
         const MAX_ITERATIONS: usize = 20;
-        let n = q.len();
+        let n = qd.len();
         let mut iterations = 0;
         loop {
             self.load(t, q, qd)?;
@@ -285,7 +245,7 @@ impl Formulation for Augmented {
                     .filter(|&r| self.values.c[r].abs() > tolerance)
                     .map(|r| (sys.equation(r), self.values.c[r]))
                     .collect();
-                return Err(dalembert_constraints::ConstraintError::NotConverged {
+                return Err(dalembert_system::ConstraintError::NotConverged {
                     time: t,
                     iterations,
                     violated,
@@ -297,7 +257,7 @@ impl Formulation for Augmented {
                 *bi = -ci;
             }
             self.factor_and_solve(t)?;
-            q.iter_mut().zip(&self.x[..n]).for_each(|(a, d)| *a += d);
+            self.model.constraints().correct_positions(q, &self.x[..n]);
             iterations += 1;
         }
         self.stats.newton_iterations += iterations as u64;

@@ -1,8 +1,7 @@
 //! What went wrong when the saddle-point matrix is singular, and the minimum-norm treatment of
 //! redundant constraints.
 
-use dalembert_constraints::{ConstraintValues, DynamicsError, Model};
-use dalembert_kinematics::MassMatrix;
+use dalembert_system::{BlockDiagonal, ConstraintValues, DynamicsError, MultibodySystem};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
@@ -12,7 +11,12 @@ const RANK_TOLERANCE: f64 = 1e-9;
 /// Explains a singular KKT matrix: redundant constraints (rank-deficient `C_q`, naming the equations
 /// in the dependent set), a mass matrix singular on the admissible motions (naming massless bodies),
 /// or else a generic singular system.
-pub(crate) fn diagnose(t: f64, model: &Model, vals: &ConstraintValues, pivot_tolerance: f64) -> DynamicsError {
+pub(crate) fn diagnose(
+    t: f64,
+    model: &dyn MultibodySystem,
+    vals: &ConstraintValues,
+    pivot_tolerance: f64,
+) -> DynamicsError {
     let sys = model.constraints();
     match sys.analyse_structure(vals, RANK_TOLERANCE) {
         Ok(s) if s.is_full_rank() => {}
@@ -30,8 +34,8 @@ pub(crate) fn diagnose(t: f64, model: &Model, vals: &ConstraintValues, pivot_tol
 /// taken only when the caller opted into it and the matrix is singular).
 pub(crate) fn minimum_norm_solve(
     t: f64,
-    model: &Model,
-    mass: &MassMatrix,
+    model: &dyn MultibodySystem,
+    mass: &BlockDiagonal,
     vals: &ConstraintValues,
     b: &[f64],
     x: &mut [f64],
@@ -43,12 +47,8 @@ pub(crate) fn minimum_norm_solve(
     let r = rows.len();
     let jac = sys.jacobian_dense(vals);
     let mut k = Mat::<f64>::zeros(n + r, n + r);
-    for (i, blk) in mass.blocks().iter().enumerate() {
-        for a in 0..3 {
-            for c in 0..3 {
-                k[(3 * i + a, 3 * i + c)] = blk[(a, c)];
-            }
-        }
+    for (r, c, v) in mass.entries() {
+        k[(r, c)] = v;
     }
     for (ii, &row) in rows.iter().enumerate() {
         for c in 0..n {

@@ -16,7 +16,7 @@
 //! Both give the same answer to round-off (tested on chains of 1 to 500 bodies).
 //!
 //! A rank-deficient `C_q` (redundant joints, a singular position) is an error naming the equations
-//! involved, unless [`dalembert_constraints::RedundancyTreatment::MinimumNorm`] is chosen: then the
+//! involved, unless [`dalembert_system::RedundancyTreatment::MinimumNorm`] is chosen: then the
 //! system is solved on a maximal independent set of equations and `λ` is the minimum-norm solution
 //! of `C_qᵀ λ = Q_e − M q̈` (one admissible distribution of the reactions).
 //!
@@ -24,8 +24,6 @@
 
 mod augmented;
 mod diagnosis;
-mod inverse;
-mod kkt;
 
 pub use augmented::{Augmented, AugmentedOptions, Backend};
-pub use inverse::{InverseDynamics, InverseSolution};
+pub use dalembert_system::inverse::{InverseDynamics, InverseSolution};

@@ -5,6 +5,7 @@ use dalembert_augmented::{Augmented, AugmentedOptions, Backend};
 use dalembert_constraints::{
     Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Revolute, Stabilization,
 };
+use dalembert_constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert_kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};
 use dalembert_testkit::mechanisms;
 use std::sync::Arc;

@@ -6,6 +6,7 @@
 //! wrong term (any modelling error is O(1)).
 
 use dalembert_augmented::{Augmented, AugmentedOptions, Backend};
+use dalembert_constraints::MultibodySystem as _;
 use dalembert_constraints::{Formulation, Stabilization};
 use dalembert_testkit::closed_form::{DoublePendulum, FourBar};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};

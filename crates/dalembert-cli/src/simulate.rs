@@ -1,5 +1,6 @@
 //! `dalembert simulate`.
 
+use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert::integrators::Sample;
 use dalembert::scene::{IntegratorKind, RunOverrides, Spelling};
 use dalembert::{CsvOutput, Scene};

@@ -19,27 +19,25 @@
 
 pub mod constraint;
 pub mod drivers;
-pub mod error;
-pub mod formulation;
-pub mod gram;
 pub mod joints;
-pub mod kinematics;
 pub mod model;
-pub mod partition;
 pub mod primitives;
 pub mod reactions;
-pub mod sparse_pattern;
-pub mod structure;
 pub mod system;
 
+// The analyses written once on the system seam, under their old paths.
+pub use dalembert_system::{error, formulation, gram, kinematics, partition, sparse_pattern, structure};
+
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
+pub use dalembert_system::StructureReport;
+pub use dalembert_system::{
+    ConstraintError, ConstraintSet, ConstraintValues, DynamicsError, Energy, EquationRef, Formulation,
+    FormulationStats, MultibodySystem, RedundancyTreatment, Stabilization,
+};
+pub use dalembert_system::{KinematicOptions, KinematicReport};
+pub use dalembert_system::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
-pub use error::{ConstraintError, EquationRef};
-pub use formulation::{DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment, Stabilization};
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
-pub use kinematics::{KinematicOptions, KinematicReport};
 pub use model::Model;
-pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use reactions::Reaction;
-pub use structure::StructureReport;
-pub use system::{ConstraintSystem, ConstraintValues};
+pub use system::ConstraintSystem;

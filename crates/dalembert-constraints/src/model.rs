@@ -1,7 +1,10 @@
-//! A complete multibody model: bodies, applied forces and constraints.
+//! A complete planar multibody model: bodies, applied forces and constraints, and its
+//! implementation of the system seam ([`MultibodySystem`]).
 
-use crate::{Constraint, ConstraintError, ConstraintSystem};
+use crate::system::PLANAR_LABELS;
+use crate::{Constraint, ConstraintError, ConstraintSet, ConstraintSystem};
 use dalembert_kinematics::{Body, ForceElement, MassMatrix};
+use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 
 /// Bodies, applied force elements and the assembled constraint system of one mechanism.
 #[derive(Debug)]
@@ -9,6 +12,8 @@ pub struct Model {
     bodies: Vec<Body>,
     forces: Vec<Box<dyn ForceElement>>,
     constraints: ConstraintSystem,
+    layout: Layout,
+    mass_is_constant: bool,
 }
 
 impl Model {
@@ -22,10 +27,16 @@ impl Model {
             f.validate(bodies.len())?;
         }
         let constraints = ConstraintSystem::new(bodies.len(), constraints)?;
+        let layout = Layout::new(bodies.iter().map(|b| (b.name.as_str(), PLANAR_LABELS, PLANAR_LABELS)));
+        let mass_is_constant = bodies
+            .iter()
+            .all(|b| b.center_of_mass == dalembert_kinematics::Vec2::zeros());
         Ok(Model {
             bodies,
             forces,
             constraints,
+            layout,
+            mass_is_constant,
         })
     }
 
@@ -39,29 +50,51 @@ impl Model {
         &self.forces
     }
 
-    /// The constraint system.
+    /// The planar constraint system (the seam sees it as [`MultibodySystem::constraints`]).
     pub fn constraints(&self) -> &ConstraintSystem {
         &self.constraints
     }
 
-    /// Number of coordinates `n`.
+    /// Number of coordinates `n` (positions and velocities alike: `v = q̇`).
     pub fn num_coordinates(&self) -> usize {
         3 * self.bodies.len()
     }
 
-    /// Number of constraint equations `m`.
-    pub fn num_equations(&self) -> usize {
-        self.constraints.num_equations()
-    }
-
-    /// The mass matrix at `q`.
+    /// The mass matrix at `q`, as 3×3 blocks.
     pub fn mass_matrix(&self, q: &[f64]) -> MassMatrix {
         MassMatrix::new(&self.bodies, q)
+    }
+}
+
+impl MultibodySystem for Model {
+    fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    fn constraints(&self) -> &dyn ConstraintSet {
+        &self.constraints
+    }
+
+    /// `M_i` of `FORMULATIONS.md` §1 per body (`dalembert_kinematics::mass`).
+    fn mass(&self, q: &[f64], out: &mut BlockDiagonal) {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let blk = MassMatrix::block(b, q[3 * i + 2]);
+            let o = out.block_mut(i);
+            for r in 0..3 {
+                for c in 0..3 {
+                    o[3 * r + c] = blk[(r, c)];
+                }
+            }
+        }
+    }
+
+    fn mass_is_constant(&self) -> bool {
+        self.mass_is_constant
     }
 
     /// `Q_e`: all applied generalized forces plus the quadratic-velocity force of offset centres of
     /// mass, written (not added) into `q_e`. Allocates nothing.
-    pub fn applied_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &mut [f64]) {
+    fn applied_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &mut [f64]) {
         q_e.iter_mut().for_each(|x| *x = 0.0);
         for f in &self.forces {
             f.add_generalized_force(t, &self.bodies, q, qd, q_e);
@@ -69,10 +102,10 @@ impl Model {
         MassMatrix::add_quadratic_velocity_force(&self.bodies, q, qd, q_e);
     }
 
-    /// `Ok` when the applied forces `q_e` (from [`Model::applied_forces`] at `(t, q, q̇)`) are
-    /// finite; otherwise the error names the force element whose generalized force overflows or is
-    /// not a number (found by evaluating each element alone: only on this failure path).
-    pub fn check_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &[f64]) -> Result<(), crate::DynamicsError> {
+    /// `Ok` when `q_e` is finite; otherwise the error names the force element whose generalized
+    /// force overflows or is not a number (found by evaluating each element alone: only on this
+    /// failure path).
+    fn check_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
         if q_e.iter().all(|x| x.is_finite()) {
             return Ok(());
         }
@@ -94,87 +127,12 @@ impl Model {
                     )
                 },
             );
-        Err(crate::DynamicsError::NonFinite { time: t, what })
-    }
-
-    /// True when `T + V` is a first integral of the exact motion: every force element is
-    /// conservative and no constraint is driven (a driver does work).
-    pub fn is_conservative(&self) -> bool {
-        self.forces.iter().all(|f| f.is_conservative())
-            && self
-                .constraints
-                .constraints()
-                .iter()
-                .all(|c| c.role() != crate::ConstraintRole::Driver)
-    }
-
-    /// Total potential energy of the conservative elements at `(t, q)`.
-    pub fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
-        self.forces
-            .iter()
-            .filter_map(|f| f.potential_energy(t, &self.bodies, q))
-            .sum()
-    }
-
-    /// The error for a singular system whose cause is not a rank-deficient `C_q`: `SingularMass`
-    /// naming the bodies without mass or inertia when there are any, otherwise `Singular` with `what`.
-    pub fn singular_mass_error(&self, t: f64, what: &str) -> crate::DynamicsError {
-        let bodies: Vec<String> = self
-            .bodies
-            .iter()
-            .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
-            .map(|b| b.name.clone())
-            .collect();
-        if bodies.is_empty() {
-            crate::DynamicsError::Singular {
-                time: t,
-                what: what.to_string(),
-            }
-        } else {
-            crate::DynamicsError::SingularMass { time: t, bodies }
-        }
-    }
-
-    /// `Ok` when every position and velocity is finite; otherwise the error names the body and the
-    /// coordinate.
-    pub fn check_state(&self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), crate::DynamicsError> {
-        self.check_lengths(&[("q", q.len()), ("q̇", qd.len())], &[])?;
-        for (v, what) in [(q, "position"), (qd, "velocity")] {
-            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                let coord = ["x", "y", "angle"][i % 3];
-                let body = &self.bodies[i / 3].name;
-                return Err(crate::DynamicsError::NonFinite {
-                    time: t,
-                    what: format!("{what} {coord} of body '{body}'"),
-                });
-            }
-        }
-        Ok(())
-    }
-
-    /// `Ok` when every coordinate-sized slice (`(name, length)` in `coordinates`) has `n` entries
-    /// and every equation-sized one (`equations`) has `m`; otherwise the error names the first
-    /// slice that does not (a caller's mistake reported instead of an index panic).
-    pub fn check_lengths(
-        &self,
-        coordinates: &[(&'static str, usize)],
-        equations: &[(&'static str, usize)],
-    ) -> Result<(), crate::DynamicsError> {
-        let (n, m) = (self.num_coordinates(), self.num_equations());
-        let wrong = coordinates
-            .iter()
-            .map(|&(w, l)| (w, l, n))
-            .chain(equations.iter().map(|&(w, l)| (w, l, m)))
-            .find(|&(_, l, e)| l != e);
-        match wrong {
-            None => Ok(()),
-            Some((what, got, expected)) => Err(crate::DynamicsError::WrongLength { what, expected, got }),
-        }
+        Err(DynamicsError::NonFinite { time: t, what })
     }
 
     /// Kinetic energy `½ q̇ᵀ M q̇`, computed body by body without building `M` (no trigonometry
     /// for bodies whose reference point is the centre of mass).
-    pub fn kinetic_energy(&self, q: &[f64], qd: &[f64]) -> f64 {
+    fn kinetic_energy(&self, q: &[f64], qd: &[f64]) -> f64 {
         self.bodies
             .iter()
             .enumerate()
@@ -188,5 +146,31 @@ impl Model {
                 }
             })
             .sum()
+    }
+
+    /// Total potential energy of the conservative elements at `(t, q)`.
+    fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
+        self.forces
+            .iter()
+            .filter_map(|f| f.potential_energy(t, &self.bodies, q))
+            .sum()
+    }
+
+    /// Every force element is conservative and no constraint is driven (a driver does work).
+    fn is_conservative(&self) -> bool {
+        self.forces.iter().all(|f| f.is_conservative())
+            && self
+                .constraints
+                .constraints()
+                .iter()
+                .all(|c| c.role() != crate::ConstraintRole::Driver)
+    }
+
+    fn bodies_without_inertia(&self) -> Vec<String> {
+        self.bodies
+            .iter()
+            .filter(|b| b.mass == 0.0 || b.inertia_about_reference() == 0.0)
+            .map(|b| b.name.clone())
+            .collect()
     }
 }

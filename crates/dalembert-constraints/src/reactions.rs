@@ -79,30 +79,14 @@ impl ConstraintSystem {
 }
 
 impl ConstraintSystem {
-    /// The minimum-norm multipliers `λ = (C_qᵀ)⁺ f` for a generalized constraint force `f` in the
-    /// range of `C_qᵀ` (for redundant constraints, one admissible distribution of the reactions).
-    ///
-    /// The minimum-norm solution lies in the range of `C_q`, which the `r` independent columns `J`
-    /// of `C_q` span (full-pivot LU, no iterative SVD): `λ = C_q,J z` with
-    /// `(C_q,Jᵀ C_q,J) z = f_J`, an `r × r` positive definite system. Dense; allocates (a
-    /// fallback path for redundant constraints). `None` when `f` is not in the range of `C_qᵀ`.
-    pub fn minimum_norm_multipliers(&self, values: &ConstraintValues, f: &[f64]) -> Option<Vec<f64>> {
-        use faer::linalg::solvers::Solve;
-        let a = self.jacobian_dense(values);
-        let (m, n) = (a.nrows(), a.ncols());
-        let (r, order) = crate::structure::column_rank(a.as_ref(), 1e-9);
-        let cols = &order[..r];
-        let cj = faer::Mat::from_fn(m, r, |i, k| a[(i, cols[k])]);
-        let g = cj.transpose() * &cj;
-        let fj = faer::Mat::from_fn(r, 1, |k, _| f[cols[k]]);
-        let z = g.partial_piv_lu().solve(&fj);
-        let lam = &cj * &z;
-        let lam: Vec<f64> = (0..m).map(|i| lam[(i, 0)]).collect();
-        // f must be reproduced on every coordinate, not only on the independent ones.
-        let mut back = vec![0.0; n];
-        self.jacobian_transpose_mul_add(values, 1.0, &lam, &mut back);
-        let scale = f.iter().fold(1.0f64, |s, v| s.max(v.abs()));
-        let ok = lam.iter().all(|l| l.is_finite()) && back.iter().zip(f).all(|(b, fi)| (b - fi).abs() <= 1e-8 * scale);
-        ok.then_some(lam)
+    /// Every constraint's reaction at `(t, q)` for multipliers `lambda` (evaluates the constraints
+    /// first; allocates: for analyses such as inverse dynamics, not for the stepping loop).
+    pub fn reactions_at(&self, t: f64, q: &[f64], lambda: &[f64]) -> Vec<Reaction> {
+        use dalembert_system::ConstraintSet;
+        let mut values = self.values();
+        self.evaluate(t, q, &[], &mut values);
+        let mut out = vec![Reaction::default(); self.constraints().len()];
+        self.reactions(q, &values, lambda, &mut out);
+        out
     }
 }

@@ -1,9 +1,14 @@
-//! Assembly of all constraints into `C`, `C_q` (sparse, fixed pattern), `C_t` and `Q_d`.
+//! Assembly of all planar constraints into `C`, `C_q` (sparse, fixed pattern), `C_t` and `Q_d`: the
+//! planar implementation of the seam's [`ConstraintSet`].
 
 use crate::{Constraint, ConstraintError, ConstraintEval, EquationRef};
-use dalembert_kinematics::{BodyRef, BodyState, Coordinates};
+use dalembert_kinematics::{BodyRef, BodyState, Coordinates, Vec2};
+use dalembert_system::{ConstraintPattern, ConstraintSet, ConstraintValues, Layout};
 
-/// Every constraint of a model, with the row layout and the sparsity pattern of `C_q`.
+/// The planar coordinate labels of one body (positions and velocities alike: `v = q̇`).
+pub const PLANAR_LABELS: &[&str] = &["x", "y", "angle"];
+
+/// Every constraint of a planar model, with the row layout and the sparsity pattern of `C_q`.
 ///
 /// Rows follow the constraints in order. The pattern lists, per constraint, the entries of each
 /// moving body's 3-column block, row by row; it is computed once and never changes, so consumers
@@ -14,22 +19,7 @@ pub struct ConstraintSystem {
     coordinates: Coordinates,
     row_offsets: Vec<usize>,
     entry_offsets: Vec<usize>,
-    pattern: Vec<(usize, usize)>,
-}
-
-/// The assembled constraint quantities at one `(t, q, q̇)`. Created once, refilled in place.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ConstraintValues {
-    /// `C(q, t)`, length `m`.
-    pub c: Vec<f64>,
-    /// `C_t`, length `m`.
-    pub c_t: Vec<f64>,
-    /// `Q_d`, length `m`.
-    pub gamma: Vec<f64>,
-    /// Values of `C_q` in the order of [`ConstraintSystem::pattern`].
-    pub jacobian: Vec<f64>,
-    /// Scratch: the state of every body at the last evaluation (one `sin_cos` per body).
-    states: Vec<BodyState>,
+    pattern: ConstraintPattern,
 }
 
 impl ConstraintSystem {
@@ -37,7 +27,7 @@ impl ConstraintSystem {
     pub fn new(bodies: usize, constraints: Vec<Box<dyn Constraint>>) -> Result<Self, ConstraintError> {
         let mut row_offsets = vec![0];
         let mut entry_offsets = vec![0];
-        let mut pattern = Vec::new();
+        let mut segments = Vec::new();
         for c in &constraints {
             let name = c.name().to_string();
             // Bodies first: a joint built against a body the model lacks is named as such.
@@ -56,16 +46,14 @@ impl ConstraintSystem {
             let r0 = *row_offsets.last().unwrap_or(&0);
             for body in [a, b] {
                 if let BodyRef::Body(id) = body {
-                    for k in 0..ne {
-                        for col in 0..3 {
-                            pattern.push((r0 + k, id.offset() + col));
-                        }
-                    }
+                    segments.extend((0..ne).map(|k| (r0 + k, id.0)));
                 }
             }
             row_offsets.push(r0 + ne);
-            entry_offsets.push(pattern.len());
+            entry_offsets.push(3 * segments.len());
         }
+        let layout = Layout::new((0..bodies).map(|_| ("", PLANAR_LABELS, PLANAR_LABELS)));
+        let pattern = ConstraintPattern::from_segments(*row_offsets.last().unwrap_or(&0), &layout, segments);
         Ok(ConstraintSystem {
             constraints,
             coordinates: Coordinates::new(bodies),
@@ -73,18 +61,6 @@ impl ConstraintSystem {
             entry_offsets,
             pattern,
         })
-    }
-
-    /// Number of constraint equations `m`.
-    #[inline]
-    pub fn num_equations(&self) -> usize {
-        *self.row_offsets.last().unwrap_or(&0)
-    }
-
-    /// Number of coordinates `n`.
-    #[inline]
-    pub fn num_coordinates(&self) -> usize {
-        self.coordinates.len()
     }
 
     /// The coordinate layout.
@@ -103,95 +79,26 @@ impl ConstraintSystem {
         self.row_offsets[k]
     }
 
-    /// `(row, column)` of every stored entry of `C_q`.
-    pub fn pattern(&self) -> &[(usize, usize)] {
-        &self.pattern
-    }
-
-    /// The equation at system row `row`.
-    pub fn equation(&self, row: usize) -> EquationRef {
-        let k = self.row_offsets.partition_point(|&r| r <= row) - 1;
-        let c = &self.constraints[k];
-        let e = row - self.row_offsets[k];
-        EquationRef {
-            constraint: k,
-            name: c.name().to_string(),
-            equation: e,
-            label: c.equation_label(e),
-        }
-    }
-
-    /// Storage for the assembled values, sized for this system.
-    pub fn values(&self) -> ConstraintValues {
-        let m = self.num_equations();
-        ConstraintValues {
-            c: vec![0.0; m],
-            c_t: vec![0.0; m],
-            gamma: vec![0.0; m],
-            jacobian: vec![0.0; self.pattern.len()],
-            states: vec![BodyState::GROUND; self.coordinates.bodies()],
-        }
-    }
-
-    /// Evaluates every constraint at `(t, q, q̇)` into `out` (`qd` may be empty for zero velocity,
-    /// in which case `Q_d` holds only the `C_tt` part). Allocates nothing.
-    pub fn evaluate(&self, t: f64, q: &[f64], qd: &[f64], out: &mut ConstraintValues) {
-        let mut eval = ConstraintEval::default();
-        for (i, st) in out.states.iter_mut().enumerate() {
-            *st = BodyState::of(BodyRef::Body(dalembert_kinematics::BodyId(i)), q, qd);
-        }
-        let state = |b: BodyRef| match b {
+    /// The state of `body` from the positions, the velocities (empty: at rest) and the sines and
+    /// cosines cached in `values.scratch` by the last [`ConstraintSet::evaluate`].
+    fn state(body: BodyRef, q: &[f64], qd: &[f64], scratch: &[f64]) -> BodyState {
+        match body {
             BodyRef::Ground => BodyState::GROUND,
-            BodyRef::Body(id) => out.states[id.0],
-        };
-        for (k, c) in self.constraints.iter().enumerate() {
-            let [a, b] = c.bodies();
-            let (sa, sb) = (state(a), state(b));
-            c.evaluate(t, &sa, &sb, &mut eval);
-            let r0 = self.row_offsets[k];
-            let ne = self.row_offsets[k + 1] - r0;
-            out.c[r0..r0 + ne].copy_from_slice(&eval.c[..ne]);
-            out.c_t[r0..r0 + ne].copy_from_slice(&eval.c_t[..ne]);
-            out.gamma[r0..r0 + ne].copy_from_slice(&eval.gamma[..ne]);
-            let mut e = self.entry_offsets[k];
-            for (side, body) in [a, b].into_iter().enumerate() {
-                if body != BodyRef::Ground {
-                    for row in eval.jac.iter().take(ne) {
-                        out.jacobian[e..e + 3].copy_from_slice(&row[side]);
-                        e += 3;
-                    }
+            BodyRef::Body(id) => {
+                let k = id.offset();
+                let (velocity, omega) = if qd.is_empty() {
+                    (Vec2::zeros(), 0.0)
+                } else {
+                    (Vec2::new(qd[k], qd[k + 1]), qd[k + 2])
+                };
+                BodyState {
+                    position: Vec2::new(q[k], q[k + 1]),
+                    angle: q[k + 2],
+                    velocity,
+                    omega,
+                    sin: scratch[2 * id.0],
+                    cos: scratch[2 * id.0 + 1],
                 }
-            }
-        }
-    }
-
-    /// `Ok` when every assembled value is finite; otherwise the error names the first equation
-    /// whose `C`, `C_t`, `Q_d` or Jacobian row overflows (e.g. `Q_d` with velocities near 1e200).
-    pub fn check_values(&self, t: f64, values: &ConstraintValues) -> Result<(), crate::DynamicsError> {
-        let bad_row = (0..self.num_equations())
-            .find(|&r| {
-                ![values.c[r], values.c_t[r], values.gamma[r]]
-                    .iter()
-                    .all(|x| x.is_finite())
-            })
-            .or_else(|| {
-                self.pattern
-                    .iter()
-                    .zip(&values.jacobian)
-                    .find(|(_, v)| !v.is_finite())
-                    .map(|(&(r, _), _)| r)
-            });
-        match bad_row {
-            None => Ok(()),
-            Some(r) => {
-                let e = self.equation(r);
-                Err(crate::DynamicsError::NonFinite {
-                    time: t,
-                    what: format!(
-                        "or overflowing constraint values of '{}' ({}): positions or velocities too large",
-                        e.name, e.label
-                    ),
-                })
             }
         }
     }
@@ -211,51 +118,61 @@ impl ConstraintSystem {
         }
         out
     }
+}
 
-    /// `y ← C_q x`.
-    pub fn jacobian_mul(&self, values: &ConstraintValues, x: &[f64], y: &mut [f64]) {
-        y.iter_mut().for_each(|v| *v = 0.0);
-        for (&(r, c), &v) in self.pattern.iter().zip(&values.jacobian) {
-            y[r] += v * x[c];
+impl ConstraintSet for ConstraintSystem {
+    fn pattern(&self) -> &ConstraintPattern {
+        &self.pattern
+    }
+
+    fn equation(&self, row: usize) -> EquationRef {
+        let k = self.row_offsets.partition_point(|&r| r <= row) - 1;
+        let c = &self.constraints[k];
+        let e = row - self.row_offsets[k];
+        EquationRef {
+            constraint: k,
+            name: c.name().to_string(),
+            equation: e,
+            label: c.equation_label(e),
         }
     }
 
-    /// `y ← y + α C_qᵀ λ`.
-    pub fn jacobian_transpose_mul_add(&self, values: &ConstraintValues, alpha: f64, lambda: &[f64], y: &mut [f64]) {
-        for (&(r, c), &v) in self.pattern.iter().zip(&values.jacobian) {
-            y[c] += alpha * v * lambda[r];
+    /// Storage sized for this system; the scratch holds one sine and cosine per body.
+    fn values(&self) -> ConstraintValues {
+        ConstraintValues::new(&self.pattern, 2 * self.coordinates.bodies())
+    }
+
+    /// Evaluates every constraint (one `sin_cos` per body, cached in `out.scratch`). Allocates nothing.
+    fn evaluate(&self, t: f64, q: &[f64], qd: &[f64], out: &mut ConstraintValues) {
+        let mut eval = ConstraintEval::default();
+        for (i, sc) in out.scratch.chunks_exact_mut(2).enumerate() {
+            let (s, c) = q[3 * i + 2].sin_cos();
+            sc[0] = s;
+            sc[1] = c;
+        }
+        for (k, c) in self.constraints.iter().enumerate() {
+            let [a, b] = c.bodies();
+            let (sa, sb) = (Self::state(a, q, qd, &out.scratch), Self::state(b, q, qd, &out.scratch));
+            c.evaluate(t, &sa, &sb, &mut eval);
+            let r0 = self.row_offsets[k];
+            let ne = self.row_offsets[k + 1] - r0;
+            out.c[r0..r0 + ne].copy_from_slice(&eval.c[..ne]);
+            out.c_t[r0..r0 + ne].copy_from_slice(&eval.c_t[..ne]);
+            out.gamma[r0..r0 + ne].copy_from_slice(&eval.gamma[..ne]);
+            let mut e = self.entry_offsets[k];
+            for (side, body) in [a, b].into_iter().enumerate() {
+                if body != BodyRef::Ground {
+                    for row in eval.jac.iter().take(ne) {
+                        out.jacobian[e..e + 3].copy_from_slice(&row[side]);
+                        e += 3;
+                    }
+                }
+            }
         }
     }
 
-    /// `C_q` as a dense `m × n` matrix.
-    pub fn jacobian_dense(&self, values: &ConstraintValues) -> faer::Mat<f64> {
-        let mut a = faer::Mat::zeros(self.num_equations(), self.num_coordinates());
-        for (&(r, c), &v) in self.pattern.iter().zip(&values.jacobian) {
-            a[(r, c)] += v;
-        }
-        a
-    }
-
-    /// Evaluates at `(t, q, q̇)` into the scratch `values` and writes `C` and `Ċ = C_q q̇ + C_t`.
-    pub fn residuals(
-        &self,
-        t: f64,
-        q: &[f64],
-        qd: &[f64],
-        values: &mut ConstraintValues,
-        c: &mut [f64],
-        cdot: &mut [f64],
-    ) {
-        self.evaluate(t, q, qd, values);
-        c.copy_from_slice(&values.c);
-        self.velocity_residual(values, qd, cdot);
-    }
-
-    /// Velocity-level residual `Ċ = C_q q̇ + C_t` into `out`.
-    pub fn velocity_residual(&self, values: &ConstraintValues, qd: &[f64], out: &mut [f64]) {
-        self.jacobian_mul(values, qd, out);
-        for (o, ct) in out.iter_mut().zip(&values.c_t) {
-            *o += ct;
-        }
+    fn describe_position(&self, i: usize) -> String {
+        let (b, c) = self.coordinates.owner(i);
+        format!("coordinate {c} of body #{}", b.0)
     }
 }

@@ -18,12 +18,11 @@
 //! velocities from the velocity equation, so an integrator that projects after every step integrates
 //! the independent coordinates only, with the constraints held to the Newton tolerance.
 
-use dalembert_constraints::partition::Repartition;
-use dalembert_constraints::{
-    ConstraintValues, DynamicsError, Formulation, FormulationStats, Model, PartitionTracker, RedundancyTreatment,
-    Stabilization,
+use dalembert_system::partition::Repartition;
+use dalembert_system::{
+    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
+    RedundancyTreatment, Stabilization,
 };
-use dalembert_kinematics::MassMatrix;
 use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 use std::sync::Arc;
@@ -66,10 +65,10 @@ impl Default for EmbeddingOptions {
 
 /// The embedding formulation of a model.
 pub struct Embedding {
-    model: Arc<Model>,
+    model: Arc<dyn MultibodySystem>,
     options: EmbeddingOptions,
     tracker: PartitionTracker,
-    mass: MassMatrix,
+    mass: BlockDiagonal,
     values: ConstraintValues,
     q_e: Vec<f64>,
     cdot: Vec<f64>,
@@ -88,15 +87,15 @@ impl std::fmt::Debug for Embedding {
 
 impl Embedding {
     /// Sets up the formulation.
-    pub fn new(model: Arc<Model>, options: EmbeddingOptions) -> Self {
+    pub fn new(model: Arc<dyn MultibodySystem>, options: EmbeddingOptions) -> Self {
         let mut tracker = PartitionTracker::new(options.repartition_threshold);
         if let Some(ind) = &options.independent {
             tracker = tracker.with_independent(model.constraints(), ind.clone());
         }
-        let n = model.num_coordinates();
+        let n = model.layout().n_v();
         let m = model.num_equations();
         Embedding {
-            mass: model.mass_matrix(&vec![0.0; n]),
+            mass: model.mass_storage(),
             values: model.constraints().values(),
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
@@ -109,7 +108,7 @@ impl Embedding {
     }
 
     /// With default options.
-    pub fn with_defaults(model: Arc<Model>) -> Self {
+    pub fn with_defaults(model: Arc<dyn MultibodySystem>) -> Self {
         Self::new(model, EmbeddingOptions::default())
     }
 
@@ -129,7 +128,7 @@ impl Embedding {
 
     fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
         self.model.check_state(t, q, qd)?;
-        self.mass.update(self.model.bodies(), q);
+        self.model.mass(q, &mut self.mass);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.check_forces(t, q, qd, &self.q_e)?;
         self.model.constraints().evaluate(t, q, qd, &mut self.values);
@@ -143,8 +142,8 @@ impl Formulation for Embedding {
         "embedding"
     }
 
-    fn model(&self) -> &Model {
-        &self.model
+    fn system(&self) -> &dyn MultibodySystem {
+        &*self.model
     }
 
     fn accelerations(
@@ -160,7 +159,7 @@ impl Formulation for Embedding {
         self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         self.load(t, q, qd)?;
         let sys = self.model.constraints();
-        let n = q.len();
+        let n = qd.len();
         if stabilization != Stabilization::None {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }
@@ -241,8 +240,7 @@ impl Formulation for Embedding {
         };
         sys.scatter_multipliers(t, &self.values, &partition.rows, &lam_r, lambda)?;
         if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
-            let what = format!("acceleration of body '{}'", self.model.bodies()[i / 3].name);
-            return Err(DynamicsError::NonFinite { time: t, what });
+            return Err(self.model.non_finite_acceleration(t, i));
         }
         Ok(())
     }

@@ -3,7 +3,7 @@
 //! *Solving ODEs I*, §II.5–II.6).
 
 use crate::explicit::derivative;
-use dalembert_constraints::{DynamicsError, Formulation, Stabilization};
+use dalembert_system::{DynamicsError, Formulation, Stabilization};
 
 const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [

@@ -4,7 +4,7 @@ use crate::dopri5::Dopri5;
 use crate::explicit::{rk4_step, symplectic_euler_step, FixedWork};
 use crate::generalized_alpha::{GeneralizedAlpha, NotConverged};
 use crate::{ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method, Statistics};
-use dalembert_constraints::{DynamicsError, Formulation, FormulationStats};
+use dalembert_system::{DynamicsError, Formulation, FormulationStats};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -190,7 +190,7 @@ pub fn integrate_cancellable<F: Formulation + ?Sized>(
     cancel: &AtomicBool,
 ) -> Result<Statistics, IntegrationFailure> {
     let n = q0.len();
-    let m = f.model().num_equations();
+    let m = f.system().num_equations();
     let wall = Instant::now();
     let mut y = [q0, qd0].concat();
     let energy0 = f.energy(t0, q0, qd0).total();
@@ -297,7 +297,7 @@ fn run_loop<F: Formulation + ?Sized>(
             // Its iteration matrix is dense (n + m)²: refuse sizes it cannot hold, by name,
             // instead of failing in the allocator.
             let k = n + run.lambda.len();
-            if !dalembert_constraints::structure::dense_fits(k, k) {
+            if !dalembert_system::structure::dense_fits(k, k) {
                 return Err(IntegrationError::Options(format!(
                     "generalized-alpha keeps a dense {k} × {k} iteration matrix ({:.1} GiB); use rk4 or dopri5 for models this large",
                     (k as f64) * (k as f64) * 8.0 / 1073741824.0
@@ -308,11 +308,11 @@ fn run_loop<F: Formulation + ?Sized>(
                 t0,
                 q0,
                 qd0,
-                dalembert_constraints::Stabilization::None,
+                dalembert_system::Stabilization::None,
                 &mut run.qdd,
                 &mut run.lambda,
             )?;
-            let mut ga = GeneralizedAlpha::new(f.model(), rho_inf, &run.qdd, &run.lambda, q0);
+            let mut ga = GeneralizedAlpha::new(f.system(), rho_inf, &run.qdd, &run.lambda, q0);
             let result = generalized_alpha_loop(f, &mut ga, t0, y, opts, run, n_out, &out_time);
             run.extra.newton_iterations += ga.iterations;
             run.extra.factorizations += ga.factorizations;
@@ -396,7 +396,7 @@ fn generalized_alpha_loop<F: Formulation + ?Sized>(
                 h
             };
             let (q, qd) = y.split_at_mut(n);
-            match ga.step(f.model(), t, hh, q, qd) {
+            match ga.step(f.system(), t, hh, q, qd) {
                 Ok(()) => {
                     t = if hh == remaining { t_next } else { t + hh };
                     run.monitor(f, t, y, hh)?;

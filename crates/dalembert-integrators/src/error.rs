@@ -1,7 +1,7 @@
 //! Integration failures: always with the time and the cause.
 
 use crate::Statistics;
-use dalembert_constraints::DynamicsError;
+use dalembert_system::DynamicsError;
 use thiserror::Error;
 
 /// Why an integration stopped early.

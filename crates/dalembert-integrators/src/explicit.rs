@@ -1,6 +1,6 @@
 //! Fixed-step explicit methods on the first-order form `y = [q; q̇]`, `ẏ = [q̇; q̈(t, q, q̇)]`.
 
-use dalembert_constraints::{DynamicsError, Formulation, Stabilization};
+use dalembert_system::{DynamicsError, Formulation, Stabilization};
 
 /// Preallocated storage for the fixed-step methods.
 pub(crate) struct FixedWork {

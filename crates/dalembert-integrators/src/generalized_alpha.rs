@@ -30,8 +30,7 @@
 //! This method always solves the index-3 system of the model; the formulation supplies the initial
 //! accelerations and the accelerations and multipliers reported at the output times.
 
-use dalembert_constraints::{ConstraintValues, Model};
-use dalembert_kinematics::MassMatrix;
+use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
@@ -68,7 +67,7 @@ pub(crate) struct GeneralizedAlpha {
     a: Vec<f64>,
     qdd: Vec<f64>,
     lambda: Vec<f64>,
-    mass: MassMatrix,
+    mass: BlockDiagonal,
     values: ConstraintValues,
     work: Work,
     /// Step size the current iteration matrix was built for (NaN: none), and how many steps it
@@ -138,13 +137,15 @@ pub(crate) struct NotConverged;
 
 impl GeneralizedAlpha {
     /// Starts from consistent `q̈₀`, `λ₀` (from the formulation).
-    pub fn new(model: &Model, rho_inf: f64, qdd0: &[f64], lambda0: &[f64], q0: &[f64]) -> Self {
+    pub fn new(model: &dyn MultibodySystem, rho_inf: f64, qdd0: &[f64], lambda0: &[f64], q0: &[f64]) -> Self {
+        let mut mass = model.mass_storage();
+        model.mass(q0, &mut mass);
         GeneralizedAlpha {
             coef: Coefficients::new(rho_inf),
             a: qdd0.to_vec(),
             qdd: qdd0.to_vec(),
             lambda: lambda0.to_vec(),
-            mass: model.mass_matrix(q0),
+            mass,
             values: model.constraints().values(),
             work: Work::new(q0.len(), lambda0.len()),
             tolerance: 1e-10,
@@ -171,9 +172,9 @@ impl GeneralizedAlpha {
     /// `r = M q̈ + C_qᵀ λ − Q_e` and `C / β'` at `(t, q, q̇)`; refreshes `mass` and `values`.
     #[allow(clippy::too_many_arguments)]
     fn residual(
-        mass: &mut MassMatrix,
+        mass: &mut BlockDiagonal,
         values: &mut ConstraintValues,
-        model: &Model,
+        model: &dyn MultibodySystem,
         t: f64,
         (q, qd): (&[f64], &[f64]),
         (qdd, lambda): (&[f64], &[f64]),
@@ -184,7 +185,7 @@ impl GeneralizedAlpha {
         let (r, c) = out.split_at_mut(n);
         model.applied_forces(t, q, qd, r);
         r.iter_mut().for_each(|v| *v = -*v);
-        mass.update(model.bodies(), q);
+        model.mass(q, mass);
         mass.mul_add(1.0, qdd, r);
         let sys = model.constraints();
         sys.evaluate(t, q, qd, values);
@@ -195,7 +196,14 @@ impl GeneralizedAlpha {
     }
 
     /// One step from `(t, q, q̇)` to `t + h`; on success `q`, `qd` hold the new state.
-    pub fn step(&mut self, model: &Model, t: f64, h: f64, q: &mut [f64], qd: &mut [f64]) -> Result<(), NotConverged> {
+    pub fn step(
+        &mut self,
+        model: &dyn MultibodySystem,
+        t: f64,
+        h: f64,
+        q: &mut [f64],
+        qd: &mut [f64],
+    ) -> Result<(), NotConverged> {
         const MAX_ITERATIONS: usize = 12;
         // Relative acceleration update at convergence, and the level below which an update that
         // no longer halves counts as converged to round-off.
@@ -310,18 +318,14 @@ impl GeneralizedAlpha {
 
     /// Builds `[M + β'K + γ'D, C_qᵀ; C_q, 0]` at the trial state in `work` (with `K` and `D` by
     /// central finite differences of the residual) and factors it in place.
-    fn factor_iteration_matrix(&mut self, model: &Model, t: f64, bp: f64, gp: f64) {
+    fn factor_iteration_matrix(&mut self, model: &dyn MultibodySystem, t: f64, bp: f64, gp: f64) {
         let w = &mut self.work;
         let n = w.q1.len();
         let k = &mut w.matrix;
         k.fill(0.0);
-        self.mass.update(model.bodies(), &w.q1);
-        for (b, blk) in self.mass.blocks().iter().enumerate() {
-            for r in 0..3 {
-                for cc in 0..3 {
-                    k[(3 * b + r, 3 * b + cc)] = blk[(r, cc)];
-                }
-            }
+        model.mass(&w.q1, &mut self.mass);
+        for (r, cc, v) in self.mass.entries() {
+            k[(r, cc)] = v;
         }
         w.qp.copy_from_slice(&w.q1);
         w.qdp.copy_from_slice(&w.qd1);
@@ -362,7 +366,7 @@ impl GeneralizedAlpha {
         self.evaluations += 4 * n as u64;
         let sys = model.constraints();
         sys.evaluate(t, &w.q1, &w.qd1, &mut self.values);
-        for (&(r, c), &v) in sys.pattern().iter().zip(&self.values.jacobian) {
+        for (&(r, c), &v) in sys.pattern().entries().iter().zip(&self.values.jacobian) {
             k[(n + r, c)] += v;
             k[(c, n + r)] += v;
         }

@@ -1,5 +1,5 @@
 //! Time integration of the constrained equations of motion through the
-//! [`Formulation`](dalembert_constraints::Formulation) interface (the integrators know the trait,
+//! [`Formulation`](dalembert_system::Formulation) interface (the integrators know the trait,
 //! not the formulations).
 //!
 //! Methods ([`Method`]):

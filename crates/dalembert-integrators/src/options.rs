@@ -1,6 +1,6 @@
 //! What to integrate with, and how.
 
-use dalembert_constraints::Stabilization;
+use dalembert_system::Stabilization;
 
 /// The integration method.
 #[derive(Debug, Clone, Copy, PartialEq)]

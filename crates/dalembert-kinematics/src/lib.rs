@@ -16,7 +16,6 @@
 
 pub mod body;
 pub mod coordinates;
-pub mod error;
 pub mod forces;
 pub mod mass;
 pub mod point;
@@ -25,7 +24,12 @@ pub mod time_function;
 
 pub use body::{Body, BodyId, BodyRef};
 pub use coordinates::{BodyState, Coordinates};
-pub use error::ModelError;
+pub use dalembert_system::ModelError;
+
+/// The errors of model building (moved to the system seam; kept here under the old path).
+pub mod error {
+    pub use dalembert_system::ModelError;
+}
 pub use forces::{ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque};
 pub use mass::MassMatrix;
 pub use point::PointState;

@@ -7,6 +7,7 @@
 //! and well conditioned and at least one degree of freedom remains.
 
 use crate::mechanisms::{Mechanism, G};
+use dalembert_constraints::ConstraintSet as _;
 use dalembert_constraints::{
     Constraint, ConstraintSystem, Distance, JointAngle, KinematicOptions, Model, PointOnLine, Prismatic, Revolute,
 };

@@ -1,18 +1,17 @@
 //! The sparse Gram matrix `G = C_q W C_qᵀ` (m × m) of the constraint Jacobian with a
-//! block-diagonal weight `W` (one symmetric 3 × 3 block per body), factored by faer's sparse
+//! block-diagonal weight `W` (one symmetric block per body, over its velocity coordinates), factored by faer's sparse
 //! Cholesky with the symbolic analysis done once per pattern.
 //!
 //! Every entry of `G` couples two equations through a body they share, so `G` is banded for chains
 //! and sparse for trees: the minimum-norm kinematic steps and the structure analysis of large
 //! models (`crate::kinematics`, `crate::structure`) cost `O(nnz)`, not `O(n³)`.
 
-use crate::ConstraintSystem;
+use crate::ConstraintSet;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
-use nalgebra::{Matrix3, Vector3};
 
 /// `G = C_q W C_qᵀ`: pattern, symbolic and numeric Cholesky, and its condition estimate.
 pub struct SparseGram {
@@ -21,8 +20,9 @@ pub struct SparseGram {
     row_idx: Vec<usize>,
     values: Vec<f64>,
     l_values: Vec<f64>,
-    /// `(body, first entry of row i's block, first entry of row j's block, position of G_ij)`.
-    contributions: Vec<(usize, usize, usize, usize)>,
+    /// `(body, block length, first entry of row i's segment, first entry of row j's segment,
+    /// position of G_ij)`.
+    contributions: Vec<(usize, usize, usize, usize, usize)>,
     symbolic: SymbolicCholesky<usize>,
     factor_buf: MemBuffer,
     solve_buf: MemBuffer,
@@ -49,15 +49,15 @@ impl std::fmt::Debug for SparseGram {
 
 impl SparseGram {
     /// The pattern of `G` for `sys` and its symbolic Cholesky analysis.
-    pub fn new(sys: &ConstraintSystem) -> Result<Self, GramSingular> {
+    pub fn new<S: ConstraintSet + ?Sized>(sys: &S) -> Result<Self, GramSingular> {
         let m = sys.num_equations();
-        let bodies = sys.num_coordinates() / 3;
-        // Rows touching each body, with the first entry of their 3-column block.
-        let mut rows_of_body: Vec<Vec<(usize, usize)>> = vec![Vec::new(); bodies];
-        for (e, &(r, c)) in sys.pattern().iter().enumerate() {
-            if c % 3 == 0 {
-                rows_of_body[c / 3].push((r, e));
-            }
+        let pattern = sys.pattern();
+        // Rows touching each body, with the first entry of their segment.
+        let mut rows_of_body: Vec<Vec<(usize, usize)>> = vec![Vec::new(); pattern.bodies()];
+        let mut len_of_body = vec![0; pattern.bodies()];
+        for s in pattern.segments() {
+            rows_of_body[s.body].push((s.row, s.first));
+            len_of_body[s.body] = s.len;
         }
         let mut cols: Vec<Vec<usize>> = (0..m).map(|i| vec![i]).collect();
         for rows in &rows_of_body {
@@ -76,7 +76,7 @@ impl SparseGram {
             for &(i, ei) in rows {
                 for &(j, ej) in rows {
                     if i >= j {
-                        contributions.push((b, ei, ej, pos(i, j)));
+                        contributions.push((b, len_of_body[b], ei, ej, pos(i, j)));
                     }
                 }
             }
@@ -104,22 +104,27 @@ impl SparseGram {
     }
 
     /// Assembles `G = C_q W C_qᵀ` from the Jacobian values (in the order of
-    /// [`ConstraintSystem::pattern`]) and `weight(body)`, and factors it. Fails when `G` is not
+    /// [`ConstraintSet::pattern`]) and `weight(body, r, c)` (entry `(r, c)` of body `body`'s block of
+    /// `W`), and factors it. Fails when `G` is not
     /// positive definite or its estimated condition number exceeds `max_condition`.
     pub fn factor(
         &mut self,
         jacobian: &[f64],
-        weight: impl Fn(usize) -> Matrix3<f64>,
+        weight: impl Fn(usize, usize, usize) -> f64,
         max_condition: f64,
     ) -> Result<(), GramSingular> {
         self.values.iter_mut().for_each(|v| *v = 0.0);
-        let mut current = (usize::MAX, Matrix3::zeros());
-        for &(b, ei, ej, p) in &self.contributions {
-            if current.0 != b {
-                current = (b, weight(b));
+        for &(b, len, ei, ej, p) in &self.contributions {
+            let mut g = 0.0;
+            for r in 0..len {
+                for c in 0..len {
+                    let w = weight(b, r, c);
+                    if w != 0.0 {
+                        g += jacobian[ei + r] * w * jacobian[ej + c];
+                    }
+                }
             }
-            let wi = current.1 * Vector3::new(jacobian[ei], jacobian[ei + 1], jacobian[ei + 2]);
-            self.values[p] += wi.x * jacobian[ej] + wi.y * jacobian[ej + 1] + wi.z * jacobian[ej + 2];
+            self.values[p] += g;
         }
         let s = SymbolicSparseColMatRef::new_checked(self.m, self.m, &self.col_ptr, None, &self.row_idx);
         self.symbolic

@@ -11,9 +11,8 @@
 
 use super::schur::InverseMass;
 use super::SingularKkt;
-use dalembert_constraints::gram::SparseGram;
-use dalembert_constraints::{ConstraintSystem, ConstraintValues};
-use dalembert_kinematics::MassMatrix;
+use crate::gram::SparseGram;
+use crate::{BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues};
 
 pub(crate) struct SparseSchurKkt {
     n: usize,
@@ -29,15 +28,20 @@ pub(crate) struct SparseSchurKkt {
 }
 
 impl SparseSchurKkt {
-    pub fn new(sys: &ConstraintSystem, pivot_tolerance: f64) -> Result<Self, SingularKkt> {
+    pub fn new(
+        mass: &BlockDiagonal,
+        mass_is_constant: bool,
+        sys: &(impl ConstraintSet + ?Sized),
+        pivot_tolerance: f64,
+    ) -> Result<Self, SingularKkt> {
         let n = sys.num_coordinates();
         let m = sys.num_equations();
         let gram = SparseGram::new(sys).map_err(|e| SingularKkt(e.0))?;
         Ok(SparseSchurKkt {
             n,
             gram,
-            minv: InverseMass::new(n / 3),
-            jacobian: vec![0.0; sys.pattern().len()],
+            minv: InverseMass::new(mass, mass_is_constant),
+            jacobian: vec![0.0; sys.pattern().entries().len()],
             tmp_n: vec![0.0; n],
             tmp_m: vec![0.0; m],
             pivot_tolerance,
@@ -47,15 +51,19 @@ impl SparseSchurKkt {
 
     pub fn factor(
         &mut self,
-        mass: &MassMatrix,
-        _sys: &ConstraintSystem,
+        mass: &BlockDiagonal,
+        _pattern: &ConstraintPattern,
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
         self.minv.update(mass, false)?;
         let blocks = &self.minv.blocks;
         let result = self
             .gram
-            .factor(&vals.jacobian, |b| blocks[b], 1.0 / self.pivot_tolerance)
+            .factor(
+                &vals.jacobian,
+                |b, r, c| blocks.get(b, r, c),
+                1.0 / self.pivot_tolerance,
+            )
             .map_err(|e| SingularKkt(format!("Schur complement: {}", e.0)));
         self.condition = self.gram.condition;
         result?;
@@ -63,12 +71,12 @@ impl SparseSchurKkt {
         Ok(())
     }
 
-    pub fn solve(&mut self, sys: &ConstraintSystem, x: &mut [f64]) {
+    pub fn solve(&mut self, pattern: &ConstraintPattern, x: &mut [f64]) {
         let n = self.n;
         let (top, bottom) = x.split_at_mut(n);
         self.minv.apply(top, &mut self.tmp_n);
         self.tmp_m.iter_mut().for_each(|v| *v = 0.0);
-        for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
+        for (&(r, c), &v) in pattern.entries().iter().zip(&self.jacobian) {
             self.tmp_m[r] += v * self.tmp_n[c];
         }
         for (t, b) in self.tmp_m.iter_mut().zip(bottom.iter()) {
@@ -77,7 +85,7 @@ impl SparseSchurKkt {
         let mut lam = std::mem::take(&mut self.tmp_m);
         self.gram.solve_in_place(&mut lam);
         bottom.copy_from_slice(&lam);
-        for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
+        for (&(r, c), &v) in pattern.entries().iter().zip(&self.jacobian) {
             top[c] -= v * lam[r];
         }
         self.tmp_m = lam;

@@ -14,7 +14,7 @@
 //! amalgamated formulations re-partition when it exceeds a threshold.
 
 use crate::structure::column_rank;
-use crate::{ConstraintSystem, ConstraintValues};
+use crate::{ConstraintSet, ConstraintValues};
 use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
@@ -32,7 +32,7 @@ pub struct Partition {
 impl Partition {
     /// Chooses the partition by LU with full pivoting of `C_q` (rows) and of the selected rows'
     /// columns: the pivot columns become the dependent coordinates.
-    pub fn choose(sys: &ConstraintSystem, values: &ConstraintValues, rank_tolerance: f64) -> Partition {
+    pub fn choose(sys: &(impl ConstraintSet + ?Sized), values: &ConstraintValues, rank_tolerance: f64) -> Partition {
         let jac = sys.jacobian_dense(values);
         let n = jac.ncols();
         // Independent rows: pivot columns of C_qᵀ.
@@ -74,7 +74,12 @@ pub struct VelocityTransform {
 impl VelocityTransform {
     /// Computes `B_i` and `γ_i` for the acceleration right-hand side `rhs` (length `m`: `Q_d`, or
     /// its Baumgarte-modified form). Returns `None` if `C_qd` is singular.
-    pub fn new(partition: &Partition, sys: &ConstraintSystem, values: &ConstraintValues, rhs: &[f64]) -> Option<Self> {
+    pub fn new(
+        partition: &Partition,
+        sys: &(impl ConstraintSet + ?Sized),
+        values: &ConstraintValues,
+        rhs: &[f64],
+    ) -> Option<Self> {
         let jac = sys.jacobian_dense(values);
         let n = jac.ncols();
         let r = partition.rows.len();
@@ -173,7 +178,7 @@ impl PartitionTracker {
     }
 
     /// Starts from user-named independent coordinates (e.g. the joint angles of a manipulator).
-    pub fn with_independent(mut self, sys: &ConstraintSystem, independent: Vec<usize>) -> Self {
+    pub fn with_independent(mut self, sys: &(impl ConstraintSet + ?Sized), independent: Vec<usize>) -> Self {
         let n = sys.num_coordinates();
         let mut ind = independent;
         ind.sort_unstable();
@@ -198,7 +203,7 @@ impl PartitionTracker {
     pub fn transform(
         &mut self,
         t: f64,
-        sys: &ConstraintSystem,
+        sys: &(impl ConstraintSet + ?Sized),
         values: &ConstraintValues,
         rhs: &[f64],
     ) -> Option<(&Partition, VelocityTransform)> {
@@ -230,7 +235,7 @@ impl PartitionTracker {
     pub fn project_counted(
         &mut self,
         t: f64,
-        sys: &ConstraintSystem,
+        sys: &(impl ConstraintSet + ?Sized),
         values: &mut ConstraintValues,
         (q, qd): (&mut [f64], &mut [f64]),
         tolerance: f64,
@@ -250,7 +255,7 @@ impl PartitionTracker {
     pub fn project(
         &mut self,
         t: f64,
-        sys: &ConstraintSystem,
+        sys: &(impl ConstraintSet + ?Sized),
         values: &mut ConstraintValues,
         q: &mut [f64],
         qd: &mut [f64],
@@ -283,9 +288,11 @@ impl PartitionTracker {
             };
             let mut y: Vec<f64> = p.rows.iter().map(|&r| -values.c[r]).collect();
             vt.solve_dependent(&mut y);
+            let mut delta = vec![0.0; sys.num_coordinates()];
             for (k, &d) in p.dependent.iter().enumerate() {
-                q[d] += y[k];
+                delta[d] = y[k];
             }
+            sys.correct_positions(q, &delta);
             iterations += 1;
         }
         let Some((p, vt)) = self.transform(t, sys, values, &zeros) else {
@@ -303,50 +310,5 @@ impl PartitionTracker {
             qd[d] = y[k];
         }
         Ok(iterations)
-    }
-}
-
-impl ConstraintSystem {
-    /// The error for a rank-deficient `C_q` at `values`: rank, and the equations in the dependent set.
-    pub fn redundancy_error(&self, t: f64, values: &ConstraintValues) -> crate::DynamicsError {
-        let s = match self.analyse_structure(values, 1e-9) {
-            Ok(s) => s,
-            Err(e) => return e.into(),
-        };
-        crate::DynamicsError::RedundantConstraints {
-            time: t,
-            rank: s.rank,
-            equations: s.equations,
-            involved: self.dependent_equations(values, 1e-9),
-        }
-    }
-
-    /// Writes multipliers `lam_rows` solved on the independent `rows` into `lambda` (zero
-    /// elsewhere); when some rows were left out (redundant constraints), replaces them by the
-    /// minimum-norm multipliers of the same generalized constraint force `C_qᵀ λ`.
-    pub fn scatter_multipliers(
-        &self,
-        t: f64,
-        values: &ConstraintValues,
-        rows: &[usize],
-        lam_rows: &[f64],
-        lambda: &mut [f64],
-    ) -> Result<(), crate::DynamicsError> {
-        lambda.iter_mut().for_each(|l| *l = 0.0);
-        for (&row, &l) in rows.iter().zip(lam_rows) {
-            lambda[row] = l;
-        }
-        if rows.len() < self.num_equations() {
-            let mut f = vec![0.0; self.num_coordinates()];
-            self.jacobian_transpose_mul_add(values, 1.0, lambda, &mut f);
-            let mn = self
-                .minimum_norm_multipliers(values, &f)
-                .ok_or(crate::DynamicsError::Factorization {
-                    time: t,
-                    what: "minimum-norm multipliers: the constraint force is not in the range of C_qᵀ".into(),
-                })?;
-            lambda.copy_from_slice(&mn);
-        }
-        Ok(())
     }
 }

@@ -1,6 +1,6 @@
 //! Errors of constraint assembly and kinematic analysis. Each names the constraints at fault.
 
-use dalembert_kinematics::ModelError;
+use crate::ModelError;
 use std::fmt;
 use thiserror::Error;
 

@@ -4,7 +4,7 @@
 //! saddle-point matrix: 2.7× fewer instructions per evaluation).
 
 /// In-place LU factors `P A = L U` of an `n × n` row-major matrix.
-pub(crate) struct SmallLu {
+pub struct SmallLu {
     n: usize,
     /// The matrix on input; `L` (unit, strictly lower) and `U` after [`SmallLu::factor`].
     pub a: Vec<f64>,
@@ -12,6 +12,7 @@ pub(crate) struct SmallLu {
 }
 
 impl SmallLu {
+    /// Storage for an `n × n` matrix (write it into [`SmallLu::a`], row-major, then factor).
     pub fn new(n: usize) -> Self {
         SmallLu {
             n,

@@ -1,10 +1,11 @@
 //! Inverse dynamics of kinematically driven systems (`FORMULATIONS.md` §7).
 //!
 //! When drivers fix every degree of freedom (`rank C_q = n`), position, velocity and acceleration
-//! analysis give `q, q̇, q̈` from the constraints alone, and `C_qᵀ λ = Q_e − M q̈` gives every joint
-//! reaction and every driver effort (`−λ`, see `dalembert_constraints::drivers`).
+//! analysis give `q, v, v̇` from the constraints alone, and `C_qᵀ λ = Q − M v̇` gives the
+//! multipliers, hence every joint reaction and every driver effort (`−λ`), which the system's
+//! modelling crate reads from them (e.g. `dalembert_constraints::ConstraintSystem::reactions`).
 
-use dalembert_constraints::{DynamicsError, KinematicOptions, Model, Reaction};
+use crate::{DynamicsError, KinematicOptions, MultibodySystem};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 use std::sync::Arc;
@@ -22,21 +23,19 @@ pub struct InverseSolution {
     pub qdd: Vec<f64>,
     /// Multipliers.
     pub lambda: Vec<f64>,
-    /// Reaction of every constraint (drivers carry their effort).
-    pub reactions: Vec<Reaction>,
 }
 
 /// Inverse dynamics of a fully driven model.
 #[derive(Debug)]
 pub struct InverseDynamics {
-    model: Arc<Model>,
+    model: Arc<dyn MultibodySystem>,
     options: KinematicOptions,
 }
 
 impl InverseDynamics {
     /// Checks that the model is fully driven at configuration `q` (approximate is fine: it is
     /// assembled first) and prepares the solver.
-    pub fn new(model: Arc<Model>, q: &[f64], options: KinematicOptions) -> Result<Self, DynamicsError> {
+    pub fn new(model: Arc<dyn MultibodySystem>, q: &[f64], options: KinematicOptions) -> Result<Self, DynamicsError> {
         let sys = model.constraints();
         let mut q = q.to_vec();
         sys.solve_positions(0.0, &mut q, &options)?;
@@ -67,7 +66,7 @@ impl InverseDynamics {
     pub fn solve(&self, t: f64, q_guess: &[f64]) -> Result<InverseSolution, DynamicsError> {
         let model = &self.model;
         let sys = model.constraints();
-        let n = model.num_coordinates();
+        let n = model.layout().n_v();
         let mut q = q_guess.to_vec();
         sys.solve_positions(t, &mut q, &self.options)?;
         let mut qd = vec![0.0; n];
@@ -77,7 +76,9 @@ impl InverseDynamics {
         // C_qᵀ λ = Q_e − M q̈ (square, n × n).
         let mut rhs = vec![0.0; n];
         model.applied_forces(t, &q, &qd, &mut rhs);
-        model.mass_matrix(&q).mul_add(-1.0, &qdd, &mut rhs);
+        let mut mass = model.mass_storage();
+        model.mass(&q, &mut mass);
+        mass.mul_add(-1.0, &qdd, &mut rhs);
         let mut vals = sys.values();
         sys.evaluate(t, &q, &qd, &mut vals);
         let jt = sys.jacobian_dense(&vals).transpose().to_owned();
@@ -90,15 +91,12 @@ impl InverseDynamics {
                 what: "multipliers (driven system singular here)".into(),
             });
         }
-        let mut reactions = vec![Reaction::default(); sys.constraints().len()];
-        sys.reactions(&q, &vals, &lambda, &mut reactions);
         Ok(InverseSolution {
             time: t,
             q,
             qd,
             qdd,
             lambda,
-            reactions,
         })
     }
 }

@@ -4,7 +4,7 @@
 //! S = C_q M⁻¹ C_qᵀ,   λ = S⁻¹ (C_q M⁻¹ b_top − b_bottom),   q̈ = M⁻¹ (b_top − C_qᵀ λ)
 //! ```
 //!
-//! `M` is block diagonal (3×3 per body), so `M⁻¹` is formed block by block, and `S` is assembled
+//! `M` is block diagonal (one block per body), so `M⁻¹` is formed block by block, and `S` is assembled
 //! from the body blocks of `C_q`: `S_ij = Σ_b C_i,b M_b⁻¹ C_j,bᵀ` over the bodies `b` that rows `i`
 //! and `j` share. `S` is factored by a dense Cholesky in storage allocated once; singular `S`
 //! (rank-deficient `C_q`) is detected from the Cholesky pivots.
@@ -19,11 +19,10 @@
 //!
 //! (size `z + m`, factored by LU with partial pivoting), then `q̈_a = M_a⁻¹ (b_a − C_aᵀ λ)`.
 
-use super::small_lu::SmallLu;
 use super::SingularKkt;
-use dalembert_constraints::{ConstraintSystem, ConstraintValues};
-use dalembert_kinematics::{Body, MassMatrix, Vec2};
-use nalgebra::{Matrix3, Vector3};
+use crate::blocks::MAX_BLOCK;
+use crate::linalg::SmallLu;
+use crate::{BlockDiagonal, ConstraintPattern, ConstraintValues};
 
 pub(crate) struct SchurKkt {
     n: usize,
@@ -57,61 +56,50 @@ pub(crate) struct SchurKkt {
 }
 
 /// True when the Schur back end can run: every body's mass block is positive definite, or is
-/// diagonal (centre of mass at the reference point) with zero entries, and the reduced system over
-/// the massless coordinates stays small.
-pub(crate) fn applicable(bodies: &[Body], m: usize) -> bool {
-    let ok = bodies
-        .iter()
-        .all(|b| (b.mass > 0.0 && b.inertia > 0.0) || b.center_of_mass == Vec2::zeros());
-    let z = massless_coordinates(bodies).len();
+/// diagonal with zero entries (no mass, or no inertia, at the reference point), and the reduced
+/// system over the coordinates without inertia stays small.
+pub(crate) fn applicable(mass: &BlockDiagonal, m: usize) -> bool {
+    let mut inv = [0.0; MAX_BLOCK * MAX_BLOCK];
+    let ok = (0..mass.num_blocks()).all(|b| {
+        let s = mass.size(b);
+        s <= MAX_BLOCK && (mass.invert_block(b, &mut inv[..s * s]) || mass.block_is_diagonal(b))
+    });
+    let z = mass.zero_diagonal().len();
     ok && (z == 0 || z + m <= 64)
 }
 
-fn massless_coordinates(bodies: &[Body]) -> Vec<usize> {
-    let mut z = Vec::new();
-    for (i, b) in bodies.iter().enumerate() {
-        if b.mass > 0.0 && b.inertia_about_reference() > 0.0 && (b.inertia > 0.0 || b.center_of_mass == Vec2::zeros()) {
-            continue;
-        }
-        if b.mass == 0.0 {
-            z.extend([3 * i, 3 * i + 1]);
-        }
-        if b.inertia_about_reference() == 0.0 {
-            z.push(3 * i + 2);
-        }
-    }
-    z
-}
-
 impl SchurKkt {
-    pub fn new(sys: &ConstraintSystem, bodies: &[Body], pivot_tolerance: f64) -> Self {
-        let n = sys.num_coordinates();
-        let m = sys.num_equations();
-        let massless = massless_coordinates(bodies);
-        let massless_entries = sys
-            .pattern()
+    pub fn new(
+        mass: &BlockDiagonal,
+        mass_is_constant: bool,
+        pattern: &ConstraintPattern,
+        pivot_tolerance: f64,
+    ) -> Self {
+        let n = pattern.cols();
+        let m = pattern.rows();
+        let massless = mass.zero_diagonal();
+        let massless_entries = pattern
+            .entries()
             .iter()
             .enumerate()
             .filter_map(|(e, &(r, c))| massless.iter().position(|&z| z == c).map(|k| (e, r, k)))
             .collect();
         let p = massless.len() + m;
         let reduced = (!massless.is_empty()).then(|| SmallLu::new(p));
-        let mut rows_of_body = vec![Vec::new(); n / 3];
-        for (e, &(r, c)) in sys.pattern().iter().enumerate() {
-            if c % 3 == 0 {
-                rows_of_body[c / 3].push((r, e));
-            }
+        let mut rows_of_body = vec![Vec::new(); mass.num_blocks()];
+        for s in pattern.segments() {
+            rows_of_body[s.body].push((s.row, s.first));
         }
         SchurKkt {
             n,
             m,
             rows_of_body,
-            minv: InverseMass::new(n / 3),
+            minv: InverseMass::new(mass, mass_is_constant),
             s: vec![0.0; m * m],
             pivot_tolerance,
             tmp_m: vec![0.0; m],
             tmp_n: vec![0.0; n],
-            jacobian: vec![0.0; sys.pattern().len()],
+            jacobian: vec![0.0; pattern.entries().len()],
             massless,
             massless_entries,
             reduced,
@@ -124,8 +112,8 @@ impl SchurKkt {
 
     pub fn factor(
         &mut self,
-        mass: &MassMatrix,
-        _sys: &ConstraintSystem,
+        mass: &BlockDiagonal,
+        _pattern: &ConstraintPattern,
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
         self.minv.update(mass, true)?;
@@ -133,13 +121,17 @@ impl SchurKkt {
         self.s.iter_mut().for_each(|v| *v = 0.0);
         let jac = &vals.jacobian;
         for (b, rows) in self.rows_of_body.iter().enumerate() {
-            let minv = &self.minv.blocks[b];
+            let len = self.minv.blocks.size(b);
+            let minv = self.minv.blocks.block(b);
             for &(i, ei) in rows {
-                let ci = Vector3::new(jac[ei], jac[ei + 1], jac[ei + 2]);
-                let wi = minv * ci;
+                // w_i = M_b⁻¹ C_i,bᵀ
+                let mut wi = [0.0; MAX_BLOCK];
+                for r in 0..len {
+                    wi[r] = (0..len).map(|c| minv[r * len + c] * jac[ei + c]).sum();
+                }
                 for &(j, ej) in rows {
                     if j <= i {
-                        self.s[i * m + j] += wi.x * jac[ej] + wi.y * jac[ej + 1] + wi.z * jac[ej + 2];
+                        self.s[i * m + j] += (0..len).map(|r| wi[r] * jac[ej + r]).sum::<f64>();
                     }
                 }
             }
@@ -239,13 +231,13 @@ impl SchurKkt {
         ok
     }
 
-    pub fn solve(&mut self, sys: &ConstraintSystem, x: &mut [f64]) {
+    pub fn solve(&mut self, pattern: &ConstraintPattern, x: &mut [f64]) {
         let (n, m) = (self.n, self.m);
         let (top, bottom) = x.split_at_mut(n);
         // tmp_m = C M⁻¹ b_top − b_bottom
         self.minv.apply(top, &mut self.tmp_n);
         self.tmp_m.iter_mut().for_each(|v| *v = 0.0);
-        for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
+        for (&(r, c), &v) in pattern.entries().iter().zip(&self.jacobian) {
             self.tmp_m[r] += v * self.tmp_n[c];
         }
         for (t, b) in self.tmp_m.iter_mut().zip(bottom.iter()) {
@@ -271,7 +263,7 @@ impl SchurKkt {
             lu.solve(&mut self.tmp_r);
             self.tmp_m.copy_from_slice(&self.tmp_r[z..]);
             bottom.copy_from_slice(&self.tmp_m);
-            for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
+            for (&(r, c), &v) in pattern.entries().iter().zip(&self.jacobian) {
                 top[c] -= v * self.tmp_m[r];
             }
             self.minv.apply(top, &mut self.tmp_n);
@@ -298,7 +290,7 @@ impl SchurKkt {
         }
         bottom.copy_from_slice(&self.tmp_m);
         // q̈ = M⁻¹ (b_top − C_qᵀ λ)
-        for (&(r, c), &v) in sys.pattern().iter().zip(&self.jacobian) {
+        for (&(r, c), &v) in pattern.entries().iter().zip(&self.jacobian) {
             top[c] -= v * self.tmp_m[r];
         }
         self.minv.apply(top, &mut self.tmp_n);
@@ -313,52 +305,51 @@ impl SchurKkt {
 
 /// `M⁻¹` block by block, recomputed only when the mass matrix depends on the configuration.
 pub(crate) struct InverseMass {
-    /// One inverse 3×3 block per body.
-    pub blocks: Vec<Matrix3<f64>>,
+    /// The inverse blocks.
+    pub blocks: BlockDiagonal,
     valid: bool,
+    constant: bool,
 }
 
 impl InverseMass {
-    pub fn new(bodies: usize) -> Self {
+    pub fn new(mass: &BlockDiagonal, constant: bool) -> Self {
         InverseMass {
-            blocks: vec![Matrix3::zeros(); bodies],
+            blocks: mass.clone(),
             valid: false,
+            constant,
         }
     }
 
     /// Refreshes the inverse when needed. With `allow_diagonal`, a diagonal block with zero entries
     /// (no mass or no inertia) is inverted on its non-zero part only; otherwise every block must be
     /// positive definite.
-    pub fn update(&mut self, mass: &MassMatrix, allow_diagonal: bool) -> Result<(), SingularKkt> {
-        if self.valid && !mass.is_configuration_dependent() {
+    pub fn update(&mut self, mass: &BlockDiagonal, allow_diagonal: bool) -> Result<(), SingularKkt> {
+        if self.valid && self.constant {
             return Ok(());
         }
-        for (mi, blk) in self.blocks.iter_mut().zip(mass.blocks()) {
-            *mi = match blk.cholesky() {
-                Some(c) => c.inverse(),
-                None if allow_diagonal
-                    && (blk - Matrix3::from_diagonal(&blk.diagonal()))
-                        .iter()
-                        .all(|v| *v == 0.0) =>
-                {
-                    Matrix3::from_diagonal(&blk.diagonal().map(|d| if d > 0.0 { 1.0 / d } else { 0.0 }))
-                }
-                None => {
-                    return Err(SingularKkt(
-                        "mass block not positive definite (nor diagonal where allowed)".into(),
-                    ))
-                }
-            };
+        for b in 0..mass.num_blocks() {
+            if mass.invert_block(b, self.blocks.block_mut(b)) {
+                continue;
+            }
+            if !(allow_diagonal && mass.block_is_diagonal(b)) {
+                return Err(SingularKkt(
+                    "mass block not positive definite (nor diagonal where allowed)".into(),
+                ));
+            }
+            let s = mass.size(b);
+            let inv = self.blocks.block_mut(b);
+            for (k, v) in inv.iter_mut().enumerate() {
+                let d = mass.get(b, k / s, k % s);
+                *v = if k / s == k % s && d > 0.0 { 1.0 / d } else { 0.0 };
+            }
         }
-        self.valid = !mass.is_configuration_dependent();
+        self.valid = self.constant;
         Ok(())
     }
 
     /// `y ← M⁻¹ x` block by block.
     pub fn apply(&self, x: &[f64], y: &mut [f64]) {
-        for (b, mi) in self.blocks.iter().enumerate() {
-            let v = mi * Vector3::new(x[3 * b], x[3 * b + 1], x[3 * b + 2]);
-            y[3 * b..3 * b + 3].copy_from_slice(v.as_slice());
-        }
+        y.iter_mut().for_each(|v| *v = 0.0);
+        self.blocks.mul_add(1.0, x, y);
     }
 }

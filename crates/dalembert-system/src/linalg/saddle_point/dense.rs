@@ -1,13 +1,12 @@
 //! Dense back end: LU with partial pivoting of the assembled `(n+m)²` KKT matrix, factored in place
 //! in storage allocated once.
 
-use super::small_lu::SmallLu;
 use super::SingularKkt;
+use crate::linalg::SmallLu;
 
 /// Largest `n + m` factored by the unblocked LU.
 const SMALL: usize = 64;
-use dalembert_constraints::{ConstraintSystem, ConstraintValues};
-use dalembert_kinematics::MassMatrix;
+use crate::{BlockDiagonal, ConstraintPattern, ConstraintValues};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::perm::PermRef;
@@ -50,22 +49,18 @@ impl DenseKkt {
 
     pub fn factor(
         &mut self,
-        mass: &MassMatrix,
-        sys: &ConstraintSystem,
+        mass: &BlockDiagonal,
+        pattern: &ConstraintPattern,
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
         let n = self.n;
         if let Some(lu) = &mut self.small {
-            let k = n + sys.num_equations();
+            let k = n + pattern.rows();
             lu.a.iter_mut().for_each(|v| *v = 0.0);
-            for (i, b) in mass.blocks().iter().enumerate() {
-                for r in 0..3 {
-                    for c in 0..3 {
-                        lu.a[(3 * i + r) * k + 3 * i + c] = b[(r, c)];
-                    }
-                }
+            for (r, c, v) in mass.entries() {
+                lu.a[r * k + c] = v;
             }
-            for (&(r, c), &v) in sys.pattern().iter().zip(&vals.jacobian) {
+            for (&(r, c), &v) in pattern.entries().iter().zip(&vals.jacobian) {
                 lu.a[(n + r) * k + c] += v;
                 lu.a[c * k + n + r] += v;
             }
@@ -77,14 +72,10 @@ impl DenseKkt {
         }
         let k = self.a.nrows();
         self.a.fill(0.0);
-        for (i, b) in mass.blocks().iter().enumerate() {
-            for r in 0..3 {
-                for c in 0..3 {
-                    self.a[(3 * i + r, 3 * i + c)] = b[(r, c)];
-                }
-            }
+        for (r, c, v) in mass.entries() {
+            self.a[(r, c)] = v;
         }
-        for (&(r, c), &v) in sys.pattern().iter().zip(&vals.jacobian) {
+        for (&(r, c), &v) in pattern.entries().iter().zip(&vals.jacobian) {
             self.a[(n + r, c)] += v;
             self.a[(c, n + r)] += v;
         }

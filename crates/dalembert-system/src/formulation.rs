@@ -1,12 +1,12 @@
 //! The interface every formulation implements and every integrator consumes.
 //!
 //! A formulation turns `(t, q, q̇)` into accelerations `q̈` and multipliers `λ` (so that reactions
-//! follow from [`crate::ConstraintSystem::reactions`]); it reports the constraint residuals and the
+//! follow from the multipliers); it reports the constraint residuals and the
 //! energy, offers a Baumgarte-stabilized right-hand side (`FORMULATIONS.md` §3), and projects a
 //! state back onto the constraint manifold. Implementations create their workspaces once, at
 //! construction: the methods allocate nothing.
 
-use crate::{EquationRef, Model};
+use crate::{EquationRef, MultibodySystem};
 use thiserror::Error;
 
 /// How the acceleration-level constraint right-hand side is modified.
@@ -165,8 +165,8 @@ pub trait Formulation {
     /// Short name, e.g. `"augmented"`.
     fn name(&self) -> &'static str;
 
-    /// The model being solved.
-    fn model(&self) -> &Model;
+    /// The system being solved.
+    fn system(&self) -> &dyn MultibodySystem;
 
     /// Computes `q̈` and `λ` at `(t, q, q̇)` with the given stabilization of the constraint
     /// right-hand side. `qdd` has length `n`, `lambda` length `m`.
@@ -185,10 +185,10 @@ pub trait Formulation {
 
     /// Kinetic and potential energy.
     fn energy(&self, t: f64, q: &[f64], qd: &[f64]) -> Energy {
-        let m = self.model();
+        let s = self.system();
         Energy {
-            kinetic: m.kinetic_energy(q, qd),
-            potential: m.potential_energy(t, q),
+            kinetic: s.kinetic_energy(q, qd),
+            potential: s.potential_energy(t, q),
         }
     }
 

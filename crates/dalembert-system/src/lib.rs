@@ -1,0 +1,39 @@
+//! The system seam of dalembert: how formulations and integrators see a multibody system.
+//!
+//! * [`Layout`]: per-body blocks of the positions `q` (`n_q`) and velocities `v` (`n_v`);
+//! * [`BlockDiagonal`]: the mass matrix, one square block per body, of any size;
+//! * [`ConstraintSet`]: constraints as a fixed sparsity pattern of `C_q` plus values, and the
+//!   analyses written once on it (structure, kinematic analysis, coordinate partitioning);
+//! * [`MultibodySystem`]: mass, forces, constraints, position update and energy;
+//! * [`Formulation`]: the forward-dynamics interface every formulation implements and every
+//!   integrator consumes, with its errors ([`DynamicsError`]) and settings.
+//!
+//! Nothing here knows whether a body is planar or spatial: `dalembert-constraints` implements the
+//! seam for planar bodies. Equations follow `FORMULATIONS.md`; `docs/architecture.md` shows where
+//! each part lives.
+
+pub mod blocks;
+pub mod constraint_set;
+pub mod error;
+pub mod formulation;
+pub mod gram;
+pub mod inverse;
+pub mod kinematics;
+pub mod layout;
+pub mod linalg;
+pub mod model_error;
+pub mod partition;
+pub mod sparse_pattern;
+pub mod structure;
+pub mod system;
+
+pub use blocks::BlockDiagonal;
+pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
+pub use error::{ConstraintError, EquationRef};
+pub use formulation::{DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment, Stabilization};
+pub use kinematics::{KinematicOptions, KinematicReport};
+pub use layout::{BodyBlock, Layout};
+pub use model_error::ModelError;
+pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
+pub use structure::StructureReport;
+pub use system::MultibodySystem;

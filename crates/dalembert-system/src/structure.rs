@@ -1,0 +1,238 @@
+//! Structure analysis: rank of `C_q`, degrees of freedom, redundant equations.
+//!
+//! The rank comes from an LU factorization with full pivoting of `C_qᵀ` (n × m): its pivot
+//! columns are a maximal independent set of constraint rows; the other rows are **redundant**
+//! (linear combinations of the chosen ones at this configuration). A pivot counts as non-zero when
+//! it exceeds `rank_tolerance × |largest pivot|`. Degrees of freedom: `n − rank`.
+//!
+//! Large models ([`SPARSE_FROM`] coordinates or more) are first tested for full row rank by a
+//! sparse Cholesky of `C_q C_qᵀ` with a condition estimate ([`SparseGram`]): if the estimate is at
+//! most `1 / rank_tolerance`, every equation is independent and no dense matrix is formed. Otherwise the dense analysis runs when it
+//! fits in [`DENSE_LIMIT_BYTES`], and the result is [`ConstraintError::TooLarge`] when it does not.
+
+use crate::gram::SparseGram;
+use crate::{ConstraintError, ConstraintSet, ConstraintValues, EquationRef};
+
+/// From this many coordinates on, the analyses try the sparse path first ([`SparseGram`]): the
+/// dense `O(n³)` factorizations take seconds from about 2000 coordinates on.
+pub const SPARSE_FROM: usize = 600;
+
+/// Largest dense matrix the analyses allocate: 1 GiB.
+pub const DENSE_LIMIT_BYTES: usize = 1 << 30;
+
+/// Why a large model reached a dense analysis, and what it needs.
+pub(crate) const RANK_DEFICIENT_HINT: &str =
+    "models this large are analysed only when their constraints are independent (no redundant equations, no singular position)";
+
+/// True when a dense `rows × cols` matrix of `f64` stays within [`DENSE_LIMIT_BYTES`].
+pub fn dense_fits(rows: usize, cols: usize) -> bool {
+    rows.checked_mul(cols)
+        .and_then(|e| e.checked_mul(8))
+        .is_some_and(|b| b <= DENSE_LIMIT_BYTES)
+}
+
+/// The outcome of a structure analysis at one configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StructureReport {
+    /// Number of coordinates `n`.
+    pub coordinates: usize,
+    /// Number of constraint equations `m`.
+    pub equations: usize,
+    /// Numerical rank of `C_q`.
+    pub rank: usize,
+    /// Degrees of freedom `n − rank`.
+    pub degrees_of_freedom: usize,
+    /// System rows of a maximal independent set of equations, ascending.
+    pub independent_rows: Vec<usize>,
+    /// The equations left out of that set (redundant at this configuration), by name.
+    pub redundant: Vec<EquationRef>,
+}
+
+impl StructureReport {
+    /// True when every equation is independent.
+    pub fn is_full_rank(&self) -> bool {
+        self.rank == self.equations
+    }
+}
+
+/// Numerical rank and pivot order of a dense matrix's columns (full-pivot LU): the first `rank`
+/// entries of the returned order are independent columns.
+pub fn column_rank(a: faer::MatRef<'_, f64>, rank_tolerance: f64) -> (usize, Vec<usize>) {
+    if a.nrows() == 0 || a.ncols() == 0 {
+        return (0, (0..a.ncols()).collect());
+    }
+    let lu = a.full_piv_lu();
+    let u = lu.U();
+    let k = u.nrows().min(u.ncols());
+    let largest = (0..k).map(|i| u[(i, i)].abs()).fold(0.0, f64::max);
+    let rank = if largest == 0.0 || !largest.is_finite() {
+        0
+    } else {
+        (0..k)
+            .take_while(|&i| u[(i, i)].abs() > rank_tolerance * largest)
+            .count()
+    };
+    let order: Vec<usize> = lu.Q().arrays().0.to_vec();
+    (rank, order)
+}
+
+/// Rank, degrees of freedom and redundant equations of `C_q` held in `values`.
+pub fn analyse_structure<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    values: &ConstraintValues,
+    rank_tolerance: f64,
+) -> Result<StructureReport, ConstraintError> {
+    let n = sys.num_coordinates();
+    let m = sys.num_equations();
+    if n >= SPARSE_FROM && has_full_row_rank_sparse(sys, values, rank_tolerance) {
+        return Ok(StructureReport {
+            coordinates: n,
+            equations: m,
+            rank: m,
+            degrees_of_freedom: n - m,
+            independent_rows: (0..m).collect(),
+            redundant: Vec::new(),
+        });
+    }
+    if !dense_fits(n, m) {
+        return Err(ConstraintError::TooLarge {
+            what: "structure analysis".into(),
+            hint: RANK_DEFICIENT_HINT,
+            rows: n,
+            cols: m,
+        });
+    }
+    let jt = sys.jacobian_dense(values).transpose().to_owned();
+    let (rank, order) = column_rank(jt.as_ref(), rank_tolerance);
+    let mut independent_rows: Vec<usize> = order[..rank].to_vec();
+    independent_rows.sort_unstable();
+    let mut redundant_rows: Vec<usize> = order[rank..].to_vec();
+    redundant_rows.sort_unstable();
+    Ok(StructureReport {
+        coordinates: n,
+        equations: m,
+        rank,
+        degrees_of_freedom: n - rank,
+        independent_rows,
+        redundant: redundant_rows.into_iter().map(|r| sys.equation(r)).collect(),
+    })
+}
+
+/// True when a sparse Cholesky of `C_q C_qᵀ` succeeds with an estimated condition number of at
+/// most `1 / rank_tolerance`: then `C_q` has full row rank by a wide margin. (A duplicated
+/// equation gives about 1e15 to 1e16 in floating point, never the exact infinity; chains of 300
+/// to 100 000 links give 50 to 100.) Anything in between is left to the dense analysis.
+fn has_full_row_rank_sparse<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    values: &ConstraintValues,
+    rank_tolerance: f64,
+) -> bool {
+    let Ok(mut gram) = SparseGram::new(sys) else {
+        return false;
+    };
+    gram.factor(&values.jacobian, |_, r, c| f64::from(r == c), 1.0 / rank_tolerance)
+        .is_ok()
+}
+
+/// Equations involved in a rank loss: the rows with a significant component in the left null
+/// space of `C_q` (from an SVD; systems above 600 equations fall back to the redundant set of
+/// [`ConstraintSystem::analyse_structure`], and to none when that analysis is too large).
+pub fn dependent_equations<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    values: &ConstraintValues,
+    rank_tolerance: f64,
+) -> Vec<EquationRef> {
+    let m = sys.num_equations();
+    let redundant = || {
+        analyse_structure(sys, values, rank_tolerance)
+            .map(|s| s.redundant)
+            .unwrap_or_default()
+    };
+    if m > 600 {
+        return redundant();
+    }
+    let a = sys.jacobian_dense(values);
+    let Ok(svd) = a.svd() else {
+        return redundant();
+    };
+    let s = svd.S().column_vector();
+    let largest = (0..s.nrows()).map(|i| s[i]).fold(0.0, f64::max);
+    let rank = (0..s.nrows()).filter(|&i| s[i] > rank_tolerance * largest).count();
+    let u = svd.U();
+    (0..m)
+        .filter(|&r| (rank..m).any(|j| u[(r, j)].abs() > 1e-6))
+        .map(|r| sys.equation(r))
+        .collect()
+}
+
+/// The error for a rank-deficient `C_q` at `values`: rank, and the equations in the dependent set.
+pub fn redundancy_error<S: ConstraintSet + ?Sized>(sys: &S, t: f64, values: &ConstraintValues) -> crate::DynamicsError {
+    let s = match analyse_structure(sys, values, 1e-9) {
+        Ok(s) => s,
+        Err(e) => return e.into(),
+    };
+    crate::DynamicsError::RedundantConstraints {
+        time: t,
+        rank: s.rank,
+        equations: s.equations,
+        involved: dependent_equations(sys, values, 1e-9),
+    }
+}
+
+/// Writes multipliers `lam_rows` solved on the independent `rows` into `lambda` (zero elsewhere);
+/// when some rows were left out (redundant constraints), replaces them by the minimum-norm
+/// multipliers of the same generalized constraint force `C_qᵀ λ`.
+pub fn scatter_multipliers<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    t: f64,
+    values: &ConstraintValues,
+    rows: &[usize],
+    lam_rows: &[f64],
+    lambda: &mut [f64],
+) -> Result<(), crate::DynamicsError> {
+    lambda.iter_mut().for_each(|l| *l = 0.0);
+    for (&row, &l) in rows.iter().zip(lam_rows) {
+        lambda[row] = l;
+    }
+    if rows.len() < sys.num_equations() {
+        let mut f = vec![0.0; sys.num_coordinates()];
+        sys.jacobian_transpose_mul_add(values, 1.0, lambda, &mut f);
+        let mn = minimum_norm_multipliers(sys, values, &f).ok_or(crate::DynamicsError::Factorization {
+            time: t,
+            what: "minimum-norm multipliers: the constraint force is not in the range of C_qᵀ".into(),
+        })?;
+        lambda.copy_from_slice(&mn);
+    }
+    Ok(())
+}
+
+/// The minimum-norm multipliers `λ = (C_qᵀ)⁺ f` for a generalized constraint force `f` in the
+/// range of `C_qᵀ` (for redundant constraints, one admissible distribution of the reactions).
+///
+/// The minimum-norm solution lies in the range of `C_q`, which the `r` independent columns `J`
+/// of `C_q` span (full-pivot LU, no iterative SVD): `λ = C_q,J z` with
+/// `(C_q,Jᵀ C_q,J) z = f_J`, an `r × r` positive definite system. Dense; allocates (a
+/// fallback path for redundant constraints). `None` when `f` is not in the range of `C_qᵀ`.
+pub fn minimum_norm_multipliers<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    values: &ConstraintValues,
+    f: &[f64],
+) -> Option<Vec<f64>> {
+    use faer::linalg::solvers::Solve;
+    let a = sys.jacobian_dense(values);
+    let (m, n) = (a.nrows(), a.ncols());
+    let (r, order) = column_rank(a.as_ref(), 1e-9);
+    let cols = &order[..r];
+    let cj = faer::Mat::from_fn(m, r, |i, k| a[(i, cols[k])]);
+    let g = cj.transpose() * &cj;
+    let fj = faer::Mat::from_fn(r, 1, |k, _| f[cols[k]]);
+    let z = g.partial_piv_lu().solve(&fj);
+    let lam = &cj * &z;
+    let lam: Vec<f64> = (0..m).map(|i| lam[(i, 0)]).collect();
+    // f must be reproduced on every coordinate, not only on the independent ones.
+    let mut back = vec![0.0; n];
+    sys.jacobian_transpose_mul_add(values, 1.0, &lam, &mut back);
+    let scale = f.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+    let ok = lam.iter().all(|l| l.is_finite()) && back.iter().zip(f).all(|(b, fi)| (b - fi).abs() <= 1e-8 * scale);
+    ok.then_some(lam)
+}

@@ -1,0 +1,132 @@
+//! The seam: how formulations and integrators see a multibody system, whatever its bodies are.
+//!
+//! ```text
+//! M(q) v̇ + C_qᵀ λ = Q(t, q, v)          C(q, t) = 0          q̇ = G(q) v  (advanced by integrate_positions)
+//! ```
+//!
+//! `M` is block diagonal (one block per body, [`BlockDiagonal`]); `Q` holds every applied force
+//! and the quadratic-velocity terms of the bodies' kinetic energy; the constraints are a fixed
+//! pattern plus values ([`ConstraintSet`]). Planar bodies (`x, y, θ`, `v = q̇`) and spatial bodies
+//! (Euler parameters, angular velocity) are two implementations; formulations and integrators use
+//! only this trait.
+
+use crate::{BlockDiagonal, ConstraintSet, DynamicsError, Layout};
+
+/// A multibody system described to formulations and integrators.
+pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
+    /// Where each body's positions and velocities sit.
+    fn layout(&self) -> &Layout;
+
+    /// The constraints.
+    fn constraints(&self) -> &dyn ConstraintSet;
+
+    /// Storage for the mass matrix: one block per body, of its velocity block's size.
+    fn mass_storage(&self) -> BlockDiagonal {
+        BlockDiagonal::zeros(self.layout().bodies().iter().map(|b| b.v_len()))
+    }
+
+    /// Writes `M(q)` into `out` (storage from [`MultibodySystem::mass_storage`]). Must not allocate.
+    fn mass(&self, q: &[f64], out: &mut BlockDiagonal);
+
+    /// True when `M` does not depend on `q` (then it need be written only once).
+    fn mass_is_constant(&self) -> bool;
+
+    /// Writes (not adds) `Q(t, q, v)`: applied forces plus quadratic-velocity terms. Must not allocate.
+    fn applied_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]);
+
+    /// `Ok` when `q_e` (from [`MultibodySystem::applied_forces`] at `(t, q, v)`) is finite; otherwise
+    /// an error naming the force element at fault.
+    fn check_forces(&self, t: f64, q: &[f64], v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError>;
+
+    /// `q ← q ⊕ h v`: advances the positions by velocity `v` over `h` (default `q + h v`, right when
+    /// `v = q̇`). Must not allocate.
+    fn integrate_positions(&self, q: &mut [f64], v: &[f64], h: f64) {
+        q.iter_mut().zip(v).for_each(|(x, d)| *x += h * d);
+    }
+
+    /// Restores invariants of the position coordinates that the integration does not keep (e.g. unit
+    /// Euler parameters). Default: nothing to do.
+    fn normalize(&self, _q: &mut [f64]) {}
+
+    /// Kinetic energy at `(q, v)`.
+    fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64;
+
+    /// Potential energy of the conservative elements at `(t, q)`.
+    fn potential_energy(&self, t: f64, q: &[f64]) -> f64;
+
+    /// True when `T + V` is a first integral of the exact motion.
+    fn is_conservative(&self) -> bool;
+
+    /// Names of the bodies without mass or inertia (to explain a singular system).
+    fn bodies_without_inertia(&self) -> Vec<String>;
+
+    /// Number of constraint equations `m`.
+    fn num_equations(&self) -> usize {
+        self.constraints().num_equations()
+    }
+
+    /// The error for a singular system whose cause is not a rank-deficient `C_q`: `SingularMass`
+    /// naming the bodies without mass or inertia when there are any, otherwise `Singular` with `what`.
+    fn singular_mass_error(&self, t: f64, what: &str) -> DynamicsError {
+        let bodies = self.bodies_without_inertia();
+        if bodies.is_empty() {
+            DynamicsError::Singular {
+                time: t,
+                what: what.to_string(),
+            }
+        } else {
+            DynamicsError::SingularMass { time: t, bodies }
+        }
+    }
+
+    /// `Ok` when every position and velocity is finite and the slices have the layout's lengths;
+    /// otherwise the error names the body and the coordinate.
+    fn check_state(&self, t: f64, q: &[f64], v: &[f64]) -> Result<(), DynamicsError> {
+        let l = self.layout();
+        for (what, expected, got) in [("q", l.n_q(), q.len()), ("v", l.n_v(), v.len())] {
+            if expected != got {
+                return Err(DynamicsError::WrongLength { what, expected, got });
+            }
+        }
+        if let Some(i) = q.iter().position(|x| !x.is_finite()) {
+            let (b, k) = l.position_owner(i);
+            return Err(DynamicsError::NonFinite {
+                time: t,
+                what: format!("position {} of body '{}'", b.q_labels[k], b.name),
+            });
+        }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            let (b, k) = l.velocity_owner(i);
+            return Err(DynamicsError::NonFinite {
+                time: t,
+                what: format!("velocity {} of body '{}'", b.v_labels[k], b.name),
+            });
+        }
+        Ok(())
+    }
+
+    /// `Ok` when every velocity-sized slice (`(name, length)` in `velocities`) has `n_v` entries and
+    /// every equation-sized one has `m`; otherwise the error names the first slice that does not.
+    fn check_lengths(
+        &self,
+        velocities: &[(&'static str, usize)],
+        equations: &[(&'static str, usize)],
+    ) -> Result<(), DynamicsError> {
+        let (n, m) = (self.layout().n_v(), self.num_equations());
+        let wrong = velocities
+            .iter()
+            .map(|&(w, l)| (w, l, n))
+            .chain(equations.iter().map(|&(w, l)| (w, l, m)))
+            .find(|&(_, l, e)| l != e);
+        match wrong {
+            None => Ok(()),
+            Some((what, got, expected)) => Err(DynamicsError::WrongLength { what, expected, got }),
+        }
+    }
+
+    /// The error for a non-finite acceleration at velocity coordinate `i`.
+    fn non_finite_acceleration(&self, t: f64, i: usize) -> DynamicsError {
+        let what = format!("acceleration of body '{}'", self.layout().velocity_owner(i).0.name);
+        DynamicsError::NonFinite { time: t, what }
+    }
+}
