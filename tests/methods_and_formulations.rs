@@ -47,6 +47,18 @@ fn every_method_runs_on_every_formulation() {
             };
             let mut f = sim.formulation().unwrap();
             let mut last = Vec::new();
+            if matches!(opts.method, Method::GeneralizedAlpha { .. }) && kind != FormulationKind::Augmented {
+                // Generalized-α solves the augmented index-3 system itself: refused, by name, with
+                // the other formulations (it would be the augmented method under their names).
+                let e = integrate(f.as_mut(), 0.0, 0.5, &sim.q, &sim.qd, &opts, &mut |_| {}).unwrap_err();
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(&format!("the {} formulation has no implicit form", kind.name()))
+                        && msg.contains("use formulation augmented with generalized-alpha"),
+                    "{msg}"
+                );
+                continue;
+            }
             let stats = integrate(f.as_mut(), 0.0, 0.5, &sim.q, &sim.qd, &opts, &mut |s| {
                 last = s.q.to_vec()
             })

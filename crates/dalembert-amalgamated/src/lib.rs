@@ -19,12 +19,12 @@
 //! is redone only at a re-partition. (A symmetric indefinite sparse factorization would halve the work; faer's needs
 //! regularisation on this matrix, see `shared/LINALG-NOTES.md`.)
 
+use dalembert_system::linalg::DenseLu;
+use dalembert_system::partition::VelocityTransform;
 use dalembert_system::{
     BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
     RedundancyTreatment, Stabilization,
 };
-use faer::linalg::solvers::Solve;
-use faer::Mat;
 use std::sync::Arc;
 
 mod sparse;
@@ -45,6 +45,21 @@ pub struct Amalgamated {
     rhs: Vec<f64>,
     stats: FormulationStats,
     sparse: Option<SparseSystem>,
+    work: Work,
+}
+
+/// Storage of one evaluation for a system of `dim = 2n + ni` unknowns (rebuilt only when a
+/// re-partition changes `ni`).
+#[derive(Debug, Default)]
+struct Work {
+    /// Right-hand side, solution, and `K x` for the residual check (each `dim`).
+    rhs: Vec<f64>,
+    sol: Vec<f64>,
+    kx: Vec<f64>,
+    /// Multipliers on the independent rows (`r`).
+    y: Vec<f64>,
+    /// The dense factorization (systems up to `DENSE_LIMIT` unknowns).
+    dense: Option<DenseLu>,
 }
 
 impl std::fmt::Debug for Amalgamated {
@@ -71,6 +86,7 @@ impl Amalgamated {
             model,
             stats: FormulationStats::default(),
             sparse: None,
+            work: Work::default(),
         }
     }
 
@@ -78,29 +94,45 @@ impl Amalgamated {
     pub fn with_defaults(model: Arc<dyn MultibodySystem>) -> Self {
         Self::new(model, RedundancyTreatment::Error)
     }
+}
 
-    fn singular(&self, t: f64) -> DynamicsError {
-        self.model.constraints().redundancy_error(t, &self.values)
+/// `y = K x` for `K = [M −I 0; −I 0 B_i; 0 B_iᵀ 0]`, from the blocks.
+fn amalgamated_mul(mass: &BlockDiagonal, b: &faer::Mat<f64>, x: &[f64], y: &mut [f64]) {
+    let (n, ni) = (b.nrows(), b.ncols());
+    let (x1, rest) = x.split_at(n);
+    let (x2, x3) = rest.split_at(n);
+    let (y1, rest) = y.split_at_mut(n);
+    let (y2, y3) = rest.split_at_mut(n);
+    for i in 0..n {
+        y1[i] = -x2[i];
+        y2[i] = -x1[i];
+    }
+    mass.mul_add(1.0, x1, y1);
+    for j in 0..ni {
+        let col = b.col_as_slice(j);
+        let mut dot = 0.0;
+        for i in 0..n {
+            y2[i] += col[i] * x3[j];
+            dot += col[i] * x2[i];
+        }
+        y3[j] = dot;
     }
 }
 
-impl Amalgamated {
-    /// The dense amalgamated matrix `[M −I 0; −I 0 B_i; 0 B_iᵀ 0]`.
-    fn dense_matrix(&self, n: usize, ni: usize, b: &Mat<f64>) -> Mat<f64> {
-        let dim = 2 * n + ni;
-        let mut k = Mat::<f64>::zeros(dim, dim);
-        for (r, c, v) in self.mass.entries() {
-            k[(r, c)] = v;
+/// Writes the dense amalgamated matrix `[M −I 0; −I 0 B_i; 0 B_iᵀ 0]` into `k`.
+fn fill_dense(mass: &BlockDiagonal, vt: &VelocityTransform, mut k: faer::MatMut<'_, f64>) {
+    let (n, ni) = (vt.b.nrows(), vt.b.ncols());
+    k.fill(0.0);
+    for (r, c, v) in mass.entries() {
+        k[(r, c)] = v;
+    }
+    for i in 0..n {
+        k[(i, n + i)] = -1.0;
+        k[(n + i, i)] = -1.0;
+        for j in 0..ni {
+            k[(n + i, 2 * n + j)] = vt.b[(i, j)];
+            k[(2 * n + j, n + i)] = vt.b[(i, j)];
         }
-        for i in 0..n {
-            k[(i, n + i)] = -1.0;
-            k[(n + i, i)] = -1.0;
-            for j in 0..ni {
-                k[(n + i, 2 * n + j)] = b[(i, j)];
-                k[(2 * n + j, n + i)] = b[(i, j)];
-            }
-        }
-        k
     }
 }
 
@@ -137,67 +169,87 @@ impl Formulation for Amalgamated {
         }
         stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
-        let (partition, vt) = match self.tracker.transform(t, sys, &self.values, &self.rhs) {
-            Some((p, vt)) => (p.clone(), vt),
-            None => return Err(self.singular(t)),
+        let m = sys.num_equations();
+        let model = Arc::clone(&self.model);
+        let sys = model.constraints();
+        let Amalgamated {
+            tracker,
+            work,
+            mass,
+            q_e,
+            values,
+            redundancy,
+            stats,
+            rhs,
+            sparse,
+            ..
+        } = self;
+        let transformed = tracker.transform(t, sys, values, rhs).is_some();
+        stats.repartitions += (tracker.log.len() - before) as u64;
+        let (true, Some((partition, vt))) = (transformed, tracker.last()) else {
+            return Err(sys.redundancy_error(t, values));
         };
-        self.stats.repartitions += (self.tracker.log.len() - before) as u64;
-        let redundant = partition.rows.len() < sys.num_equations();
-        if redundant && self.redundancy == RedundancyTreatment::Error {
-            return Err(self.singular(t));
+        let redundant = partition.rows.len() < m;
+        if redundant && *redundancy == RedundancyTreatment::Error {
+            return Err(sys.redundancy_error(t, values));
         }
         let ni = partition.independent.len();
         let dim = 2 * n + ni;
-        let rhs: Vec<f64> = (0..dim)
-            .map(|i| {
-                if i < n {
-                    self.q_e[i]
-                } else if i < 2 * n {
-                    -vt.gamma[i - n]
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        self.stats.factorizations += 1;
-        let mut sol = rhs.clone();
-        let accurate = if dim > DENSE_LIMIT {
-            if self
-                .sparse
-                .as_ref()
-                .is_none_or(|s| s.independent != partition.independent)
-            {
-                self.sparse = SparseSystem::new(&self.mass, &partition);
-            }
-            match self.sparse.as_mut() {
-                Some(sp) => {
-                    let solved = sp.solve(&self.mass, &vt.b, &mut sol).is_some();
-                    let mut r = vec![0.0; dim];
-                    sp.mul(&sol, &mut r);
-                    let res = r.iter().zip(&rhs).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-                    let size = rhs.iter().chain(&sol).fold(0.0f64, |a, v| a.max(v.abs()));
-                    solved && res <= 1e-9 * size.max(1.0)
-                }
-                None => false,
-            }
-        } else {
-            let k = self.dense_matrix(n, ni, &vt.b);
-            let b = Mat::from_fn(dim, 1, |i, _| rhs[i]);
-            let x = k.partial_piv_lu().solve(&b);
-            let res = (&k * &x - &b).norm_max();
-            for i in 0..dim {
-                sol[i] = x[(i, 0)];
-            }
-            res <= 1e-9 * (b.norm_max() + k.norm_max() * x.norm_max())
-        };
-        if !accurate || sol.iter().any(|v| !v.is_finite()) {
-            return Err(self.model.singular_mass_error(t, "amalgamated system singular"));
+        if work.rhs.len() != dim || work.y.len() != partition.rows.len() {
+            *work = Work {
+                rhs: vec![0.0; dim],
+                sol: vec![0.0; dim],
+                kx: vec![0.0; dim],
+                y: vec![0.0; partition.rows.len()],
+                dense: (dim <= DENSE_LIMIT).then(|| DenseLu::new(dim, 1)),
+            };
         }
-        qdd.copy_from_slice(&sol[..n]);
+        for i in 0..n {
+            work.rhs[i] = q_e[i];
+            work.rhs[n + i] = -vt.gamma[i];
+        }
+        work.rhs[2 * n..].iter_mut().for_each(|v| *v = 0.0);
+        stats.factorizations += 1;
+        work.sol.copy_from_slice(&work.rhs);
+        let solved = match &mut work.dense {
+            Some(lu) => {
+                fill_dense(mass, vt, lu.matrix_mut());
+                lu.factor();
+                lu.solve_vec(&mut work.sol);
+                true
+            }
+            None => {
+                // The sparse pattern depends on the partition: a new symbolic analysis per partition.
+                if sparse.as_ref().is_none_or(|s| s.independent != partition.independent) {
+                    *sparse = SparseSystem::new(mass, partition);
+                }
+                sparse
+                    .as_mut()
+                    .is_some_and(|sp| sp.solve(mass, &vt.b, &mut work.sol).is_some())
+            }
+        };
+        // Accept the solve when its residual is at round-off: ‖K x − b‖∞ ≤ 1e-9 (‖b‖∞ + s ‖x‖∞),
+        // s the largest entry of K.
+        amalgamated_mul(mass, &vt.b, &work.sol, &mut work.kx);
+        let norm = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let res = work
+            .kx
+            .iter()
+            .zip(&work.rhs)
+            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let scale = mass.max_abs().max(1.0);
+        let s_b = (0..ni).map(|j| norm(vt.b.col_as_slice(j))).fold(scale, f64::max);
+        let accurate = solved && res <= 1e-9 * (norm(&work.rhs) + s_b * norm(&work.sol));
+        if !accurate || work.sol.iter().any(|v| !v.is_finite()) {
+            return Err(model.singular_mass_error(t, "amalgamated system singular"));
+        }
+        qdd.copy_from_slice(&work.sol[..n]);
         // λ on the independent rows from the dependent columns of Q_c = −C_qᵀ λ.
-        let mut y: Vec<f64> = partition.dependent.iter().map(|&d| -sol[n + d]).collect();
-        vt.solve_dependent_transpose(&mut y);
-        sys.scatter_multipliers(t, &self.values, &partition.rows, &y, lambda)?;
+        for (y, &d) in work.y.iter_mut().zip(&partition.dependent) {
+            *y = -work.sol[n + d];
+        }
+        vt.solve_dependent_transpose(&mut work.y);
+        sys.scatter_multipliers(t, values, &partition.rows, &work.y, lambda)?;
         Ok(())
     }
 

@@ -78,9 +78,4 @@ impl SparseSystem {
         self.lu.solve_in_place(x);
         Some(())
     }
-
-    /// `y = K x` with the current values.
-    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
-        self.lu.mul(x, y);
-    }
 }

@@ -275,4 +275,8 @@ impl Formulation for Augmented {
     fn stats(&self) -> FormulationStats {
         self.stats
     }
+
+    fn is_index3_augmented(&self) -> bool {
+        true
+    }
 }

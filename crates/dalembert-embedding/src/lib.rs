@@ -18,13 +18,13 @@
 //! velocities from the velocity equation, so an integrator that projects after every step integrates
 //! the independent coordinates only, with the constraints held to the Newton tolerance.
 
-use dalembert_system::partition::Repartition;
+use dalembert_system::linalg::{DenseCholesky, DenseLu};
+use dalembert_system::partition::{Partition, Repartition};
 use dalembert_system::{
     BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
     RedundancyTreatment, Stabilization,
 };
-use faer::linalg::solvers::Solve;
-use faer::{Mat, Side};
+use faer::{Accum, Mat, Par};
 use std::sync::Arc;
 
 /// How the embedding formulation computes the multipliers.
@@ -74,6 +74,50 @@ pub struct Embedding {
     cdot: Vec<f64>,
     rhs: Vec<f64>,
     stats: FormulationStats,
+    work: Work,
+}
+
+/// Storage of one evaluation, sized for a partition with `ni` independent coordinates (rebuilt only
+/// when a re-partition changes the sizes).
+struct Work {
+    ni: usize,
+    /// `M B_i` (`n × ni`).
+    mb: Mat<f64>,
+    /// `M_i = B_iᵀ M B_i` and its Cholesky factor.
+    mi: DenseCholesky,
+    /// `Q_e − M γ_i`, `n`.
+    rhs_full: Vec<f64>,
+    /// `q̈_i` (or `[q̈_i; λ_R]` with elimination), `n`.
+    sol: Vec<f64>,
+    /// `Q_e − M q̈`, `n`.
+    f: Vec<f64>,
+    /// Multipliers on the independent rows, `r`.
+    lam_r: Vec<f64>,
+    /// `[M B_i  C_q,Rᵀ]` (elimination only), `n × n`.
+    elimination: Option<DenseLu>,
+    /// Row of each system equation among the partition's rows (elimination only).
+    row_slot: Vec<Option<usize>>,
+}
+
+impl Work {
+    fn new(n: usize, partition: &Partition, m: usize, multipliers: Multipliers) -> Self {
+        let ni = partition.independent.len();
+        let mut row_slot = vec![None; m];
+        for (i, &row) in partition.rows.iter().enumerate() {
+            row_slot[row] = Some(i);
+        }
+        Work {
+            ni,
+            mb: Mat::zeros(n, ni),
+            mi: DenseCholesky::new(ni),
+            rhs_full: vec![0.0; n],
+            sol: vec![0.0; n],
+            f: vec![0.0; n],
+            lam_r: vec![0.0; partition.rows.len()],
+            elimination: (multipliers == Multipliers::Elimination).then(|| DenseLu::new(n, 1)),
+            row_slot,
+        }
+    }
 }
 
 impl std::fmt::Debug for Embedding {
@@ -104,6 +148,7 @@ impl Embedding {
             options,
             model,
             stats: FormulationStats::default(),
+            work: Work::new(0, &Partition::default(), 0, Multipliers::AfterTheFact),
         }
     }
 
@@ -120,10 +165,6 @@ impl Embedding {
     /// Every re-partition so far: time, old and new independent coordinates.
     pub fn repartitions(&self) -> &[Repartition] {
         &self.tracker.log
-    }
-
-    fn singular(&self, t: f64) -> DynamicsError {
-        self.model.constraints().redundancy_error(t, &self.values)
     }
 
     fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
@@ -165,82 +206,119 @@ impl Formulation for Embedding {
         }
         stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
-        let (partition, vt) = match self.tracker.transform(t, sys, &self.values, &self.rhs) {
-            Some((p, vt)) => (p.clone(), vt),
-            None => return Err(self.singular(t)),
+        let m = sys.num_equations();
+        let model = Arc::clone(&self.model);
+        let sys = model.constraints();
+        let Embedding {
+            tracker,
+            work,
+            mass,
+            q_e,
+            values,
+            options,
+            stats,
+            rhs,
+            ..
+        } = self;
+        let transformed = tracker.transform(t, sys, values, rhs).is_some();
+        stats.repartitions += (tracker.log.len() - before) as u64;
+        let (true, Some((partition, vt))) = (transformed, tracker.last()) else {
+            return Err(sys.redundancy_error(t, values));
         };
-        self.stats.repartitions += (self.tracker.log.len() - before) as u64;
-        self.stats.factorizations += 1;
-        let redundant = partition.rows.len() < sys.num_equations();
-        if redundant && self.options.redundancy == RedundancyTreatment::Error {
-            return Err(self.singular(t));
+        stats.factorizations += 1;
+        let redundant = partition.rows.len() < m;
+        if redundant && options.redundancy == RedundancyTreatment::Error {
+            return Err(sys.redundancy_error(t, values));
         }
         let ni = partition.independent.len();
-        // M B_i, M γ_i (M block diagonal).
-        let mut mb = Mat::<f64>::zeros(n, ni);
+        let r = partition.rows.len();
+        if work.ni != ni || work.lam_r.len() != r || work.rhs_full.len() != n || work.row_slot.len() != m {
+            *work = Work::new(n, partition, m, options.multipliers);
+        }
+        if work.elimination.is_some() {
+            // The row map follows the partition's rows (same sizes, possibly other rows).
+            work.row_slot.iter_mut().for_each(|s| *s = None);
+            for (i, &row) in partition.rows.iter().enumerate() {
+                work.row_slot[row] = Some(i);
+            }
+        }
+        // M B_i column by column (M block diagonal), and Q_e − M γ_i.
         for j in 0..ni {
-            let col: Vec<f64> = (0..n).map(|i| vt.b[(i, j)]).collect();
-            let mut out = vec![0.0; n];
-            self.mass.mul_add(1.0, &col, &mut out);
-            for i in 0..n {
-                mb[(i, j)] = out[i];
-            }
+            let out = work.mb.col_as_slice_mut(j);
+            out.iter_mut().for_each(|v| *v = 0.0);
+            mass.mul_add(1.0, vt.b.col_as_slice(j), out);
         }
-        let mut mg = vec![0.0; n];
-        self.mass.mul_add(1.0, &vt.gamma, &mut mg);
-        let rhs_full: Vec<f64> = (0..n).map(|i| self.q_e[i] - mg[i]).collect();
-        let qdd_i: Vec<f64>;
-        let mut lam_rows: Option<Vec<f64>> = None;
-        match self.options.multipliers {
-            Multipliers::AfterTheFact => {
-                let mi = vt.b.transpose() * &mb;
-                let qi = vt.b.transpose() * Mat::from_fn(n, 1, |i, _| rhs_full[i]);
-                let llt = mi.llt(Side::Lower).map_err(|_| {
-                    self.model
-                        .singular_mass_error(t, "reduced mass matrix B_iᵀ M B_i not positive definite")
-                })?;
-                let sol = llt.solve(&qi);
-                qdd_i = (0..ni).map(|i| sol[(i, 0)]).collect();
-            }
-            Multipliers::Elimination => {
-                // [M B_i  C_q,Rᵀ] [q̈_i; λ_R] = Q_e − M γ_i   (n × n when the rows are independent).
-                let r = partition.rows.len();
-                let jac = sys.jacobian_dense(&self.values);
-                let k = Mat::from_fn(n, ni + r, |i, j| {
-                    if j < ni {
-                        mb[(i, j)]
-                    } else {
-                        jac[(partition.rows[j - ni], i)]
-                    }
-                });
-                let lu = k.partial_piv_lu();
-                let sol = lu.solve(Mat::from_fn(n, 1, |i, _| rhs_full[i]));
-                if (0..n).any(|i| !sol[(i, 0)].is_finite()) {
-                    return Err(self
-                        .model
-                        .singular_mass_error(t, "elimination matrix [M B_i  C_qᵀ] singular"));
-                }
-                qdd_i = (0..ni).map(|i| sol[(i, 0)]).collect();
-                lam_rows = Some((0..r).map(|i| sol[(ni + i, 0)]).collect());
-            }
-        }
-        for i in 0..n {
-            qdd[i] = vt.gamma[i] + (0..ni).map(|j| vt.b[(i, j)] * qdd_i[j]).sum::<f64>();
-        }
-        // Multipliers on the independent rows (minimum-norm over all rows when some are redundant).
-        let lam_r = match lam_rows {
-            Some(l) => l,
+        work.rhs_full.copy_from_slice(q_e);
+        mass.mul_add(-1.0, &vt.gamma, &mut work.rhs_full);
+        match &mut work.elimination {
             None => {
-                let mut f = self.q_e.clone();
-                self.mass.mul_add(-1.0, qdd, &mut f);
-                let mut y: Vec<f64> = partition.dependent.iter().map(|&d| f[d]).collect();
-                vt.solve_dependent_transpose(&mut y);
-                y
+                // M_i q̈_i = B_iᵀ (Q_e − M γ_i),   M_i = B_iᵀ M B_i (Cholesky).
+                faer::linalg::matmul::matmul(
+                    work.mi.matrix_mut(),
+                    Accum::Replace,
+                    vt.b.transpose(),
+                    work.mb.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                for j in 0..ni {
+                    work.sol[j] =
+                        vt.b.col_as_slice(j)
+                            .iter()
+                            .zip(&work.rhs_full)
+                            .map(|(a, b)| a * b)
+                            .sum();
+                }
+                if work.mi.factor().is_err() {
+                    return Err(model.singular_mass_error(t, "reduced mass matrix B_iᵀ M B_i not positive definite"));
+                }
+                work.mi.solve_vec(&mut work.sol[..ni]);
             }
-        };
-        sys.scatter_multipliers(t, &self.values, &partition.rows, &lam_r, lambda)?;
+            Some(lu) => {
+                // [M B_i  C_q,Rᵀ] [q̈_i; λ_R] = Q_e − M γ_i   (n × n when the rows are independent).
+                {
+                    let mut k = lu.matrix_mut();
+                    k.fill(0.0);
+                    for j in 0..ni {
+                        for i in 0..n {
+                            k[(i, j)] = work.mb[(i, j)];
+                        }
+                    }
+                    for (&(row, col), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
+                        if let Some(i) = work.row_slot[row] {
+                            k[(col, ni + i)] += v;
+                        }
+                    }
+                }
+                lu.factor();
+                work.sol.copy_from_slice(&work.rhs_full);
+                lu.solve_vec(&mut work.sol);
+                if work.sol.iter().any(|v| !v.is_finite()) {
+                    return Err(model.singular_mass_error(t, "elimination matrix [M B_i  C_qᵀ] singular"));
+                }
+                work.lam_r.copy_from_slice(&work.sol[ni..ni + r]);
+            }
+        }
+        // q̈ = B_i q̈_i + γ_i
+        qdd.copy_from_slice(&vt.gamma);
+        for j in 0..ni {
+            let a = work.sol[j];
+            for (o, b) in qdd.iter_mut().zip(vt.b.col_as_slice(j)) {
+                *o += b * a;
+            }
+        }
+        if work.elimination.is_none() {
+            // Multipliers on the independent rows from the dependent columns of C_qᵀ λ = Q_e − M q̈.
+            work.f.copy_from_slice(q_e);
+            mass.mul_add(-1.0, qdd, &mut work.f);
+            for (l, &d) in work.lam_r.iter_mut().zip(&partition.dependent) {
+                *l = work.f[d];
+            }
+            vt.solve_dependent_transpose(&mut work.lam_r);
+        }
+        sys.scatter_multipliers(t, values, &partition.rows, &work.lam_r, lambda)?;
         if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
-            return Err(self.model.non_finite_acceleration(t, i));
+            return Err(model.non_finite_acceleration(t, i));
         }
         Ok(())
     }

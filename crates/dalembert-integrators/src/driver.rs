@@ -293,6 +293,12 @@ fn run_loop<F: Formulation + ?Sized>(
             }
         }
         Method::GeneralizedAlpha { rho_inf } => {
+            if !f.is_index3_augmented() {
+                return Err(IntegrationError::Options(format!(
+                    "generalized-alpha integrates the augmented index-3 equations and the {0} formulation has no implicit form of its own yet: use formulation augmented with generalized-alpha, or rk4 / dopri5 with {0}",
+                    f.name()
+                )));
+            }
             let n = run.n;
             // Its iteration matrix is dense (n + m)²: refuse sizes it cannot hold, by name,
             // instead of failing in the allocator.

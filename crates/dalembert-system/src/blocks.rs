@@ -88,15 +88,37 @@ impl BlockDiagonal {
         })
     }
 
-    /// `y ← y + α A x`.
+    /// `y ← y + α A x`. Blocks of 3 and 6 (planar and spatial bodies) take an unrolled kernel.
     pub fn mul_add(&self, alpha: f64, x: &[f64], y: &mut [f64]) {
         for i in 0..self.num_blocks() {
             let (o, s) = (self.offsets[i], self.sizes[i]);
             let b = self.block(i);
-            for r in 0..s {
-                let row = &b[r * s..(r + 1) * s];
-                let dot: f64 = row.iter().zip(&x[o..o + s]).map(|(a, v)| a * v).sum();
-                y[o + r] += alpha * dot;
+            match s {
+                3 => block_mul_add::<3>(alpha, b, &x[o..o + 3], &mut y[o..o + 3]),
+                6 => block_mul_add::<6>(alpha, b, &x[o..o + 6], &mut y[o..o + 6]),
+                _ => {
+                    for r in 0..s {
+                        let row = &b[r * s..(r + 1) * s];
+                        let dot: f64 = row.iter().zip(&x[o..o + s]).map(|(a, v)| a * v).sum();
+                        y[o + r] += alpha * dot;
+                    }
+                }
+            }
+        }
+    }
+
+    /// `y ← A_i x` for block `i` alone (`x`, `y` of the block's size).
+    #[inline]
+    pub fn block_mul(&self, i: usize, x: &[f64], y: &mut [f64]) {
+        y.iter_mut().for_each(|v| *v = 0.0);
+        let b = self.block(i);
+        match self.sizes[i] {
+            3 => block_mul_add::<3>(1.0, b, x, y),
+            6 => block_mul_add::<6>(1.0, b, x, y),
+            s => {
+                for r in 0..s {
+                    y[r] = b[r * s..(r + 1) * s].iter().zip(x).map(|(a, v)| a * v).sum();
+                }
             }
         }
     }
@@ -205,6 +227,19 @@ impl BlockDiagonal {
             .iter()
             .enumerate()
             .all(|(k, &v)| k / s == k % s || v == 0.0)
+    }
+}
+
+/// `y ← y + α B x` for one `N × N` block stored row by row (sizes known at compile time).
+#[inline(always)]
+fn block_mul_add<const N: usize>(alpha: f64, b: &[f64], x: &[f64], y: &mut [f64]) {
+    let (b, x, y) = (&b[..N * N], &x[..N], &mut y[..N]);
+    for r in 0..N {
+        let mut dot = 0.0;
+        for c in 0..N {
+            dot += b[r * N + c] * x[c];
+        }
+        y[r] += alpha * dot;
     }
 }
 

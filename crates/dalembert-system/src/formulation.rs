@@ -198,4 +198,12 @@ pub trait Formulation {
 
     /// Cumulative counters.
     fn stats(&self) -> FormulationStats;
+
+    /// True when this formulation's own equations are the augmented index-3 system
+    /// `M v̇ + C_qᵀ λ = Q, C(q, t) = 0` that generalized-α integrates. Integrators that solve that
+    /// system themselves refuse a formulation for which this is false, rather than silently
+    /// replacing it (default: false).
+    fn is_index3_augmented(&self) -> bool {
+        false
+    }
 }

@@ -56,6 +56,13 @@ impl SparseGram {
         let mut rows_of_body: Vec<Vec<(usize, usize)>> = vec![Vec::new(); pattern.bodies()];
         let mut len_of_body = vec![0; pattern.bodies()];
         for s in pattern.segments() {
+            if s.len > crate::blocks::MAX_BLOCK {
+                return Err(GramSingular(format!(
+                    "a body with {} velocity coordinates (at most {} supported)",
+                    s.len,
+                    crate::blocks::MAX_BLOCK
+                )));
+            }
             rows_of_body[s.body].push((s.row, s.first));
             len_of_body[s.body] = s.len;
         }
@@ -114,17 +121,22 @@ impl SparseGram {
         max_condition: f64,
     ) -> Result<(), GramSingular> {
         self.values.iter_mut().for_each(|v| *v = 0.0);
+        // Contributions come grouped by (body, row i): w_i = W_b C_i,bᵀ once per group.
+        let mut current = (usize::MAX, usize::MAX);
+        let mut wi = [0.0; crate::blocks::MAX_BLOCK];
         for &(b, len, ei, ej, p) in &self.contributions {
-            let mut g = 0.0;
-            for r in 0..len {
-                for c in 0..len {
-                    let w = weight(b, r, c);
-                    if w != 0.0 {
-                        g += jacobian[ei + r] * w * jacobian[ej + c];
-                    }
+            if current != (b, ei) {
+                current = (b, ei);
+                for (r, w) in wi.iter_mut().enumerate().take(len) {
+                    *w = (0..len).map(|c| weight(b, r, c) * jacobian[ei + c]).sum();
                 }
             }
-            self.values[p] += g;
+            self.values[p] += if len == 3 {
+                // Planar bodies: the unrolled product.
+                wi[0] * jacobian[ej] + wi[1] * jacobian[ej + 1] + wi[2] * jacobian[ej + 2]
+            } else {
+                (0..len).map(|r| wi[r] * jacobian[ej + r]).sum::<f64>()
+            };
         }
         let s = SymbolicSparseColMatRef::new_checked(self.m, self.m, &self.col_ptr, None, &self.row_idx);
         self.symbolic

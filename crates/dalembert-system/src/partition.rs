@@ -13,13 +13,13 @@
 //! The conditioning of `C_qd` is estimated from the ratio of the factor's pivots; the embedding and
 //! amalgamated formulations re-partition when it exceeds a threshold.
 
+use crate::linalg::DenseLu;
 use crate::structure::column_rank;
 use crate::{ConstraintSet, ConstraintValues};
-use faer::linalg::solvers::{PartialPivLu, Solve};
 use faer::Mat;
 
 /// A choice of dependent and independent coordinates and of independent equations.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct Partition {
     /// Dependent coordinates (one per independent equation), in pivot order.
     pub dependent: Vec<usize>,
@@ -58,7 +58,8 @@ impl Partition {
     }
 }
 
-/// `B_i`, `γ_i` and the factorization of `C_qd` at one state.
+/// `B_i`, `γ_i` and the factorization of `C_qd` at one state: a workspace allocated when the
+/// partition's sizes change and refilled in place at every state.
 #[derive(Debug)]
 pub struct VelocityTransform {
     /// `B_i`, `n × (n − r)`.
@@ -66,77 +67,103 @@ pub struct VelocityTransform {
     /// `γ_i`, length `n`.
     pub gamma: Vec<f64>,
     /// LU of `C_qd` (`r × r`, rows = `partition.rows`, columns = `partition.dependent`).
-    pub lu: PartialPivLu<f64>,
+    lu: DenseLu,
+    /// `C_qi` (`r × (n − r)`), then `C_qd⁻¹ C_qi`.
+    cqi: Mat<f64>,
+    /// For each system row: its index among `partition.rows`, if selected.
+    row_slot: Vec<Option<usize>>,
+    /// For each coordinate: dependent (`Ok(k)`) or independent (`Err(j)`) with its index.
+    col_slot: Vec<Result<usize, usize>>,
+    /// Scratch of length `r`.
+    g: Vec<f64>,
     /// Ratio largest / smallest pivot of `C_qd`'s LU: a cheap condition estimate.
     pub condition: f64,
 }
 
 impl VelocityTransform {
+    /// A workspace for `partition` of `n` coordinates and `m` equations.
+    pub fn new(partition: &Partition, n: usize, m: usize) -> Self {
+        let (r, ni) = (partition.rows.len(), partition.independent.len());
+        let mut row_slot = vec![None; m];
+        for (i, &row) in partition.rows.iter().enumerate() {
+            row_slot[row] = Some(i);
+        }
+        let mut col_slot = vec![Err(0); n];
+        for (k, &d) in partition.dependent.iter().enumerate() {
+            col_slot[d] = Ok(k);
+        }
+        for (j, &c) in partition.independent.iter().enumerate() {
+            col_slot[c] = Err(j);
+        }
+        VelocityTransform {
+            b: Mat::zeros(n, ni),
+            gamma: vec![0.0; n],
+            lu: DenseLu::new(r, ni.max(1)),
+            cqi: Mat::zeros(r, ni),
+            row_slot,
+            col_slot,
+            g: vec![0.0; r],
+            condition: f64::INFINITY,
+        }
+    }
+
     /// Computes `B_i` and `γ_i` for the acceleration right-hand side `rhs` (length `m`: `Q_d`, or
-    /// its Baumgarte-modified form). Returns `None` if `C_qd` is singular.
-    pub fn new(
+    /// its Baumgarte-modified form). Returns `false` if `C_qd` is singular. Allocates nothing.
+    pub fn update(
+        &mut self,
         partition: &Partition,
         sys: &(impl ConstraintSet + ?Sized),
         values: &ConstraintValues,
         rhs: &[f64],
-    ) -> Option<Self> {
-        let jac = sys.jacobian_dense(values);
-        let n = jac.ncols();
+    ) -> bool {
         let r = partition.rows.len();
-        let cqd = Mat::from_fn(r, r, |i, j| jac[(partition.rows[i], partition.dependent[j])]);
-        let lu = cqd.partial_piv_lu();
-        let u = lu.U();
-        let (mut big, mut small) = (0.0f64, f64::INFINITY);
-        for k in 0..r {
-            big = big.max(u[(k, k)].abs());
-            small = small.min(u[(k, k)].abs());
+        {
+            let mut cqd = self.lu.matrix_mut();
+            cqd.fill(0.0);
+            self.cqi.fill(0.0);
+            for (&(row, col), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
+                if let Some(i) = self.row_slot[row] {
+                    match self.col_slot[col] {
+                        Ok(k) => cqd[(i, k)] += v,
+                        Err(j) => self.cqi[(i, j)] += v,
+                    }
+                }
+            }
         }
-        let condition = if r == 0 { 1.0 } else { big / small };
-        if !condition.is_finite() {
-            return None;
+        let (small, big) = self.lu.factor();
+        self.condition = if r == 0 { 1.0 } else { big / small };
+        if !self.condition.is_finite() {
+            return false;
         }
-        let ni = partition.independent.len();
-        let cqi = Mat::from_fn(r, ni, |i, j| jac[(partition.rows[i], partition.independent[j])]);
-        let x = lu.solve(&cqi);
-        let mut b = Mat::zeros(n, ni);
+        self.lu.solve_in_place(self.cqi.as_mut());
+        self.b.fill(0.0);
         for (k, &dep) in partition.dependent.iter().enumerate() {
-            for j in 0..ni {
-                b[(dep, j)] = -x[(k, j)];
+            for j in 0..self.b.ncols() {
+                self.b[(dep, j)] = -self.cqi[(k, j)];
             }
         }
         for (j, &ind) in partition.independent.iter().enumerate() {
-            b[(ind, j)] = 1.0;
+            self.b[(ind, j)] = 1.0;
         }
-        let g = Mat::from_fn(r, 1, |i, _| rhs[partition.rows[i]]);
-        let gd = lu.solve(&g);
-        let mut gamma = vec![0.0; n];
+        for (g, &row) in self.g.iter_mut().zip(&partition.rows) {
+            *g = rhs[row];
+        }
+        self.lu.solve_vec(&mut self.g);
+        self.gamma.iter_mut().for_each(|v| *v = 0.0);
         for (k, &dep) in partition.dependent.iter().enumerate() {
-            gamma[dep] = gd[(k, 0)];
+            self.gamma[dep] = self.g[k];
         }
-        Some(VelocityTransform {
-            b,
-            gamma,
-            lu,
-            condition,
-        })
+        true
     }
 
     /// Solves `C_qd x = y` (length `r`) in place.
-    pub fn solve_dependent(&self, y: &mut [f64]) {
-        let mut m = Mat::from_fn(y.len(), 1, |i, _| y[i]);
-        self.lu.solve_in_place(&mut m);
-        for (i, v) in y.iter_mut().enumerate() {
-            *v = m[(i, 0)];
-        }
+    pub fn solve_dependent(&mut self, y: &mut [f64]) {
+        self.lu.solve_vec(y);
     }
 
     /// Solves `C_qdᵀ x = y` (length `r`) in place.
-    pub fn solve_dependent_transpose(&self, y: &mut [f64]) {
-        let mut m = Mat::from_fn(y.len(), 1, |i, _| y[i]);
-        self.lu.solve_transpose_in_place(&mut m);
-        for (i, v) in y.iter_mut().enumerate() {
-            *v = m[(i, 0)];
-        }
+    pub fn solve_dependent_transpose(&mut self, y: &mut [f64]) {
+        self.lu.solve_transpose_vec(y);
     }
 }
 
@@ -152,9 +179,12 @@ pub struct Repartition {
 }
 
 /// Keeps a partition across evaluations and re-chooses it when `C_qd` becomes ill-conditioned.
-#[derive(Debug, Clone)]
+/// Its velocity transformation and scratch are allocated with the partition and reused: an
+/// evaluation or projection that keeps the partition allocates nothing.
+#[derive(Debug)]
 pub struct PartitionTracker {
     current: Option<Partition>,
+    vt: Option<VelocityTransform>,
     /// Every re-partition so far (the first choice is not logged).
     pub log: Vec<Repartition>,
     /// Condition estimate of `C_qd` above which the partition is re-chosen.
@@ -163,6 +193,11 @@ pub struct PartitionTracker {
     pub rank_tolerance: f64,
     /// If given, the user's choice of independent coordinates (used while `C_qd` stays regular).
     preferred: Option<Vec<usize>>,
+    /// Scratch of the projection: zeros (m), Ċ (m), a row-sized vector, a coordinate-sized one.
+    zeros: Vec<f64>,
+    cdot: Vec<f64>,
+    y: Vec<f64>,
+    delta: Vec<f64>,
 }
 
 impl PartitionTracker {
@@ -170,10 +205,15 @@ impl PartitionTracker {
     pub fn new(threshold: f64) -> Self {
         PartitionTracker {
             current: None,
+            vt: None,
             log: Vec::new(),
             threshold,
             rank_tolerance: 1e-9,
             preferred: None,
+            zeros: Vec::new(),
+            cdot: Vec::new(),
+            y: Vec::new(),
+            delta: Vec::new(),
         }
     }
 
@@ -190,6 +230,7 @@ impl PartitionTracker {
             independent: ind,
             rows,
         });
+        self.vt = None;
         self
     }
 
@@ -200,33 +241,48 @@ impl PartitionTracker {
 
     /// `B_i`, `γ_i` for `rhs` at the current state, re-partitioning first if `C_qd` is singular or
     /// its condition estimate exceeds the threshold. `None` if even a fresh partition is singular.
+    /// Allocates only when it re-partitions.
     pub fn transform(
         &mut self,
         t: f64,
         sys: &(impl ConstraintSet + ?Sized),
         values: &ConstraintValues,
         rhs: &[f64],
-    ) -> Option<(&Partition, VelocityTransform)> {
+    ) -> Option<(&Partition, &mut VelocityTransform)> {
+        let (n, m) = (sys.num_coordinates(), sys.num_equations());
+        let mut kept = false;
         if let Some(p) = &self.current {
-            if let Some(vt) = VelocityTransform::new(p, sys, values, rhs) {
-                if vt.condition <= self.threshold {
-                    return self.current.as_ref().map(|p| (p, vt));
+            let vt = self.vt.get_or_insert_with(|| VelocityTransform::new(p, n, m));
+            kept = vt.update(p, sys, values, rhs) && vt.condition <= self.threshold;
+        }
+        if !kept {
+            let fresh = Partition::choose(sys, values, self.rank_tolerance);
+            let mut vt = VelocityTransform::new(&fresh, n, m);
+            if !vt.update(&fresh, sys, values, rhs) {
+                return None;
+            }
+            if let Some(old) = &self.current {
+                if old.independent != fresh.independent || old.rows.len() != fresh.rows.len() {
+                    self.log.push(Repartition {
+                        time: t,
+                        old: old.independent.clone(),
+                        new: fresh.independent.clone(),
+                    });
                 }
             }
+            self.current = Some(fresh);
+            self.vt = Some(vt);
         }
-        let fresh = Partition::choose(sys, values, self.rank_tolerance);
-        if let Some(old) = &self.current {
-            if old.independent != fresh.independent || old.rows.len() != fresh.rows.len() {
-                self.log.push(Repartition {
-                    time: t,
-                    old: old.independent.clone(),
-                    new: fresh.independent.clone(),
-                });
-            }
+        self.last()
+    }
+
+    /// The partition and velocity transformation of the last successful
+    /// [`PartitionTracker::transform`].
+    pub fn last(&mut self) -> Option<(&Partition, &mut VelocityTransform)> {
+        match (&self.current, &mut self.vt) {
+            (Some(p), Some(vt)) => Some((p, vt)),
+            _ => None,
         }
-        let vt = VelocityTransform::new(&fresh, sys, values, rhs)?;
-        self.current = Some(fresh);
-        self.current.as_ref().map(|p| (p, vt))
     }
 }
 
@@ -251,7 +307,8 @@ impl PartitionTracker {
     /// Coordinate partitioning: with the independent coordinates held, Newton–Raphson on the
     /// dependent ones (`C_qd Δq_d = −C` over the independent equations) until `‖C‖∞ ≤ tolerance`,
     /// then the dependent velocities from `C_qd q̇_d = −C_t − C_qi q̇_i`. `values` is scratch and ends
-    /// holding the constraints at the projected state. Returns the Newton iterations.
+    /// holding the constraints at the projected state. Returns the Newton iterations. Allocates
+    /// nothing after the first call unless it re-partitions.
     pub fn project(
         &mut self,
         t: f64,
@@ -262,53 +319,67 @@ impl PartitionTracker {
         tolerance: f64,
     ) -> Result<usize, crate::DynamicsError> {
         const MAX_ITERATIONS: usize = 25;
-        let zeros = vec![0.0; sys.num_equations()];
-        let singular = |values: &ConstraintValues| sys.redundancy_error(t, values);
-        let mut iterations = 0;
-        loop {
-            sys.evaluate(t, q, qd, values);
-            let res = values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            if res <= tolerance {
-                break;
-            }
-            if iterations == MAX_ITERATIONS || !res.is_finite() {
-                let violated = (0..values.c.len())
-                    .filter(|&r| values.c[r].abs() > tolerance || values.c[r].is_nan())
-                    .map(|r| (sys.equation(r), values.c[r]))
-                    .collect();
-                return Err(crate::ConstraintError::NotConverged {
-                    time: t,
-                    iterations,
-                    violated,
+        let (n, m) = (sys.num_coordinates(), sys.num_equations());
+        self.zeros.resize(m, 0.0);
+        self.cdot.resize(m, 0.0);
+        self.delta.resize(n, 0.0);
+        let mut zeros = std::mem::take(&mut self.zeros);
+        let mut y = std::mem::take(&mut self.y);
+        let mut delta = std::mem::take(&mut self.delta);
+        let mut cdot = std::mem::take(&mut self.cdot);
+        let result = (|| {
+            let mut iterations = 0;
+            loop {
+                sys.evaluate(t, q, qd, values);
+                let res = values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                if res <= tolerance {
+                    break;
                 }
-                .into());
+                if iterations == MAX_ITERATIONS || !res.is_finite() {
+                    let violated = (0..values.c.len())
+                        .filter(|&r| values.c[r].abs() > tolerance || values.c[r].is_nan())
+                        .map(|r| (sys.equation(r), values.c[r]))
+                        .collect();
+                    return Err(crate::ConstraintError::NotConverged {
+                        time: t,
+                        iterations,
+                        violated,
+                    }
+                    .into());
+                }
+                let Some((p, vt)) = self.transform(t, sys, values, &zeros) else {
+                    return Err(sys.redundancy_error(t, values));
+                };
+                y.clear();
+                y.extend(p.rows.iter().map(|&r| -values.c[r]));
+                vt.solve_dependent(&mut y);
+                delta.iter_mut().for_each(|d| *d = 0.0);
+                for (k, &d) in p.dependent.iter().enumerate() {
+                    delta[d] = y[k];
+                }
+                sys.correct_positions(q, &delta);
+                iterations += 1;
             }
             let Some((p, vt)) = self.transform(t, sys, values, &zeros) else {
-                return Err(singular(values));
+                return Err(sys.redundancy_error(t, values));
             };
-            let mut y: Vec<f64> = p.rows.iter().map(|&r| -values.c[r]).collect();
-            vt.solve_dependent(&mut y);
-            let mut delta = vec![0.0; sys.num_coordinates()];
-            for (k, &d) in p.dependent.iter().enumerate() {
-                delta[d] = y[k];
+            for &d in &p.dependent {
+                qd[d] = 0.0;
             }
-            sys.correct_positions(q, &delta);
-            iterations += 1;
-        }
-        let Some((p, vt)) = self.transform(t, sys, values, &zeros) else {
-            return Err(singular(values));
-        };
-        let p = p.clone();
-        for &d in &p.dependent {
-            qd[d] = 0.0;
-        }
-        let mut cdot = vec![0.0; sys.num_equations()];
-        sys.velocity_residual(values, qd, &mut cdot);
-        let mut y: Vec<f64> = p.rows.iter().map(|&r| -cdot[r]).collect();
-        vt.solve_dependent(&mut y);
-        for (k, &d) in p.dependent.iter().enumerate() {
-            qd[d] = y[k];
-        }
-        Ok(iterations)
+            sys.velocity_residual(values, qd, &mut cdot);
+            y.clear();
+            y.extend(p.rows.iter().map(|&r| -cdot[r]));
+            vt.solve_dependent(&mut y);
+            for (k, &d) in p.dependent.iter().enumerate() {
+                qd[d] = y[k];
+            }
+            Ok(iterations)
+        })();
+        zeros.iter_mut().for_each(|z| *z = 0.0);
+        self.zeros = zeros;
+        self.y = y;
+        self.delta = delta;
+        self.cdot = cdot;
+        result
     }
 }

@@ -3,6 +3,7 @@
 //! factorization into storage allocated at setup.
 //!
 //! * [`small_lu`]: unblocked dense LU for matrices up to a few dozen rows;
+//! * [`dense`]: dense LU and Cholesky (faer's in-place kernels) in storage allocated once;
 //! * [`sparse_lu`]: faer's sparse LU behind a fixed pattern (scatter positions computed once);
 //! * [`saddle_point`]: the saddle-point matrix `[M C_qᵀ; C_q 0]` by dense LU, dense Schur
 //!   complement (Cholesky of `C_q M⁻¹ C_qᵀ`), sparse LU, or sparse Schur complement
@@ -13,10 +14,12 @@
 //! analysis and caller-provided scratch: no allocation in a numeric refactorization);
 //! `shared/LINALG-NOTES.md` records what was verified about it.
 
+pub mod dense;
 pub mod saddle_point;
 pub mod small_lu;
 pub mod sparse_lu;
 
+pub use dense::{DenseCholesky, DenseLu};
 pub use saddle_point::{Backend, SaddlePoint};
 pub use small_lu::SmallLu;
 pub use sparse_lu::SparseLu;

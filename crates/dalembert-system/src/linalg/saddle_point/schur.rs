@@ -122,16 +122,26 @@ impl SchurKkt {
         let jac = &vals.jacobian;
         for (b, rows) in self.rows_of_body.iter().enumerate() {
             let len = self.minv.blocks.size(b);
-            let minv = self.minv.blocks.block(b);
+            let w = self.minv.blocks.block(b);
             for &(i, ei) in rows {
-                // w_i = M_b⁻¹ C_i,bᵀ
-                let mut wi = [0.0; MAX_BLOCK];
-                for r in 0..len {
-                    wi[r] = (0..len).map(|c| minv[r * len + c] * jac[ei + c]).sum();
-                }
-                for &(j, ej) in rows {
-                    if j <= i {
-                        self.s[i * m + j] += (0..len).map(|r| wi[r] * jac[ej + r]).sum::<f64>();
+                // S_ij += C_i,b M_b⁻¹ C_j,bᵀ: for planar bodies with w_i = M_b⁻¹ C_i,bᵀ in registers.
+                if len == 3 {
+                    let (c0, c1, c2) = (jac[ei], jac[ei + 1], jac[ei + 2]);
+                    let w0 = w[0] * c0 + w[1] * c1 + w[2] * c2;
+                    let w1 = w[3] * c0 + w[4] * c1 + w[5] * c2;
+                    let w2 = w[6] * c0 + w[7] * c1 + w[8] * c2;
+                    for &(j, ej) in rows {
+                        if j <= i {
+                            self.s[i * m + j] += w0 * jac[ej] + w1 * jac[ej + 1] + w2 * jac[ej + 2];
+                        }
+                    }
+                } else {
+                    let mut wi = [0.0; MAX_BLOCK];
+                    self.minv.blocks.block_mul(b, &jac[ei..ei + len], &mut wi[..len]);
+                    for &(j, ej) in rows {
+                        if j <= i {
+                            self.s[i * m + j] += (0..len).map(|r| wi[r] * jac[ej + r]).sum::<f64>();
+                        }
                     }
                 }
             }
