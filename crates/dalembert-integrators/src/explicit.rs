@@ -41,7 +41,8 @@ pub(crate) fn derivative<F: Formulation + ?Sized>(
     Ok(())
 }
 
-/// One semi-implicit Euler step: `q̇ ← q̇ + h q̈(t, q, q̇)`, then `q ← q + h q̇`.
+/// One semi-implicit Euler step: `v ← v + h v̇(t, q, v)`, then `q ← q ⊕ h v`
+/// ([`dalembert_system::MultibodySystem::integrate_positions`], `q + h v` for planar bodies).
 pub(crate) fn symplectic_euler_step<F: Formulation + ?Sized>(
     f: &mut F,
     w: &mut FixedWork,
@@ -58,8 +59,10 @@ pub(crate) fn symplectic_euler_step<F: Formulation + ?Sized>(
     let (q, qd) = y.split_at_mut(n);
     for i in 0..n {
         qd[i] += h * w.qdd[i];
-        q[i] += h * qd[i];
     }
+    // q ← q ⊕ h q̇ (the system's position update), then its invariants restored.
+    f.system().integrate_positions(q, qd, h);
+    f.system().normalize(q);
     Ok(())
 }
 
