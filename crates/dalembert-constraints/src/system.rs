@@ -2,7 +2,7 @@
 //! planar implementation of the seam's [`ConstraintSet`].
 
 use crate::{Constraint, ConstraintError, ConstraintEval, EquationRef};
-use dalembert_kinematics::{BodyRef, BodyState, Coordinates, Vec2};
+use dalembert_kinematics::{BodyRef, BodyState, Coordinates};
 use dalembert_system::{ConstraintPattern, ConstraintSet, ConstraintValues, Layout};
 
 /// The planar coordinate labels of one body (positions and velocities alike: `v = q̇`).
@@ -84,22 +84,7 @@ impl ConstraintSystem {
     fn state(body: BodyRef, q: &[f64], qd: &[f64], scratch: &[f64]) -> BodyState {
         match body {
             BodyRef::Ground => BodyState::GROUND,
-            BodyRef::Body(id) => {
-                let k = id.offset();
-                let (velocity, omega) = if qd.is_empty() {
-                    (Vec2::zeros(), 0.0)
-                } else {
-                    (Vec2::new(qd[k], qd[k + 1]), qd[k + 2])
-                };
-                BodyState {
-                    position: Vec2::new(q[k], q[k + 1]),
-                    angle: q[k + 2],
-                    velocity,
-                    omega,
-                    sin: scratch[2 * id.0],
-                    cos: scratch[2 * id.0 + 1],
-                }
-            }
+            BodyRef::Body(id) => BodyState::of_with_rotation(body, q, qd, scratch[2 * id.0], scratch[2 * id.0 + 1]),
         }
     }
 

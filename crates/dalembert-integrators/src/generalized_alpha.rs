@@ -30,11 +30,8 @@
 //! This method always solves the index-3 system of the model; the formulation supplies the initial
 //! accelerations and the accelerations and multipliers reported at the output times.
 
+use dalembert_system::linalg::DenseLu;
 use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem};
-use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::lu::partial_pivoting::{factor, solve};
-use faer::perm::PermRef;
-use faer::{Mat, MatMut, Par};
 
 /// Coefficients of the method for a spectral radius `ρ∞`.
 #[derive(Debug, Clone, Copy)]
@@ -97,11 +94,8 @@ struct Work {
     qp: Vec<f64>,
     qdp: Vec<f64>,
     dx: Vec<f64>,
-    matrix: Mat<f64>,
-    perm: Vec<usize>,
-    perm_inv: Vec<usize>,
-    factor_buf: MemBuffer,
-    solve_buf: MemBuffer,
+    /// The iteration matrix and its LU (the seam's dense LU, storage held).
+    lu: DenseLu,
 }
 
 impl Work {
@@ -118,16 +112,7 @@ impl Work {
             qp: vec![0.0; n],
             qdp: vec![0.0; n],
             dx: vec![0.0; k],
-            matrix: Mat::zeros(k, k),
-            perm: vec![0; k],
-            perm_inv: vec![0; k],
-            factor_buf: MemBuffer::new(factor::lu_in_place_scratch::<usize, f64>(
-                k,
-                k,
-                Par::Seq,
-                Default::default(),
-            )),
-            solve_buf: MemBuffer::new(solve::solve_in_place_scratch::<usize, f64>(k, 1, Par::Seq)),
+            lu: DenseLu::new(k, 1),
         }
     }
 }
@@ -256,16 +241,7 @@ impl GeneralizedAlpha {
             for (d, r) in w.dx.iter_mut().zip(&w.res) {
                 *d = -r;
             }
-            let k = n + m;
-            let perm = PermRef::new_checked(&w.perm, &w.perm_inv, k);
-            solve::solve_in_place(
-                w.matrix.as_ref(),
-                w.matrix.as_ref(),
-                perm,
-                MatMut::from_column_major_slice_mut(&mut w.dx, k, 1),
-                Par::Seq,
-                MemStack::new(&mut w.solve_buf),
-            );
+            w.lu.solve_vec(&mut w.dx);
             self.iterations += 1;
             let mut dq = 0.0f64;
             let mut da = 0.0f64;
@@ -321,7 +297,7 @@ impl GeneralizedAlpha {
     fn factor_iteration_matrix(&mut self, model: &dyn MultibodySystem, t: f64, bp: f64, gp: f64) {
         let w = &mut self.work;
         let n = w.q1.len();
-        let k = &mut w.matrix;
+        let mut k = w.lu.matrix_mut();
         k.fill(0.0);
         model.mass(&w.q1, &mut self.mass);
         for (r, cc, v) in self.mass.entries() {
@@ -370,13 +346,6 @@ impl GeneralizedAlpha {
             k[(n + r, c)] += v;
             k[(c, n + r)] += v;
         }
-        factor::lu_in_place(
-            k.as_mut(),
-            &mut w.perm,
-            &mut w.perm_inv,
-            Par::Seq,
-            MemStack::new(&mut w.factor_buf),
-            Default::default(),
-        );
+        w.lu.factor();
     }
 }

@@ -96,13 +96,33 @@ impl BodyState {
         match body {
             BodyRef::Ground => BodyState::GROUND,
             BodyRef::Body(id) => {
+                let (sin, cos) = q[id.offset() + 2].sin_cos();
+                Self::of_with_rotation(body, q, qd, sin, cos)
+            }
+        }
+    }
+
+    /// [`BodyState::of`] with `sin θ` and `cos θ` already known (computed once per body per
+    /// evaluation by the constraint assembly).
+    #[inline]
+    pub fn of_with_rotation(body: BodyRef, q: &[f64], qd: &[f64], sin: f64, cos: f64) -> BodyState {
+        match body {
+            BodyRef::Ground => BodyState::GROUND,
+            BodyRef::Body(id) => {
                 let k = id.offset();
                 let (velocity, omega) = if qd.is_empty() {
                     (Vec2::zeros(), 0.0)
                 } else {
                     (Vec2::new(qd[k], qd[k + 1]), qd[k + 2])
                 };
-                BodyState::new(Vec2::new(q[k], q[k + 1]), q[k + 2], velocity, omega)
+                BodyState {
+                    position: Vec2::new(q[k], q[k + 1]),
+                    angle: q[k + 2],
+                    velocity,
+                    omega,
+                    cos,
+                    sin,
+                }
             }
         }
     }
