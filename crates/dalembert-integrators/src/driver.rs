@@ -258,6 +258,14 @@ fn run_loop<F: Formulation + ?Sized>(
     run: &mut Run<'_>,
 ) -> Result<(), IntegrationError> {
     check_options(t0, t_end, opts)?;
+    let layout = f.system().layout();
+    if !layout.velocities_are_position_rates() {
+        return Err(IntegrationError::Options(format!(
+            "the integrators keep positions and velocities in one layout (v = dq/dt); this system has {} positions and {} velocities: not supported yet",
+            layout.n_q(),
+            layout.n_v()
+        )));
+    }
     project(f, t0, y, opts.treatment)?;
     run.emit(f, t0, y, opts)?;
     let stab = opts.treatment.stabilization();

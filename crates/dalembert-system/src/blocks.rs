@@ -143,11 +143,6 @@ impl BlockDiagonal {
         self.values.iter().fold(0.0, |a, v| a.max(v.abs()))
     }
 
-    /// True when the matrix is diagonal (every off-diagonal entry of every block is zero).
-    pub fn is_diagonal(&self) -> bool {
-        self.entries().all(|(r, c, v)| r == c || v == 0.0)
-    }
-
     /// Global indices of the zero diagonal entries (coordinates without inertia).
     pub fn zero_diagonal(&self) -> Vec<usize> {
         self.entries()
