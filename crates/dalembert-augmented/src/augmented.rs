@@ -71,7 +71,7 @@ impl Augmented {
         let n = model.layout().n_v();
         let m = model.num_equations();
         let mut mass = model.mass_storage();
-        model.mass(&vec![0.0; model.layout().n_q()], &mut mass);
+        model.mass(&model.reference_positions(), &mut mass);
         let solver = SaddlePoint::new(
             options.backend,
             &mass,

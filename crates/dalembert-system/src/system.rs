@@ -31,6 +31,14 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// True when `M` does not depend on `q` (then it need be written only once).
     fn mass_is_constant(&self) -> bool;
 
+    /// A valid configuration at which `M`'s block structure (which blocks are positive definite,
+    /// which diagonal) is representative: formulations choose their factorizations from it before
+    /// they see a state. Default: all positions zero (right for planar bodies; Euler parameters need
+    /// `p = (1, 0, 0, 0)`).
+    fn reference_positions(&self) -> Vec<f64> {
+        vec![0.0; self.layout().n_q()]
+    }
+
     /// Writes (not adds) `Q(t, q, v)`: applied forces plus quadratic-velocity terms. Must not allocate.
     fn applied_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]);
 

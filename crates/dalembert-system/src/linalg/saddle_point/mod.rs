@@ -78,7 +78,8 @@ pub fn resolve(backend: Backend, mass: &BlockDiagonal, m: usize, dense_limit: us
 
 impl SaddlePoint {
     /// Chooses the back end for a system with mass matrix `mass` (its block structure and which
-    /// blocks are positive definite; `mass_is_constant` lets the inverse blocks be computed once)
+    /// blocks are positive definite, at [`crate::MultibodySystem::reference_positions`];
+    /// `mass_is_constant` lets the inverse blocks be computed once)
     /// and constraints `sys`, and sets it up (symbolic analysis, storage, scratch).
     pub fn new(
         backend: Backend,
