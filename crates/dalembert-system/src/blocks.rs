@@ -123,21 +123,6 @@ impl BlockDiagonal {
         }
     }
 
-    /// `½ xᵀ A x` (the kinetic energy when `A` is the mass matrix and `x` the velocities).
-    pub fn half_quadratic_form(&self, x: &[f64]) -> f64 {
-        let mut t = 0.0;
-        for i in 0..self.num_blocks() {
-            let (o, s) = (self.offsets[i], self.sizes[i]);
-            let b = self.block(i);
-            for r in 0..s {
-                for c in 0..s {
-                    t += x[o + r] * b[r * s + c] * x[o + c];
-                }
-            }
-        }
-        0.5 * t
-    }
-
     /// Largest entry magnitude.
     pub fn max_abs(&self) -> f64 {
         self.values.iter().fold(0.0, |a, v| a.max(v.abs()))

@@ -97,17 +97,15 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
             }
         }
         if let Some(i) = q.iter().position(|x| !x.is_finite()) {
-            let (b, k) = l.position_owner(i);
             return Err(DynamicsError::NonFinite {
                 time: t,
-                what: format!("position {} of body '{}'", b.q_labels[k], b.name),
+                what: format!("position {}", l.describe_position(i)),
             });
         }
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            let (b, k) = l.velocity_owner(i);
             return Err(DynamicsError::NonFinite {
                 time: t,
-                what: format!("velocity {} of body '{}'", b.v_labels[k], b.name),
+                what: format!("velocity {}", l.describe_velocity(i)),
             });
         }
         Ok(())

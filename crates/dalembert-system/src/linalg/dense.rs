@@ -81,34 +81,24 @@ impl DenseLu {
 
     /// `X ← A⁻¹ X` for up to `max_rhs` columns.
     pub fn solve_in_place(&mut self, x: MatMut<'_, f64>) {
-        debug_assert!(x.ncols() <= self.max_rhs);
-        let n = self.a.nrows();
-        let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
-        solve::solve_in_place_with_conj(
-            self.a.as_ref(),
-            self.a.as_ref(),
-            perm,
-            Conj::No,
-            x,
-            Par::Seq,
-            MemStack::new(&mut self.solve_buf),
-        );
+        self.solve_with(x, false);
     }
 
     /// `X ← A⁻ᵀ X` for up to `max_rhs` columns.
     pub fn solve_transpose_in_place(&mut self, x: MatMut<'_, f64>) {
+        self.solve_with(x, true);
+    }
+
+    fn solve_with(&mut self, x: MatMut<'_, f64>, transpose: bool) {
         debug_assert!(x.ncols() <= self.max_rhs);
         let n = self.a.nrows();
         let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
-        solve::solve_transpose_in_place_with_conj(
-            self.a.as_ref(),
-            self.a.as_ref(),
-            perm,
-            Conj::No,
-            x,
-            Par::Seq,
-            MemStack::new(&mut self.solve_buf),
-        );
+        let (a, stack) = (self.a.as_ref(), MemStack::new(&mut self.solve_buf));
+        if transpose {
+            solve::solve_transpose_in_place_with_conj(a, a, perm, Conj::No, x, Par::Seq, stack);
+        } else {
+            solve::solve_in_place_with_conj(a, a, perm, Conj::No, x, Par::Seq, stack);
+        }
     }
 
     /// `x ← A⁻¹ x` for one vector.
