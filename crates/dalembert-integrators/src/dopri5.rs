@@ -82,13 +82,14 @@ pub(crate) struct Attempt {
 }
 
 impl Dopri5 {
-    pub fn new(n: usize, m: usize, rtol: f64, atol: f64) -> Self {
+    pub fn new(n_q: usize, n_v: usize, m: usize, rtol: f64, atol: f64) -> Self {
+        let len = n_q + n_v;
         Dopri5 {
-            k: std::array::from_fn(|_| vec![0.0; 2 * n]),
-            y_new: vec![0.0; 2 * n],
-            y_tmp: vec![0.0; 2 * n],
-            cont: std::array::from_fn(|_| vec![0.0; 2 * n]),
-            qdd: vec![0.0; n],
+            k: std::array::from_fn(|_| vec![0.0; len]),
+            y_new: vec![0.0; len],
+            y_tmp: vec![0.0; len],
+            cont: std::array::from_fn(|_| vec![0.0; len]),
+            qdd: vec![0.0; n_v],
             lambda: vec![0.0; m],
             rtol,
             atol,

@@ -31,6 +31,7 @@ pub struct Sample<'a> {
 
 /// Monitors, output buffers and counters shared by all methods.
 struct Run<'o> {
+    /// Number of positions `n_q` (`y = [q; v]` splits there).
     n: usize,
     stats: Statistics,
     start: FormulationStats,
@@ -142,16 +143,22 @@ impl Run<'_> {
     }
 }
 
-/// Projects `y` when the treatment asks for it; returns true if it did.
+/// Restores the position invariants of `y = [q; v]` (`n_q` positions) that an explicit step does
+/// not keep (unit Euler parameters): [`dalembert_system::MultibodySystem::normalize`].
+fn normalize<F: Formulation + ?Sized>(f: &F, y: &mut [f64], n_q: usize) {
+    f.system().normalize(&mut y[..n_q]);
+}
+
+/// Projects `y = [q; v]` (`n_q` positions) when the treatment asks for it; returns true if it did.
 fn project<F: Formulation + ?Sized>(
     f: &mut F,
     t: f64,
     y: &mut [f64],
+    n_q: usize,
     treatment: ConstraintTreatment,
 ) -> Result<bool, DynamicsError> {
     if let ConstraintTreatment::Projection { tolerance } = treatment {
-        let n = y.len() / 2;
-        let (q, qd) = y.split_at_mut(n);
+        let (q, qd) = y.split_at_mut(n_q);
         f.project(t, q, qd, tolerance)?;
         return Ok(true);
     }
@@ -189,7 +196,7 @@ pub fn integrate_cancellable<F: Formulation + ?Sized>(
     observer: &mut dyn FnMut(&Sample<'_>),
     cancel: &AtomicBool,
 ) -> Result<Statistics, IntegrationFailure> {
-    let n = q0.len();
+    let (n, n_v) = (q0.len(), qd0.len());
     let m = f.system().num_equations();
     let wall = Instant::now();
     let mut y = [q0, qd0].concat();
@@ -203,9 +210,9 @@ pub fn integrate_cancellable<F: Formulation + ?Sized>(
         start: f.stats(),
         c: vec![0.0; m],
         cdot: vec![0.0; m],
-        qdd: vec![0.0; n],
+        qdd: vec![0.0; n_v],
         lambda: vec![0.0; m],
-        y_out: vec![0.0; 2 * n],
+        y_out: vec![0.0; n + n_v],
         energy0,
         scale0: 1.0 + inf_norm(&y),
         divergence_factor: opts.divergence_factor,
@@ -258,15 +265,8 @@ fn run_loop<F: Formulation + ?Sized>(
     run: &mut Run<'_>,
 ) -> Result<(), IntegrationError> {
     check_options(t0, t_end, opts)?;
-    let layout = f.system().layout();
-    if !layout.velocities_are_position_rates() {
-        return Err(IntegrationError::Options(format!(
-            "the integrators keep positions and velocities in one layout (v = dq/dt); this system has {} positions and {} velocities: not supported yet",
-            layout.n_q(),
-            layout.n_v()
-        )));
-    }
-    project(f, t0, y, opts.treatment)?;
+    let n_q = run.n;
+    project(f, t0, y, n_q, opts.treatment)?;
     run.emit(f, t0, y, opts)?;
     let stab = opts.treatment.stabilization();
     let n_out = ((t_end - t0) / opts.output_every - 1e-9).ceil().max(0.0) as u64;
@@ -279,7 +279,7 @@ fn run_loop<F: Formulation + ?Sized>(
     };
     match opts.method {
         Method::SymplecticEuler | Method::Rk4 => {
-            let mut work = FixedWork::new(run.n, run.lambda.len());
+            let mut work = FixedWork::new(n_q, run.qdd.len(), run.lambda.len());
             let mut t = t0;
             for k in 1..=n_out {
                 let t_next = out_time(k);
@@ -293,7 +293,8 @@ fn run_loop<F: Formulation + ?Sized>(
                         _ => symplectic_euler_step(f, &mut work, ts, h, y, stab)?,
                     }
                     let t_after = if s + 1 == steps { t_next } else { ts + h };
-                    project(f, t_after, y, opts.treatment)?;
+                    normalize(f, y, n_q);
+                    project(f, t_after, y, n_q, opts.treatment)?;
                     run.monitor(f, t_after, y, h)?;
                 }
                 t = t_next;
@@ -334,7 +335,7 @@ fn run_loop<F: Formulation + ?Sized>(
             result?;
         }
         Method::DormandPrince { rtol, atol } => {
-            let mut dp = Dopri5::new(run.n, run.lambda.len(), rtol, atol);
+            let mut dp = Dopri5::new(n_q, run.qdd.len(), run.lambda.len(), rtol, atol);
             let max_step = opts.max_step.min(t_end - t0).max(opts.min_step);
             let mut h = opts.step.min(max_step);
             let mut t = t0;
@@ -366,13 +367,17 @@ fn run_loop<F: Formulation + ?Sized>(
                     let to = out_time(k_out);
                     let mut y_out = std::mem::take(&mut run.y_out);
                     dp.interpolate(((to - t) / h).clamp(0.0, 1.0), &mut y_out);
-                    project(f, to, &mut y_out, opts.treatment)?;
+                    normalize(f, &mut y_out, n_q);
+                    project(f, to, &mut y_out, n_q, opts.treatment)?;
                     let r = run.emit(f, to, &y_out, opts);
                     run.y_out = y_out;
                     r?;
                     k_out += 1;
                 }
-                if project(f, t_new, y, opts.treatment)? {
+                // The stored last stage stays valid after a normalization (it moves `q` by the
+                // order of the local error); a projection moves it further and invalidates it.
+                normalize(f, y, n_q);
+                if project(f, t_new, y, n_q, opts.treatment)? {
                     dp.invalidate();
                 }
                 run.monitor(f, t_new, y, h)?;

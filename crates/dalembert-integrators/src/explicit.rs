@@ -1,10 +1,11 @@
-//! Fixed-step explicit methods on the first-order form `y = [q; q̇]`, `ẏ = [q̇; q̈(t, q, q̇)]`.
+//! Fixed-step explicit methods on the first-order form `y = [q; v]`, `ẏ = [T(q) v; v̇(t, q, v)]`
+//! (`T(q) v` = [`dalembert_system::MultibodySystem::position_rates`], `v` itself when `v = q̇`).
 
 use dalembert_system::{DynamicsError, Formulation, Stabilization};
 
 /// Preallocated storage for the fixed-step methods.
 pub(crate) struct FixedWork {
-    n: usize,
+    n_q: usize,
     k: [Vec<f64>; 4],
     y_tmp: Vec<f64>,
     qdd: Vec<f64>,
@@ -12,18 +13,18 @@ pub(crate) struct FixedWork {
 }
 
 impl FixedWork {
-    pub fn new(n: usize, m: usize) -> Self {
+    pub fn new(n_q: usize, n_v: usize, m: usize) -> Self {
         FixedWork {
-            n,
-            k: std::array::from_fn(|_| vec![0.0; 2 * n]),
-            y_tmp: vec![0.0; 2 * n],
-            qdd: vec![0.0; n],
+            n_q,
+            k: std::array::from_fn(|_| vec![0.0; n_q + n_v]),
+            y_tmp: vec![0.0; n_q + n_v],
+            qdd: vec![0.0; n_v],
             lambda: vec![0.0; m],
         }
     }
 }
 
-/// `out = [q̇; q̈]` at `(t, y)`.
+/// `out = [T(q) v; v̇]` at `(t, y = [q; v])`.
 pub(crate) fn derivative<F: Formulation + ?Sized>(
     f: &mut F,
     t: f64,
@@ -33,11 +34,12 @@ pub(crate) fn derivative<F: Formulation + ?Sized>(
     lambda: &mut [f64],
     out: &mut [f64],
 ) -> Result<(), DynamicsError> {
-    let n = y.len() / 2;
-    let (q, qd) = y.split_at(n);
+    let n_q = y.len() - qdd.len();
+    let (q, qd) = y.split_at(n_q);
     f.accelerations(t, q, qd, stab, qdd, lambda)?;
-    out[..n].copy_from_slice(qd);
-    out[n..].copy_from_slice(qdd);
+    let (rates, vdot) = out.split_at_mut(n_q);
+    f.system().position_rates(q, qd, rates);
+    vdot.copy_from_slice(qdd);
     Ok(())
 }
 
@@ -51,22 +53,21 @@ pub(crate) fn symplectic_euler_step<F: Formulation + ?Sized>(
     y: &mut [f64],
     stab: Stabilization,
 ) -> Result<(), DynamicsError> {
-    let n = w.n;
+    let n_q = w.n_q;
     {
-        let (q, qd) = y.split_at(n);
+        let (q, qd) = y.split_at(n_q);
         f.accelerations(t, q, qd, stab, &mut w.qdd, &mut w.lambda)?;
     }
-    let (q, qd) = y.split_at_mut(n);
-    for i in 0..n {
-        qd[i] += h * w.qdd[i];
+    let (q, qd) = y.split_at_mut(n_q);
+    for (v, a) in qd.iter_mut().zip(&w.qdd) {
+        *v += h * a;
     }
-    // q ← q ⊕ h q̇ (the system's position update), then its invariants restored.
+    // q ← q ⊕ h v (the system's position update; the driver restores its invariants).
     f.system().integrate_positions(q, qd, h);
-    f.system().normalize(q);
     Ok(())
 }
 
-/// One classic Runge–Kutta step.
+/// One classic Runge–Kutta step on `y = [q; v]` (the driver restores the position invariants after it).
 pub(crate) fn rk4_step<F: Formulation + ?Sized>(
     f: &mut F,
     w: &mut FixedWork,

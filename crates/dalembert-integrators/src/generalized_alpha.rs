@@ -1,15 +1,18 @@
 //! Generalized-α on the index-3 form (Arnold & Brüls, *Multibody Syst. Dyn.* 18, 2007):
 //!
 //! ```text
-//! q_{n+1} = q_n + h q̇_n + h²(½ − β) a_n + h² β a_{n+1}
-//! q̇_{n+1} = q̇_n + h(1 − γ) a_n + h γ a_{n+1}
+//! q_{n+1} = q_n ⊕ h Δq_n,   Δq_n = v_n + h(½ − β) a_n + h β a_{n+1}
+//! v_{n+1} = v_n + h(1 − γ) a_n + h γ a_{n+1}
 //! (1 − α_m) a_{n+1} + α_m a_n = (1 − α_f) q̈_{n+1} + α_f q̈_n
 //! M(q) q̈ + C_qᵀ λ = Q_e(q, q̇, t),   C(q, t) = 0            at t_{n+1}
 //! ```
 //!
 //! with `α_m = (2ρ∞ − 1)/(ρ∞ + 1)`, `α_f = ρ∞/(ρ∞ + 1)`, `γ = ½ + α_f − α_m`, `β = ¼(γ + ½)²`:
 //! second order, unconditionally stable, numerical damping of the highest frequencies set by the
-//! spectral radius at infinity `ρ∞ ∈ [0, 1]`. Newton iterates on `(q̈_{n+1}, λ_{n+1})` with
+//! spectral radius at infinity `ρ∞ ∈ [0, 1]`. `q ⊕ h Δq` is the system's position update
+//! ([`MultibodySystem::integrate_positions`]): `q + h Δq` for planar bodies, and for Euler parameters
+//! with angular velocities the Lie-group form of Brüls, Cardona & Arnold (*Mech. Mach. Theory* 48,
+//! 2012), which keeps the method's second order. Newton iterates on `(q̈_{n+1}, λ_{n+1})` with
 //!
 //! ```text
 //! [ M + β' K + γ' D   C_qᵀ ] [Δq̈]     [ M q̈ + C_qᵀ λ − Q_e ]
@@ -17,7 +20,7 @@
 //! ```
 //!
 //! `β' = h² β (1 − α_f)/(1 − α_m)`, `γ' = h γ (1 − α_f)/(1 − α_m)`, `K = ∂(M q̈ + C_qᵀ λ − Q_e)/∂q`,
-//! `D = −∂Q_e/∂q̇`. `K` and `D` are formed by finite differences of the residual (the documented
+//! `D = −∂Q_e/∂v` (`∂/∂q` along the velocity coordinates: `q ⊕ ε e_j`). `K` and `D` are formed by finite differences of the residual (the documented
 //! fallback; analytic force and constraint Jacobians are future work), and the factored matrix is
 //! reused across steps of the same size (modified Newton) until it has served 20 steps or Newton
 //! contracts slowly. Newton stops when the position update and `‖C‖∞` are below the tolerance
@@ -88,6 +91,9 @@ struct Work {
     lam: Vec<f64>,
     q1: Vec<f64>,
     qd1: Vec<f64>,
+    /// `Δq_n` of the position update, and a unit velocity for the position perturbations.
+    delta: Vec<f64>,
+    unit: Vec<f64>,
     res: Vec<f64>,
     rp: Vec<f64>,
     rm: Vec<f64>,
@@ -99,17 +105,19 @@ struct Work {
 }
 
 impl Work {
-    fn new(n: usize, m: usize) -> Self {
+    fn new(n_q: usize, n: usize, m: usize) -> Self {
         let k = n + m;
         Work {
             qdd: vec![0.0; n],
             lam: vec![0.0; m],
-            q1: vec![0.0; n],
+            q1: vec![0.0; n_q],
             qd1: vec![0.0; n],
+            delta: vec![0.0; n],
+            unit: vec![0.0; n],
             res: vec![0.0; k],
             rp: vec![0.0; k],
             rm: vec![0.0; k],
-            qp: vec![0.0; n],
+            qp: vec![0.0; n_q],
             qdp: vec![0.0; n],
             dx: vec![0.0; k],
             lu: DenseLu::new(k, 1),
@@ -132,7 +140,7 @@ impl GeneralizedAlpha {
             lambda: lambda0.to_vec(),
             mass,
             values: model.constraints().values(),
-            work: Work::new(q0.len(), lambda0.len()),
+            work: Work::new(q0.len(), qdd0.len(), lambda0.len()),
             tolerance: 1e-10,
             iterations: 0,
             factorizations: 0,
@@ -143,15 +151,17 @@ impl GeneralizedAlpha {
     }
 
     /// Positions and velocities for the trial `q̈_{n+1}` in `work.qdd` (into `work.q1`, `work.qd1`).
-    fn predict(&mut self, h: f64, q: &[f64], qd: &[f64]) {
+    fn predict(&mut self, model: &dyn MultibodySystem, h: f64, q: &[f64], qd: &[f64]) {
         let c = self.coef;
         let w = &mut self.work;
-        for i in 0..q.len() {
+        for i in 0..qd.len() {
             let a_new =
                 ((1.0 - c.alpha_f) * w.qdd[i] + c.alpha_f * self.qdd[i] - c.alpha_m * self.a[i]) / (1.0 - c.alpha_m);
-            w.q1[i] = q[i] + h * qd[i] + h * h * ((0.5 - c.beta) * self.a[i] + c.beta * a_new);
+            w.delta[i] = qd[i] + h * ((0.5 - c.beta) * self.a[i] + c.beta * a_new);
             w.qd1[i] = qd[i] + h * ((1.0 - c.gamma) * self.a[i] + c.gamma * a_new);
         }
+        w.q1.copy_from_slice(q);
+        model.integrate_positions(&mut w.q1, &w.delta, h);
     }
 
     /// `r = M q̈ + C_qᵀ λ − Q_e` and `C / β'` at `(t, q, q̇)`; refreshes `mass` and `values`.
@@ -166,8 +176,7 @@ impl GeneralizedAlpha {
         bp: f64,
         out: &mut [f64],
     ) {
-        let n = q.len();
-        let (r, c) = out.split_at_mut(n);
+        let (r, c) = out.split_at_mut(qd.len());
         model.applied_forces(t, q, qd, r);
         r.iter_mut().for_each(|v| *v = -*v);
         model.mass(q, mass);
@@ -196,7 +205,7 @@ impl GeneralizedAlpha {
         const STALL_FLOOR: f64 = 1e-6;
         let mut last_rel = f64::INFINITY;
         let mut last_contraction = 0.0f64;
-        let n = q.len();
+        let n = qd.len();
         let m = self.lambda.len();
         let c = self.coef;
         let bp = h * h * c.beta * (1.0 - c.alpha_f) / (1.0 - c.alpha_m);
@@ -211,7 +220,7 @@ impl GeneralizedAlpha {
             self.matrix_h = f64::NAN;
         }
         for it in 0..MAX_ITERATIONS {
-            self.predict(h, q, qd);
+            self.predict(model, h, q, qd);
             let w = &mut self.work;
             Self::residual(
                 &mut self.mass,
@@ -269,7 +278,7 @@ impl GeneralizedAlpha {
             }
             let qscale = 1.0 + w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             if dq <= self.tolerance * qscale && accurate {
-                self.predict(h, q, qd);
+                self.predict(model, h, q, qd);
                 let w = &self.work;
                 model.constraints().evaluate(t1, &w.q1, &w.qd1, &mut self.values);
                 let cmax = self.values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -282,6 +291,7 @@ impl GeneralizedAlpha {
                     self.qdd.copy_from_slice(&w.qdd);
                     self.lambda.copy_from_slice(&w.lam);
                     q.copy_from_slice(&w.q1);
+                    model.normalize(q);
                     qd.copy_from_slice(&w.qd1);
                     self.matrix_age += 1;
                     return Ok(());
@@ -296,7 +306,7 @@ impl GeneralizedAlpha {
     /// central finite differences of the residual) and factors it in place.
     fn factor_iteration_matrix(&mut self, model: &dyn MultibodySystem, t: f64, bp: f64, gp: f64) {
         let w = &mut self.work;
-        let n = w.q1.len();
+        let n = w.qd1.len();
         let mut k = w.lu.matrix_mut();
         k.fill(0.0);
         model.mass(&w.q1, &mut self.mass);
@@ -305,17 +315,28 @@ impl GeneralizedAlpha {
         }
         w.qp.copy_from_slice(&w.q1);
         w.qdp.copy_from_slice(&w.qd1);
+        w.unit.fill(0.0);
         for j in 0..n {
-            // K column j (perturbing the position), scaled by β'; D column j (the velocity), by γ'.
+            // K column j (perturbing the position along velocity coordinate j: q ⊕ ε e_j), scaled
+            // by β'; D column j (the velocity), by γ'.
+            w.unit[j] = 1.0;
             for (velocity, scale) in [(false, bp), (true, gp)] {
-                let x = if velocity { w.qd1[j] } else { w.q1[j] };
-                let h = 1e-7 * (1.0 + x.abs());
+                let x = w.qd1[j];
+                // Relative steps: to the velocity, or to the position coordinate when `v = q̇`
+                // (otherwise to the largest position: the direction mixes coordinates).
+                let size = match (velocity, w.q1.len() == n) {
+                    (true, _) => x.abs(),
+                    (false, true) => w.q1[j].abs(),
+                    (false, false) => w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs())),
+                };
+                let h = 1e-7 * (1.0 + size);
                 for (sign, out) in [(1.0, &mut w.rp), (-1.0, &mut w.rm)] {
                     let (qs, qds) = if velocity {
                         w.qdp[j] = x + sign * h;
                         (&w.q1, &w.qdp)
                     } else {
-                        w.qp[j] = x + sign * h;
+                        w.qp.copy_from_slice(&w.q1);
+                        model.integrate_positions(&mut w.qp, &w.unit, sign * h);
                         (&w.qp, &w.qd1)
                     };
                     Self::residual(
@@ -331,13 +352,12 @@ impl GeneralizedAlpha {
                 }
                 if velocity {
                     w.qdp[j] = x;
-                } else {
-                    w.qp[j] = x;
                 }
                 for i in 0..n {
                     k[(i, j)] += scale * (w.rp[i] - w.rm[i]) / (2.0 * h);
                 }
             }
+            w.unit[j] = 0.0;
         }
         self.evaluations += 4 * n as u64;
         let sys = model.constraints();

@@ -46,6 +46,15 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// an error naming the force element at fault.
     fn check_forces(&self, t: f64, q: &[f64], v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError>;
 
+    /// `q̇ = T(q) v` into `out` (length `n_q`): the time derivative of the positions at velocity `v`.
+    /// Default: `out = v`, right when `v = q̇`; a system whose velocities are not position rates
+    /// (`n_q ≠ n_v`, e.g. Euler parameters with angular velocities) must override it. Explicit
+    /// Runge–Kutta methods integrate `q̇ = T(q) v` in the `n_q` coordinates and then call
+    /// [`MultibodySystem::normalize`]. Must not allocate.
+    fn position_rates(&self, _q: &[f64], v: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(v);
+    }
+
     /// `q ← q ⊕ h v`: advances the positions by velocity `v` over `h` (default `q + h v`, right when
     /// `v = q̇`). Must not allocate.
     fn integrate_positions(&self, q: &mut [f64], v: &[f64], h: f64) {
