@@ -1,0 +1,380 @@
+//! The spatial model: bodies, joints and forces, and its implementation of the system seam.
+//!
+//! Per body, positions `q = (r, p)` (centre of mass, Euler parameters: 7) and velocities
+//! `v = (ṙ, ω')` (centre-of-mass velocity in global components, angular velocity in the body
+//! frame: 6), so that the mass matrix is constant and block diagonal (Newton–Euler form,
+//! Nikravesh §6.4; Haug §11.2):
+//!
+//! ```text
+//! [m I   0 ] [r̈ ]   [ m g + Σ F                  ]
+//! [ 0   J' ] [ω̇'] = [ −ω' × J'ω' + Σ Aᵀ(s × F) + Aᵀ T ] − C_qᵀ λ
+//! ṗ = ½ p ⊗ (0, ω')
+//! ```
+//!
+//! `C_q` is the Jacobian with respect to `v` (columns `ṙ`, `ω'`); a correction `Δ = (Δr, Δθ')`
+//! moves the positions by `r + Δr`, `p ⊗ exp(Δθ'/2)`.
+
+use crate::euler_parameters::{self, rotate_body};
+use crate::forces::ForceData;
+use crate::frame::{self, Frame, NQ, NV, POSITION_LABELS, VELOCITY_LABELS};
+use crate::joints::primitives::Row;
+use crate::joints::JointData;
+use crate::{Body, BodyRef, Force, Joint};
+use dalembert_system::{
+    BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, Layout, ModelError,
+    MultibodySystem,
+};
+use nalgebra::Vector3;
+
+/// Collects bodies, joints and forces; [`ModelBuilder::build`] checks them and makes the model.
+#[derive(Debug, Clone, Default)]
+pub struct ModelBuilder {
+    gravity: [f64; 3],
+    bodies: Vec<Body>,
+    joints: Vec<Joint>,
+    forces: Vec<Force>,
+}
+
+impl ModelBuilder {
+    /// An empty model with gravitational acceleration `gravity` (global).
+    pub fn new(gravity: [f64; 3]) -> Self {
+        ModelBuilder {
+            gravity,
+            ..Default::default()
+        }
+    }
+
+    /// Adds a body; returns the reference joints and forces use.
+    pub fn body(&mut self, body: Body) -> BodyRef {
+        self.bodies.push(body);
+        BodyRef::Body(self.bodies.len() - 1)
+    }
+
+    /// Adds a joint (placed in the initial configuration).
+    pub fn joint(&mut self, joint: Joint) -> &mut Self {
+        self.joints.push(joint);
+        self
+    }
+
+    /// Adds a force element.
+    pub fn force(&mut self, force: Force) -> &mut Self {
+        self.forces.push(force);
+        self
+    }
+
+    /// Checks every element (errors name the element and what is wrong) and builds the model.
+    pub fn build(self) -> Result<Model, ModelError> {
+        if !self.gravity.iter().all(|g| g.is_finite()) {
+            return Err(ModelError::InvalidParameter {
+                element: "gravity".into(),
+                what: "must be finite".into(),
+            });
+        }
+        for b in &self.bodies {
+            b.validate()?;
+        }
+        let count = self.bodies.len();
+        let initial: Vec<Frame> = self
+            .bodies
+            .iter()
+            .map(|b| Frame {
+                r: b.position,
+                a: euler_parameters::rotation(&b.orientation),
+                v: b.velocity,
+                w: b.angular_velocity,
+            })
+            .collect();
+        let frame_of = |b: Option<usize>| b.map_or(Frame::GROUND, |i| initial[i]);
+        let index = |element: &str, b: BodyRef| match b {
+            BodyRef::Ground => Ok(None),
+            BodyRef::Body(i) if i < count => Ok(Some(i)),
+            BodyRef::Body(index) => Err(ModelError::UnknownBody {
+                element: element.to_string(),
+                index,
+                count,
+            }),
+        };
+        let mut joints = Vec::with_capacity(self.joints.len());
+        for j in &self.joints {
+            let element = format!("joint '{}'", j.name);
+            let (bi, bj) = (index(&element, j.body_i)?, index(&element, j.body_j)?);
+            joints.push(JointData::new(j, bi, bj, &frame_of(bi), &frame_of(bj))?);
+        }
+        let mut forces = Vec::with_capacity(self.forces.len());
+        for f in &self.forces {
+            let element = format!("force '{}'", f.name());
+            forces.push(ForceData::new(f, &|b| index(&element, b), &frame_of)?);
+        }
+        let layout = Layout::new(
+            self.bodies
+                .iter()
+                .map(|b| (b.name.as_str(), POSITION_LABELS, VELOCITY_LABELS)),
+        );
+        let mut segments = Vec::new();
+        let mut equations = Vec::new();
+        for (ji, j) in joints.iter().enumerate() {
+            for k in 0..j.num_equations() {
+                let row = equations.len();
+                equations.push((ji, k));
+                segments.extend(j.body_i.map(|b| (row, b)));
+                segments.extend(j.body_j.map(|b| (row, b)));
+            }
+        }
+        let pattern = ConstraintPattern::from_segments(equations.len(), &layout, segments);
+        Ok(Model {
+            gravity: Vector3::from(self.gravity),
+            bodies: self.bodies,
+            joints,
+            forces,
+            layout,
+            pattern,
+            equations,
+        })
+    }
+}
+
+/// A spatial multibody model (build it with [`ModelBuilder`]).
+#[derive(Debug, Clone)]
+pub struct Model {
+    gravity: Vector3<f64>,
+    bodies: Vec<Body>,
+    joints: Vec<JointData>,
+    forces: Vec<ForceData>,
+    layout: Layout,
+    pattern: ConstraintPattern,
+    /// `(joint, equation within it)` of every row.
+    equations: Vec<(usize, usize)>,
+}
+
+/// Most rows a joint primitive has.
+const MAX_PRIMITIVE_ROWS: usize = 3;
+
+impl Model {
+    /// The bodies, in layout order.
+    pub fn bodies(&self) -> &[Body] {
+        &self.bodies
+    }
+
+    /// Gravitational acceleration.
+    pub fn gravity(&self) -> Vector3<f64> {
+        self.gravity
+    }
+
+    /// `(q₀, v₀)` from the bodies' initial poses and velocities (orientations normalized,
+    /// angular velocities converted to body frames). Not necessarily consistent with the joints:
+    /// run the position and velocity analyses for that.
+    pub fn initial_state(&self) -> (Vec<f64>, Vec<f64>) {
+        let mut q = Vec::with_capacity(NQ * self.bodies.len());
+        let mut v = Vec::with_capacity(NV * self.bodies.len());
+        for b in &self.bodies {
+            let p = euler_parameters::normalized(&b.orientation);
+            q.extend(b.position.iter().chain(&p));
+            let w_body = euler_parameters::rotation(&p).transpose() * b.angular_velocity;
+            v.extend(b.velocity.iter().chain(w_body.iter()));
+        }
+        (q, v)
+    }
+
+    /// The frame of body `b` (ground for `None`) at `(q, v)`.
+    #[inline]
+    pub fn frame(&self, b: Option<usize>, q: &[f64], v: &[f64]) -> Frame {
+        b.map_or(Frame::GROUND, |i| Frame::of(i, q, v))
+    }
+
+    /// Angular velocity of body `b` in global components at `(q, v)`.
+    pub fn angular_velocity(&self, b: usize, q: &[f64], v: &[f64]) -> Vector3<f64> {
+        Frame::of(b, q, v).w
+    }
+
+    /// Angular momentum of the whole system about the origin (global).
+    pub fn angular_momentum(&self, q: &[f64], v: &[f64]) -> Vector3<f64> {
+        self.bodies.iter().enumerate().fold(Vector3::zeros(), |acc, (i, b)| {
+            let f = Frame::of(i, q, v);
+            let (_, w_body) = frame::velocity(i, v);
+            acc + f.r.cross(&(b.mass * f.v)) + f.a * (b.inertia * w_body)
+        })
+    }
+}
+
+impl ConstraintSet for Model {
+    fn pattern(&self) -> &ConstraintPattern {
+        &self.pattern
+    }
+
+    fn equation(&self, row: usize) -> EquationRef {
+        let (ji, k) = self.equations[row];
+        let j = &self.joints[ji];
+        EquationRef {
+            constraint: ji,
+            name: j.name.clone(),
+            equation: k,
+            label: j.labels[k],
+        }
+    }
+
+    fn values(&self) -> ConstraintValues {
+        ConstraintValues::new(&self.pattern, 0)
+    }
+
+    fn evaluate(&self, _t: f64, q: &[f64], v: &[f64], out: &mut ConstraintValues) {
+        let mut row = 0;
+        let mut entry = 0;
+        let mut rows = [Row::default(); MAX_PRIMITIVE_ROWS];
+        for j in &self.joints {
+            let (fi, fj) = (self.frame(j.body_i, q, v), self.frame(j.body_j, q, v));
+            for prim in &j.primitives {
+                let n = prim.len();
+                prim.evaluate(&fi, &fj, &mut rows[..n]);
+                for r in &rows[..n] {
+                    out.c[row] = r.c;
+                    out.c_t[row] = 0.0;
+                    out.gamma[row] = r.gamma;
+                    for (body, frame, [lin, ang]) in [(j.body_i, &fi, r.i), (j.body_j, &fj, r.j)] {
+                        if body.is_some() {
+                            // ∂/∂ω' = (∂/∂ω) A.
+                            let ang_body = frame.a.transpose() * ang;
+                            out.jacobian[entry..entry + 3].copy_from_slice(lin.as_slice());
+                            out.jacobian[entry + 3..entry + 6].copy_from_slice(ang_body.as_slice());
+                            entry += NV;
+                        }
+                    }
+                    row += 1;
+                }
+            }
+        }
+    }
+
+    fn correct_positions(&self, q: &mut [f64], delta: &[f64]) {
+        self.integrate_positions(q, delta, 1.0);
+        self.normalize(q);
+    }
+
+    fn describe_position(&self, i: usize) -> String {
+        self.layout.describe_position(i)
+    }
+}
+
+impl MultibodySystem for Model {
+    fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    fn constraints(&self) -> &dyn ConstraintSet {
+        self
+    }
+
+    fn mass(&self, _q: &[f64], out: &mut BlockDiagonal) {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let blk = out.block_mut(i);
+            blk.fill(0.0);
+            for k in 0..3 {
+                blk[k * NV + k] = b.mass;
+                for l in 0..3 {
+                    blk[(3 + k) * NV + 3 + l] = b.inertia[(k, l)];
+                }
+            }
+        }
+    }
+
+    fn mass_is_constant(&self) -> bool {
+        true
+    }
+
+    fn reference_positions(&self) -> Vec<f64> {
+        let mut q = vec![0.0; self.layout.n_q()];
+        for c in q.chunks_exact_mut(NQ) {
+            c[3] = 1.0;
+        }
+        q
+    }
+
+    fn applied_forces(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+        for (i, b) in self.bodies.iter().enumerate() {
+            let (_, w) = frame::velocity(i, v);
+            let gyro = -w.cross(&(b.inertia * w));
+            let o = NV * i;
+            for k in 0..3 {
+                out[o + k] = b.mass * self.gravity[k];
+                out[o + 3 + k] = gyro[k];
+            }
+        }
+        let frame = |b: Option<usize>| self.frame(b, q, v);
+        for f in &self.forces {
+            f.add(&frame, out);
+        }
+    }
+
+    fn check_forces(&self, t: f64, _q: &[f64], _v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
+        match q_e.iter().position(|x| !x.is_finite()) {
+            None => Ok(()),
+            Some(i) => Err(DynamicsError::NonFinite {
+                time: t,
+                what: format!("applied force {}", self.layout.describe_velocity(i)),
+            }),
+        }
+    }
+
+    fn position_rates(&self, q: &[f64], v: &[f64], out: &mut [f64]) {
+        for i in 0..self.bodies.len() {
+            let (_, p) = frame::position(i, q);
+            let (lin, w) = frame::velocity(i, v);
+            let o = NQ * i;
+            out[o..o + 3].copy_from_slice(lin.as_slice());
+            out[o + 3..o + 7].copy_from_slice(&euler_parameters::rates(&p, &w));
+        }
+    }
+
+    fn integrate_positions(&self, q: &mut [f64], v: &[f64], h: f64) {
+        for i in 0..self.bodies.len() {
+            let (lin, w) = frame::velocity(i, v);
+            let o = NQ * i;
+            for k in 0..3 {
+                q[o + k] += h * lin[k];
+            }
+            let (_, mut p) = frame::position(i, q);
+            rotate_body(&mut p, &(h * w));
+            q[o + 3..o + 7].copy_from_slice(&p);
+        }
+    }
+
+    fn normalize(&self, q: &mut [f64]) {
+        for c in q.chunks_exact_mut(NQ) {
+            let p = euler_parameters::normalized(&[c[3], c[4], c[5], c[6]]);
+            c[3..].copy_from_slice(&p);
+        }
+    }
+
+    fn kinetic_energy(&self, _q: &[f64], v: &[f64]) -> f64 {
+        self.bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let (lin, w) = frame::velocity(i, v);
+                0.5 * (b.mass * lin.norm_squared() + w.dot(&(b.inertia * w)))
+            })
+            .sum()
+    }
+
+    fn potential_energy(&self, _t: f64, q: &[f64]) -> f64 {
+        let gravity: f64 = self
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| -b.mass * self.gravity.dot(&frame::position(i, q).0))
+            .sum();
+        let frame = |b: Option<usize>| self.frame(b, q, &[]);
+        gravity + self.forces.iter().map(|f| f.potential(&frame)).sum::<f64>()
+    }
+
+    fn is_conservative(&self) -> bool {
+        self.forces.iter().all(ForceData::is_conservative)
+    }
+
+    fn bodies_without_inertia(&self) -> Vec<String> {
+        self.bodies
+            .iter()
+            .filter(|b| b.lacks_inertia())
+            .map(|b| b.name.clone())
+            .collect()
+    }
+}
