@@ -1,4 +1,4 @@
-//! dalembert: constrained planar multibody dynamics.
+//! dalembert: constrained multibody dynamics, planar and spatial.
 //!
 //! This facade re-exports the workspace crates and adds what ties them together: [`Simulation`]
 //! (a model, a formulation and an integrator, run to an end time) and [`CsvOutput`] (streamed
@@ -6,12 +6,14 @@
 //!
 //! | crate | holds |
 //! |---|---|
-//! | [`kinematics`] | bodies, coordinates, point kinematics, mass matrix, applied forces, time functions |
-//! | [`constraints`] | joints, drivers, `C`, `C_q`, `C_t`, `Q_d`, structure and kinematic analysis, the `Formulation` trait |
+//! | [`system`] | the seam: how formulations and integrators see any multibody system; the linear-algebra layer |
+//! | [`kinematics`] | planar bodies, coordinates, point kinematics, mass matrix, applied forces, time functions |
+//! | [`constraints`] | planar joints, drivers, `C`, `C_q`, `C_t`, `Q_d`, reactions (structure and kinematic analysis re-exported from the seam) |
+//! | [`spatial`] | spatial bodies (Euler parameters, body-frame angular velocity), the spatial joint set, forces |
 //! | [`augmented`] | the augmented (Lagrange multiplier) formulation, reactions, inverse dynamics |
 //! | [`embedding`] | the embedding (velocity transformation) formulation, coordinate partitioning |
 //! | [`amalgamated`] | the amalgamated formulation |
-//! | [`integrators`] | symplectic Euler, RK4, Dormand–Prince; Baumgarte and projection |
+//! | [`integrators`] | symplectic Euler, RK4, Dormand–Prince, generalized-α; Baumgarte and projection |
 //!
 //! The mathematics is in `docs/` and in each crate's documentation.
 
@@ -29,6 +31,7 @@ pub use dalembert_constraints as constraints;
 pub use dalembert_embedding as embedding;
 pub use dalembert_integrators as integrators;
 pub use dalembert_kinematics as kinematics;
+pub use dalembert_spatial as spatial;
 pub use dalembert_system as system;
 
 pub use analysis::{CheckReport, Recording};

@@ -9,5 +9,6 @@ pub mod fuzz;
 pub mod generator;
 pub mod jet;
 pub mod mechanisms;
+pub mod spatial;
 
 pub use mechanisms::Mechanism;

@@ -1,0 +1,100 @@
+//! The spatial scenes of `shared/anchors` (its README defines each exactly; `spatial_scenes.py`),
+//! built with `dalembert-spatial`: each body frame at the link's centre of mass with the link
+//! frame's orientation, so states compare row by row with the anchors' reference
+//! (`[x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz]`, angular velocity in world axes).
+
+use dalembert_spatial::euler_parameters::from_rotation;
+use dalembert_spatial::{Body, BodyRef, Joint, JointKind, Model, ModelBuilder};
+use nalgebra::{Matrix3, Vector3};
+use std::sync::Arc;
+
+/// Gravitational acceleration of every anchors scene, along −z.
+pub const G: f64 = 9.81;
+
+/// `chain3d`: `n` boxes 1 m × 0.1 m × 0.1 m of 1 kg along +x, revolute joint `i` at `x = i` about
+/// global `y` (even `i`) or `z` (odd `i`), at rest.
+pub fn chain3d(n: usize) -> Arc<Model> {
+    let (l, w, m) = (1.0, 0.1, 1.0);
+    let inertia = [
+        m * (w * w + w * w) / 12.0,
+        m * (l * l + w * w) / 12.0,
+        m * (l * l + w * w) / 12.0,
+    ];
+    let mut b = ModelBuilder::new([0.0, 0.0, -G]);
+    let mut parent = BodyRef::Ground;
+    for i in 0..n {
+        let x = i as f64 * l;
+        let link = b.body(Body::new(&format!("link{i}"), m, inertia).at([x + l / 2.0, 0.0, 0.0]));
+        let axis = if i % 2 == 0 { [0.0, 1.0, 0.0] } else { [0.0, 0.0, 1.0] };
+        b.joint(Joint::revolute(&format!("joint{i}"), parent, link, [x, 0.0, 0.0], axis));
+        parent = link;
+    }
+    Arc::new(b.build().expect("chain3d is well formed"))
+}
+
+/// `heavytop`: 15 kg, inertia diag(0.234375, 0.46875, 0.234375), centre of mass 1 m from a ball
+/// joint at the origin along body `y`, angular velocity (0, 150, −4.61538) rad/s.
+pub fn heavy_top() -> Arc<Model> {
+    let omega = Vector3::new(0.0, 150.0, -4.61538);
+    let r = Vector3::new(0.0, 1.0, 0.0);
+    let mut b = ModelBuilder::new([0.0, 0.0, -G]);
+    let top = b.body(
+        Body::new("top", 15.0, [0.234375, 0.46875, 0.234375])
+            .at(r.into())
+            .moving(omega.cross(&r).into(), omega.into()),
+    );
+    b.joint(Joint::spherical("pivot", BodyRef::Ground, top, [0.0; 3]));
+    Arc::new(b.build().expect("heavytop is well formed"))
+}
+
+/// `slidercrank3d`: the IFToMM spatial slider-crank (crank, slider, rod; revolute, prismatic,
+/// spherical and universal joints), with its consistent initial velocities.
+pub fn slider_crank_3d() -> Arc<Model> {
+    let a = Vector3::new(0.0, 0.1, 0.12);
+    let (l_ab, l_bc): (f64, f64) = (0.08, 0.3);
+    let bpt = a + Vector3::new(0.0, 0.0, l_ab);
+    let c = Vector3::new((l_bc * l_bc - a.y * a.y - (a.z + l_ab) * (a.z + l_ab)).sqrt(), 0.0, 0.0);
+    let x1 = (c - bpt) / l_bc;
+    let z1 = (bpt - x1 * bpt.dot(&x1)).normalize();
+    let y1 = z1.cross(&x1);
+    let rod_frame = Matrix3::from_columns(&[x1, y1, z1]);
+    let mut b = ModelBuilder::new([0.0, 0.0, -G]);
+    let crank_omega = Vector3::new(6.0, 0.0, 0.0);
+    let crank_com = a + Vector3::new(0.0, 0.0, l_ab / 2.0);
+    let crank = b.body(
+        Body::new("crank", 0.12, [1e-4, 1e-4, 1e-5])
+            .at(crank_com.into())
+            .moving(crank_omega.cross(&(crank_com - a)).into(), crank_omega.into()),
+    );
+    let slider = b.body(
+        Body::new("slider", 2.0, [1e-4; 3])
+            .at(c.into())
+            .moving([0.24, 0.0, 0.0], [0.0; 3]),
+    );
+    let rod = b.body(
+        Body::new("rod", 0.5, [4e-4, 4e-3, 4e-3])
+            .at(((bpt + c) / 2.0).into())
+            .oriented(from_rotation(&rod_frame))
+            .moving([0.12, -0.24, 0.0], [2.4, -1.2, 0.0]),
+    );
+    b.joint(Joint::revolute("A", BodyRef::Ground, crank, a.into(), [1.0, 0.0, 0.0]));
+    b.joint(Joint::new(
+        "guide",
+        JointKind::Prismatic,
+        BodyRef::Ground,
+        slider,
+        c.into(),
+        [1.0, 0.0, 0.0],
+    ));
+    b.joint(Joint::spherical("B", crank, rod, bpt.into()));
+    b.joint(Joint::crossed(
+        "C",
+        JointKind::Universal,
+        slider,
+        rod,
+        c.into(),
+        [0.0, 1.0, 0.0],
+        [1.0, 0.0, 0.0],
+    ));
+    Arc::new(b.build().expect("slidercrank3d is well formed"))
+}
