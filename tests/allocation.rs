@@ -3,16 +3,20 @@
 //! add hundreds). The shorter run, made first, may count one or two more for lazily initialized
 //! library state; the test therefore requires `long ≤ short`. Every formulation × integrator:
 //! augmented with its dense (four-bar) and sparse (chain of 64) back ends, embedding and
-//! amalgamated (dense on the four-bar, sparse amalgamated system on the chain of 64).
+//! amalgamated (dense on the four-bar, sparse amalgamated system on the chain of 64); and the same
+//! for spatial models (the anchors' slider-crank, a closed loop, and the spatial chain of 64), whose
+//! steps also advance Euler parameters and normalize them.
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
 use dalembert::constraints::Formulation;
 use dalembert::embedding::Embedding;
 use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
-use dalembert_testkit::mechanisms::{self, Mechanism};
+use dalembert::system::MultibodySystem;
+use dalembert_testkit::mechanisms;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
 
 struct Counting;
 
@@ -47,13 +51,20 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 /// The formulations under test: `"augmented"` with `backend`, `"embedding"`, `"amalgamated"`.
-fn formulation(kind: &str, mech: &Mechanism, backend: Backend) -> Box<dyn Formulation> {
+/// A system and a consistent state.
+struct Case {
+    sys: Arc<dyn MultibodySystem>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+}
+
+fn formulation(kind: &str, case: &Case, backend: Backend) -> Box<dyn Formulation> {
     match kind {
-        "embedding" => Box::new(Embedding::with_defaults(mech.model.clone())),
-        "amalgamated" => Box::new(Amalgamated::with_defaults(mech.model.clone())),
+        "embedding" => Box::new(Embedding::with_defaults(case.sys.clone())),
+        "amalgamated" => Box::new(Amalgamated::with_defaults(case.sys.clone())),
         _ => Box::new(
             Augmented::new(
-                mech.model.clone(),
+                case.sys.clone(),
                 AugmentedOptions {
                     backend,
                     ..Default::default()
@@ -64,17 +75,28 @@ fn formulation(kind: &str, mech: &Mechanism, backend: Backend) -> Box<dyn Formul
     }
 }
 
-fn allocations(mech: &Mechanism, kind: &str, backend: Backend, opts: &IntegratorOptions, t_end: f64) -> usize {
-    let mut f = formulation(kind, mech, backend);
+fn allocations(case: &Case, kind: &str, backend: Backend, opts: &IntegratorOptions, t_end: f64) -> usize {
+    let mut f = formulation(kind, case, backend);
     let before = ALLOCATIONS.load(Ordering::Relaxed);
-    integrate(f.as_mut(), 0.0, t_end, &mech.q, &mech.qd, opts, &mut |_| {}).unwrap();
+    integrate(f.as_mut(), 0.0, t_end, &case.q, &case.qd, opts, &mut |_| {}).unwrap();
     ALLOCATIONS.load(Ordering::Relaxed) - before
 }
 
 #[test]
 fn stepping_allocates_nothing_after_setup() {
-    let four_bar = mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false);
-    let chain = mechanisms::chain(1.0, 1.0, &[-0.3; 64], &[0.0; 64], &[]);
+    let planar = |m: mechanisms::Mechanism| Case {
+        sys: m.model,
+        q: m.q,
+        qd: m.qd,
+    };
+    let spatial = |m: Arc<dalembert::spatial::Model>| {
+        let (q, qd) = m.initial_state();
+        Case { sys: m, q, qd }
+    };
+    let four_bar = planar(mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false));
+    let chain = planar(mechanisms::chain(1.0, 1.0, &[-0.3; 64], &[0.0; 64], &[]));
+    let slider_crank_3d = spatial(dalembert_testkit::spatial::slider_crank_3d());
+    let chain_3d = spatial(dalembert_testkit::spatial::chain3d(64));
     // Every integrator, including the implicit one, with the augmented formulation.
     let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
     let baum = ConstraintTreatment::baumgarte_for_step(1e-3);
@@ -117,6 +139,37 @@ fn stepping_allocates_nothing_after_setup() {
             Backend::Auto,
             "chain of 64, amalgamated (sparse)",
         ),
+        (
+            &slider_crank_3d,
+            "augmented",
+            Backend::Auto,
+            "spatial slider-crank, augmented",
+        ),
+        (
+            &chain_3d,
+            "augmented",
+            Backend::Sparse,
+            "spatial chain of 64, augmented, sparse",
+        ),
+        (
+            &slider_crank_3d,
+            "embedding",
+            Backend::Auto,
+            "spatial slider-crank, embedding",
+        ),
+        (&chain_3d, "embedding", Backend::Auto, "spatial chain of 64, embedding"),
+        (
+            &slider_crank_3d,
+            "amalgamated",
+            Backend::Auto,
+            "spatial slider-crank, amalgamated",
+        ),
+        (
+            &chain_3d,
+            "amalgamated",
+            Backend::Auto,
+            "spatial chain of 64, amalgamated",
+        ),
     ] {
         for (name, opts) in &cases {
             // Generalized-α integrates the augmented index-3 equations and refuses the others.
@@ -124,7 +177,8 @@ fn stepping_allocates_nothing_after_setup() {
                 continue;
             }
             // The chain's implicit steps are costly (finite-difference Jacobians): shorter runs.
-            let scale = if std::ptr::eq(mech, &chain) { 0.1 } else { 1.0 };
+            let long_model = std::ptr::eq(mech, &chain) || std::ptr::eq(mech, &chain_3d);
+            let scale = if long_model { 0.1 } else { 1.0 };
             let short = allocations(mech, kind, backend, opts, 0.5 * scale);
             let long = allocations(mech, kind, backend, opts, scale);
             if long > short {
