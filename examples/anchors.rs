@@ -1,7 +1,9 @@
-//! dalembert's side of the `shared/anchors` protocol: times and accuracy on the anchor scenes
-//! (chain of N rods, four-bar, slider-crank), one JSON record per line to `$ANCHORS_OUT` (or
-//! stdout), in the fields of `shared/anchors/README.md`. Run from the anchors folder (it reads
-//! `results/reference.json` for the errors at t = 1 s):
+//! dalembert's side of the `shared/anchors` protocol: times and accuracy on the anchor scenes, one
+//! JSON record per line to `$ANCHORS_OUT` (or stdout), in the fields of `shared/anchors/README.md`.
+//! `ANCHORS_PART=planar` (the default): chain of N rods, four-bar, slider-crank, errors against
+//! `results/reference.json`; `ANCHORS_PART=spatial`: chain3d, heavytop, slidercrank3d
+//! (`dalembert_testkit::spatial`), errors against `results/reference_spatial.json`. Run from the
+//! anchors folder:
 //!
 //! ```sh
 //! ANCHORS_EXTRA="cargo run --release --manifest-path $PROJECT/Cargo.toml --example anchors" python run_all.py
@@ -10,13 +12,46 @@
 //! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once.
 
 use dalembert::augmented::Augmented;
-use dalembert::constraints::MultibodySystem as _;
 use dalembert::constraints::{Formulation, Stabilization};
 use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::system::MultibodySystem;
 use dalembert_testkit::anchors::state_errors;
-use dalembert_testkit::mechanisms::{self, Mechanism};
+use dalembert_testkit::{mechanisms, spatial};
 use std::io::Write;
+use std::sync::Arc;
 use std::time::Instant;
+
+/// A scene's system and consistent initial state.
+struct Mechanism {
+    model: Arc<dyn MultibodySystem>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    /// Spatial (errors against 13-column reference rows).
+    spatial: bool,
+}
+
+impl From<mechanisms::Mechanism> for Mechanism {
+    fn from(m: mechanisms::Mechanism) -> Self {
+        Mechanism {
+            model: m.model,
+            q: m.q,
+            qd: m.qd,
+            spatial: false,
+        }
+    }
+}
+
+impl From<Arc<dalembert::spatial::Model>> for Mechanism {
+    fn from(m: Arc<dalembert::spatial::Model>) -> Self {
+        let (q, qd) = m.initial_state();
+        Mechanism {
+            model: m,
+            q,
+            qd,
+            spatial: true,
+        }
+    }
+}
 
 struct Variant {
     name: &'static str,
@@ -59,7 +94,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// µs per forward-dynamics evaluation (median of batches).
 fn fd_us(mech: &Mechanism) -> f64 {
     let mut f = Augmented::with_defaults(mech.model.clone()).expect("formulation");
-    let (n, m) = (mech.q.len(), mech.model.num_equations());
+    let (n, m) = (mech.qd.len(), mech.model.num_equations());
     let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
     let reps = (20000 / (n + 1)).max(20);
     let batches: Vec<f64> = (0..7)
@@ -79,7 +114,7 @@ struct RunResult {
     /// `None` when the run failed (the message is reported instead).
     failure: Option<String>,
     sim_s: f64,
-    at_one: Vec<f64>,
+    at_one: (Vec<f64>, Vec<f64>),
     de_10s: f64,
     de_max: f64,
     cviol: f64,
@@ -88,12 +123,12 @@ struct RunResult {
 fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
     let mut f = Augmented::with_defaults(mech.model.clone()).expect("formulation");
     let e0 = f.energy(0.0, &mech.q, &mech.qd).total();
-    let mut at_one = Vec::new();
+    let mut at_one = (Vec::new(), Vec::new());
     let mut de_max = 0.0f64;
     let mut de_last = 0.0;
     let result = integrate(&mut f, 0.0, 10.0, &mech.q, &mech.qd, opts, &mut |s| {
         if (s.t - 1.0).abs() < 1e-9 {
-            at_one = [s.q, s.qd].concat();
+            at_one = (s.q.to_vec(), s.qd.to_vec());
         }
         de_max = de_max.max((s.energy - e0).abs());
         de_last = s.energy - e0;
@@ -113,8 +148,14 @@ fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
 }
 
 /// Max abs errors (positions and angles; velocities) against the reference bodies at t = 1 s.
-fn errors(state: &[f64], reference: &serde_json::Value) -> (f64, f64) {
-    let (q, qd) = state.split_at(state.len() / 2);
+fn errors(mech: &Mechanism, (q, qd): &(Vec<f64>, Vec<f64>), reference: &serde_json::Value) -> (f64, f64) {
+    if mech.spatial {
+        let rows: Vec<Vec<f64>> = serde_json::from_value(reference.clone()).unwrap_or_default();
+        if rows.is_empty() || q.is_empty() {
+            return (f64::NAN, f64::NAN);
+        }
+        return spatial::state_errors(q, qd, &rows);
+    }
     let rows: Vec<[f64; 6]> = reference
         .as_array()
         .into_iter()
@@ -130,7 +171,13 @@ fn errors(state: &[f64], reference: &serde_json::Value) -> (f64, f64) {
 
 fn main() {
     let quick = std::env::var("ANCHORS_QUICK").is_ok();
-    let reference: serde_json::Value = std::fs::read_to_string("results/reference.json")
+    let is_spatial = std::env::var("ANCHORS_PART").is_ok_and(|p| p == "spatial");
+    let reference_file = if is_spatial {
+        "results/reference_spatial.json"
+    } else {
+        "results/reference.json"
+    };
+    let reference: serde_json::Value = std::fs::read_to_string(reference_file)
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or(serde_json::Value::Null);
@@ -143,22 +190,22 @@ fn main() {
         if quick && n > 8 {
             continue;
         }
-        scenes.push((
-            "chain".into(),
-            n,
-            mechanisms::chain(1.0, 1.0, &vec![0.0; n], &vec![0.0; n], &[]),
-        ));
+        if is_spatial {
+            scenes.push(("chain3d".into(), n, spatial::chain3d(n).into()));
+        } else {
+            let chain = mechanisms::chain(1.0, 1.0, &vec![0.0; n], &vec![0.0; n], &[]);
+            scenes.push(("chain".into(), n, chain.into()));
+        }
     }
-    scenes.push((
-        "fourbar".into(),
-        1,
-        mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false),
-    ));
-    scenes.push((
-        "slidercrank".into(),
-        1,
-        mechanisms::slider_crank(std::f64::consts::FRAC_PI_3, 0.0),
-    ));
+    if is_spatial {
+        scenes.push(("heavytop".into(), 1, spatial::heavy_top().into()));
+        scenes.push(("slidercrank3d".into(), 1, spatial::slider_crank_3d().into()));
+    } else {
+        let four_bar = mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false);
+        scenes.push(("fourbar".into(), 1, four_bar.into()));
+        let slider_crank = mechanisms::slider_crank(std::f64::consts::FRAC_PI_3, 0.0);
+        scenes.push(("slidercrank".into(), 1, slider_crank.into()));
+    }
     for (scene, n, mech) in &scenes {
         let key = format!("{scene}/{n}");
         let fd = fd_us(mech);
@@ -172,7 +219,7 @@ fn main() {
             let runs: Vec<RunResult> = (0..repeats).map(|_| simulate(mech, &v.options)).collect();
             let sim_s = median(runs.iter().map(|r| r.sim_s).collect());
             let r = &runs[0];
-            let (ep, ev) = errors(&r.at_one, &reference["scenes"][&key]["bodies"]);
+            let (ep, ev) = errors(mech, &r.at_one, &reference["scenes"][&key]["bodies"]);
             let has_ref = !reference["scenes"][&key]["bodies"].is_null();
             let mut rec = serde_json::json!({
                 "engine": "dalembert",

@@ -14,40 +14,15 @@ use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
 use dalembert::embedding::Embedding;
 use dalembert::integrators::{integrate, IntegratorOptions, Method};
-use dalembert::spatial::euler_parameters::rotation;
 use dalembert::spatial::Model;
 use dalembert::system::{Formulation, MultibodySystem};
 use dalembert_testkit::spatial;
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use std::sync::Arc;
 
 fn reference(scene: &str) -> Vec<Vec<f64>> {
     let text = include_str!("data/anchors_reference_spatial.json");
     let json: serde_json::Value = serde_json::from_str(text).unwrap();
     serde_json::from_value(json["scenes"][scene]["bodies"].clone()).unwrap()
-}
-
-/// Largest position and velocity errors of the state at 1 s against the reference rows.
-fn errors(model: &Model, q: &[f64], v: &[f64], rows: &[Vec<f64>]) -> (f64, f64) {
-    let (mut pos, mut vel) = (0.0f64, 0.0f64);
-    for (i, row) in rows.iter().enumerate() {
-        let (r, p) = (
-            &q[7 * i..7 * i + 3],
-            [q[7 * i + 3], q[7 * i + 4], q[7 * i + 5], q[7 * i + 6]],
-        );
-        for k in 0..3 {
-            pos = pos.max((r[k] - row[k]).abs());
-            vel = vel.max((v[6 * i + k] - row[7 + k]).abs());
-        }
-        let computed = UnitQuaternion::from_quaternion(Quaternion::new(p[0], p[1], p[2], p[3]));
-        let expected = UnitQuaternion::from_quaternion(Quaternion::new(row[3], row[4], row[5], row[6]));
-        pos = pos.max(computed.angle_to(&expected));
-        let w_global = rotation(&p) * Vector3::new(v[6 * i + 3], v[6 * i + 4], v[6 * i + 5]);
-        let w_ref = Vector3::new(row[10], row[11], row[12]);
-        vel = vel.max((w_global - w_ref).amax());
-        let _ = model;
-    }
-    (pos, vel)
 }
 
 #[test]
@@ -87,7 +62,7 @@ fn spatial_anchor_scenes_match_the_reference_at_one_second() {
             })
             .unwrap_or_else(|e| panic!("{name} {}: {e}", f.name()));
             let (q, v) = end.expect("a sample at 1 s");
-            let (pos, vel) = errors(&model, &q, &v, &rows);
+            let (pos, vel) = spatial::state_errors(&q, &v, &rows);
             assert!(
                 pos < 1e-7 && vel < 1e-6,
                 "{name} {}: position error {pos:e}, velocity error {vel:e}",

@@ -98,3 +98,30 @@ pub fn slider_crank_3d() -> Arc<Model> {
     ));
     Arc::new(b.build().expect("slidercrank3d is well formed"))
 }
+
+/// Largest position error (centres of mass, and the angle between computed and reference
+/// orientations) and velocity error (centre-of-mass velocity, angular velocity in world axes) of a
+/// state `(q, v)` of a spatial model against reference rows `[x, y, z, qw, qx, qy, qz, vx, vy, vz,
+/// wx, wy, wz]`, one per body in layout order (the anchors' format).
+pub fn state_errors(q: &[f64], v: &[f64], rows: &[Vec<f64>]) -> (f64, f64) {
+    use dalembert_spatial::euler_parameters::{normalized, product, rotation};
+    let (mut pos, mut vel) = (0.0f64, 0.0f64);
+    for (i, row) in rows.iter().enumerate() {
+        let p = normalized(&[q[7 * i + 3], q[7 * i + 4], q[7 * i + 5], q[7 * i + 6]]);
+        for k in 0..3 {
+            pos = pos.max((q[7 * i + k] - row[k]).abs());
+            vel = vel.max((v[6 * i + k] - row[7 + k]).abs());
+        }
+        // Angle of the relative rotation p_ref⁻¹ ⊗ p: 2 atan2(|vector part|, |scalar part|).
+        let reference = normalized(&[row[3], -row[4], -row[5], -row[6]]);
+        let rel = product(&reference, &p);
+        let angle = 2.0
+            * (rel[1] * rel[1] + rel[2] * rel[2] + rel[3] * rel[3])
+                .sqrt()
+                .atan2(rel[0].abs());
+        pos = pos.max(angle);
+        let w = rotation(&p) * Vector3::new(v[6 * i + 3], v[6 * i + 4], v[6 * i + 5]);
+        vel = vel.max((w - Vector3::new(row[10], row[11], row[12])).amax());
+    }
+    (pos, vel)
+}
