@@ -31,11 +31,13 @@ pub mod forces;
 pub mod frame;
 pub mod joints;
 pub mod model;
+pub mod reactions;
 
 pub use body::Body;
 pub use forces::Force;
 pub use joints::{Joint, JointKind};
 pub use model::{Model, ModelBuilder};
+pub use reactions::Reaction;
 
 /// A body of the model, or the ground.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

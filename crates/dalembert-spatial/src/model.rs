@@ -155,6 +155,16 @@ impl Model {
         &self.bodies
     }
 
+    /// The joints in body-frame terms, in order (their equations are the rows of `C`).
+    pub(crate) fn joints(&self) -> &[JointData] {
+        &self.joints
+    }
+
+    /// Names of the joints, in order (the order of [`Model::reactions`]).
+    pub fn joint_names(&self) -> impl Iterator<Item = &str> {
+        self.joints.iter().map(|j| j.name.as_str())
+    }
+
     /// Gravitational acceleration.
     pub fn gravity(&self) -> Vector3<f64> {
         self.gravity

@@ -27,7 +27,7 @@ pub(crate) mod primitives;
 use crate::frame::Frame;
 use crate::BodyRef;
 use dalembert_system::ModelError;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use primitives::Primitive;
 
 type V3 = Vector3<f64>;
@@ -185,6 +185,10 @@ pub(crate) struct JointData {
     pub body_j: Option<usize>,
     pub primitives: Vec<Primitive>,
     pub labels: Vec<&'static str>,
+    /// The joint's point on body `i` (body frame): where its reaction moment is taken.
+    pub point_i: V3,
+    /// The joint frame's axes `x, y, z` on body `i` (body frame, columns).
+    pub axes_i: Matrix3<f64>,
 }
 
 fn invalid(joint: &Joint, what: impl Into<String>) -> ModelError {
@@ -288,6 +292,8 @@ impl JointData {
             body_j,
             primitives,
             labels,
+            point_i: si,
+            axes_i: fi.a.transpose() * Matrix3::from_columns(&[x, y, z]),
         })
     }
 

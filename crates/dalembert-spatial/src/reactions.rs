@@ -1,0 +1,74 @@
+//! Joint reactions from the multipliers (`docs/sign-conventions.md`, spatial section).
+//!
+//! With `M v̇ + C_qᵀ λ = Q`, the generalized force a joint applies to body `b` is `−C_q,bᵀ λ`: on the
+//! velocity coordinates `(ṙ, ω)` (global angular velocity) it is the force `F` on the body and the
+//! moment `n` about its centre of mass, global components. A joint's reaction is **what its second
+//! body exerts on its first body**: `F_i` and the moment about the joint's point `P` on body `i`,
+//! `M_P = n_i − (P − r_i) × F_i`. When the first body is the ground, the reaction is computed on the
+//! second body and reversed (`F = −F_j`, `M_P = −(n_j + (r_j − P) × F_j)`).
+
+use crate::joints::primitives::Row;
+use crate::model::Model;
+use nalgebra::{Matrix3, Vector3};
+
+/// A joint's reaction: force and moment that its second body exerts on its first body.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reaction {
+    /// Force (global components).
+    pub force: Vector3<f64>,
+    /// Moment about [`Reaction::point`] (global components).
+    pub moment: Vector3<f64>,
+    /// The joint's point on the first body (global).
+    pub point: Vector3<f64>,
+    /// The joint frame's axes `x, y, z` (columns, global components); `z` is the joint axis.
+    pub axes: Matrix3<f64>,
+}
+
+impl Reaction {
+    /// Force and moment in the joint frame's components (`z` along the joint axis).
+    pub fn in_joint_axes(&self) -> (Vector3<f64>, Vector3<f64>) {
+        (self.axes.transpose() * self.force, self.axes.transpose() * self.moment)
+    }
+}
+
+impl Model {
+    /// The reaction of every joint at `(q, λ)` (`λ` from a formulation or inverse dynamics), in
+    /// joint order. `lambda` must have one entry per constraint equation.
+    pub fn reactions(&self, q: &[f64], lambda: &[f64]) -> Vec<Reaction> {
+        let mut out = Vec::with_capacity(self.joints().len());
+        let mut row = 0;
+        let mut rows = [Row::default(); 3];
+        for j in self.joints() {
+            let (fi, fj) = (self.frame(j.body_i, q, &[]), self.frame(j.body_j, q, &[]));
+            // Σ λ_r × (row on i), Σ λ_r × (row on j): the generalized constraint forces with a minus.
+            let mut sums = [[Vector3::zeros(); 2]; 2];
+            for prim in &j.primitives {
+                let n = prim.len();
+                prim.evaluate(&fi, &fj, &mut rows[..n]);
+                for r in &rows[..n] {
+                    let l = lambda[row];
+                    for k in 0..2 {
+                        sums[0][k] += l * r.i[k];
+                        sums[1][k] += l * r.j[k];
+                    }
+                    row += 1;
+                }
+            }
+            let point = fi.point(&j.point_i);
+            let (force, moment) = if j.body_i.is_some() {
+                let (f, n) = (-sums[0][0], -sums[0][1]);
+                (f, n - (point - fi.r).cross(&f))
+            } else {
+                let (f, n) = (-sums[1][0], -sums[1][1]);
+                (-f, -(n + (fj.r - point).cross(&f)))
+            };
+            out.push(Reaction {
+                force,
+                moment,
+                point,
+                axes: fi.a * j.axes_i,
+            });
+        }
+        out
+    }
+}
