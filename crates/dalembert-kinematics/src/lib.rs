@@ -20,7 +20,7 @@ pub mod forces;
 pub mod mass;
 pub mod point;
 pub mod rotation;
-pub mod time_function;
+pub use dalembert_system::time_function;
 
 pub use body::{Body, BodyId, BodyRef};
 pub use coordinates::{BodyState, Coordinates};
@@ -30,11 +30,11 @@ pub use dalembert_system::ModelError;
 pub mod error {
     pub use dalembert_system::ModelError;
 }
+pub use dalembert_system::TimeFunction;
 pub use forces::{ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque};
 pub use mass::MassMatrix;
 pub use point::PointState;
 pub use rotation::{perp, rotation, rotation_derivative};
-pub use time_function::TimeFunction;
 
 /// Two-component vector used for planar geometry.
 pub type Vec2 = nalgebra::Vector2<f64>;

@@ -5,11 +5,12 @@
 //! * [`ConstraintSet`]: constraints as a fixed sparsity pattern of `C_q` plus values, and the
 //!   analyses written once on it (structure, kinematic analysis, coordinate partitioning);
 //! * [`MultibodySystem`]: mass, forces, constraints, position update and energy;
+//! * [`TimeFunction`]: prescribed functions of time (drivers, time-varying forces) of any model;
 //! * [`Formulation`]: the forward-dynamics interface every formulation implements and every
 //!   integrator consumes, with its errors ([`DynamicsError`]) and settings.
 //!
 //! Nothing here knows whether a body is planar or spatial: `dalembert-constraints` implements the
-//! seam for planar bodies. Equations follow `FORMULATIONS.md`; `docs/architecture.md` shows where
+//! seam for planar bodies, `dalembert-spatial` for spatial ones. Equations follow `FORMULATIONS.md`; `docs/architecture.md` shows where
 //! each part lives.
 
 pub mod blocks;
@@ -26,6 +27,7 @@ pub mod partition;
 pub mod sparse_pattern;
 pub mod structure;
 pub mod system;
+pub mod time_function;
 
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
@@ -37,3 +39,4 @@ pub use model_error::ModelError;
 pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use structure::StructureReport;
 pub use system::MultibodySystem;
+pub use time_function::TimeFunction;
