@@ -50,7 +50,7 @@ fn cantilever_reaction_is_the_weight_and_its_moment() {
     let (a, lambda) = solve(&model);
     assert!(a.iter().all(|x| x.abs() < 1e-12), "a welded rod accelerates: {a:?}");
     let (q, _) = model.initial_state();
-    let r = model.reactions(&q, &lambda)[0];
+    let r = model.reactions(0.0, &q, &lambda)[0];
     let weight = Vector3::new(0.0, 0.0, -m * G);
     let arm = Vector3::new(0.5, 0.2, 0.1) - Vector3::new(0.0, 0.2, 0.0);
     assert!(close(r.force, weight, m * G), "force {:?}", r.force);
@@ -80,7 +80,7 @@ fn precessing_top_loads_its_pivot_with_the_centripetal_force() {
     let model = Arc::new(b.build().unwrap());
     let (_, lambda) = solve(&model);
     let (q, _) = model.initial_state();
-    let reaction = model.reactions(&q, &lambda)[0];
+    let reaction = model.reactions(0.0, &q, &lambda)[0];
     let centripetal = -precession * precession * Vector3::new(r.x, r.y, 0.0);
     let on_top = m * (centripetal - Vector3::new(0.0, 0.0, -G));
     assert!(
@@ -124,7 +124,7 @@ fn hinge_reaction_obeys_newton_euler_and_has_no_axial_moment() {
     let model = Arc::new(b.build().unwrap());
     let (acc, lambda) = solve(&model);
     let (q, _) = model.initial_state();
-    let reaction = model.reactions(&q, &lambda)[0];
+    let reaction = model.reactions(0.0, &q, &lambda)[0];
     let a_rot = rotation(&p);
     let j_global = a_rot * Matrix3::from_diagonal(&Vector3::from(principal)) * a_rot.transpose();
     let a_com = Vector3::new(acc[0], acc[1], acc[2]);

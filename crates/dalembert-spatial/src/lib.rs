@@ -7,6 +7,8 @@
 //!   explicit step ([`euler_parameters`]). The choice and its measured drift: `docs/spatial.md`.
 //! - Joints ([`joints`]): spherical, revolute, universal, cylindrical, prismatic, fixed, distance,
 //!   point on line, point in plane, parallel, perpendicular, from four primitives.
+//! - Drivers ([`Driver`]): joint angle, joint displacement, body coordinate, following a
+//!   [`dalembert_system::TimeFunction`].
 //! - Forces ([`Force`]): gravity, point forces, torques, spring–dampers.
 //!
 //! ```
@@ -26,6 +28,7 @@
 //! ```
 
 pub mod body;
+pub mod drivers;
 pub mod euler_parameters;
 pub mod forces;
 pub mod frame;
@@ -34,6 +37,7 @@ pub mod model;
 pub mod reactions;
 
 pub use body::Body;
+pub use drivers::{Driver, DriverTarget};
 pub use forces::Force;
 pub use joints::{Joint, JointKind};
 pub use model::{Model, ModelBuilder};

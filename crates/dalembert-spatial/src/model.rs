@@ -19,7 +19,7 @@ use crate::forces::ForceData;
 use crate::frame::{self, Frame, NQ, NV, POSITION_LABELS, VELOCITY_LABELS};
 use crate::joints::primitives::Row;
 use crate::joints::JointData;
-use crate::{Body, BodyRef, Force, Joint};
+use crate::{Body, BodyRef, Driver, Force, Joint};
 use dalembert_system::{
     BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, Layout, ModelError,
     MultibodySystem,
@@ -32,6 +32,7 @@ pub struct ModelBuilder {
     gravity: [f64; 3],
     bodies: Vec<Body>,
     joints: Vec<Joint>,
+    drivers: Vec<Driver>,
     forces: Vec<Force>,
 }
 
@@ -53,6 +54,12 @@ impl ModelBuilder {
     /// Adds a joint (placed in the initial configuration).
     pub fn joint(&mut self, joint: Joint) -> &mut Self {
         self.joints.push(joint);
+        self
+    }
+
+    /// Adds a driver (a prescribed motion).
+    pub fn driver(&mut self, driver: Driver) -> &mut Self {
+        self.drivers.push(driver);
         self
     }
 
@@ -100,6 +107,11 @@ impl ModelBuilder {
             let (bi, bj) = (index(&element, j.body_i)?, index(&element, j.body_j)?);
             joints.push(JointData::new(j, bi, bj, &frame_of(bi), &frame_of(bj))?);
         }
+        let mut drivers = Vec::with_capacity(self.drivers.len());
+        for d in &self.drivers {
+            let element = format!("driver '{}'", d.name);
+            drivers.push(d.data(&joints, &|b| index(&element, b))?);
+        }
         let mut forces = Vec::with_capacity(self.forces.len());
         for f in &self.forces {
             let element = format!("force '{}'", f.name());
@@ -112,7 +124,7 @@ impl ModelBuilder {
         );
         let mut segments = Vec::new();
         let mut equations = Vec::new();
-        for (ji, j) in joints.iter().enumerate() {
+        for (ji, j) in joints.iter().chain(&drivers).enumerate() {
             for k in 0..j.num_equations() {
                 let row = equations.len();
                 equations.push((ji, k));
@@ -125,6 +137,7 @@ impl ModelBuilder {
             gravity: Vector3::from(self.gravity),
             bodies: self.bodies,
             joints,
+            drivers,
             forces,
             layout,
             pattern,
@@ -139,10 +152,12 @@ pub struct Model {
     gravity: Vector3<f64>,
     bodies: Vec<Body>,
     joints: Vec<JointData>,
+    /// Drivers, as constraints after the joints (their rows follow the joints' rows).
+    drivers: Vec<JointData>,
     forces: Vec<ForceData>,
     layout: Layout,
     pattern: ConstraintPattern,
-    /// `(joint, equation within it)` of every row.
+    /// `(joint or driver, equation within it)` of every row (drivers numbered after the joints).
     equations: Vec<(usize, usize)>,
 }
 
@@ -163,6 +178,23 @@ impl Model {
     /// Names of the joints, in order (the order of [`Model::reactions`]).
     pub fn joint_names(&self) -> impl Iterator<Item = &str> {
         self.joints.iter().map(|j| j.name.as_str())
+    }
+
+    /// Names of the drivers, in order (the order of [`Model::driver_efforts`]).
+    pub fn driver_names(&self) -> impl Iterator<Item = &str> {
+        self.drivers.iter().map(|d| d.name.as_str())
+    }
+
+    /// Each driver's effort `−λ` (torque about a driven joint axis, force along a driven
+    /// displacement or coordinate, on the driven body), from the multipliers of all equations.
+    pub fn driver_efforts(&self, lambda: &[f64]) -> Vec<f64> {
+        let first = lambda.len() - self.drivers.len();
+        lambda[first..].iter().map(|l| -l).collect()
+    }
+
+    /// Joints then drivers: every constraint in row order.
+    fn constraint_data(&self) -> impl Iterator<Item = &JointData> {
+        self.joints.iter().chain(&self.drivers)
     }
 
     /// Gravitational acceleration.
@@ -213,7 +245,10 @@ impl ConstraintSet for Model {
 
     fn equation(&self, row: usize) -> EquationRef {
         let (ji, k) = self.equations[row];
-        let j = &self.joints[ji];
+        let j = match ji.checked_sub(self.joints.len()) {
+            None => &self.joints[ji],
+            Some(d) => &self.drivers[d],
+        };
         EquationRef {
             constraint: ji,
             name: j.name.clone(),
@@ -226,18 +261,18 @@ impl ConstraintSet for Model {
         ConstraintValues::new(&self.pattern, 0)
     }
 
-    fn evaluate(&self, _t: f64, q: &[f64], v: &[f64], out: &mut ConstraintValues) {
+    fn evaluate(&self, t: f64, q: &[f64], v: &[f64], out: &mut ConstraintValues) {
         let mut row = 0;
         let mut entry = 0;
         let mut rows = [Row::default(); MAX_PRIMITIVE_ROWS];
-        for j in &self.joints {
+        for j in self.constraint_data() {
             let (fi, fj) = (self.frame(j.body_i, q, v), self.frame(j.body_j, q, v));
             for prim in &j.primitives {
                 let n = prim.len();
-                prim.evaluate(&fi, &fj, &mut rows[..n]);
+                prim.evaluate(t, &fi, &fj, &mut rows[..n]);
                 for r in &rows[..n] {
                     out.c[row] = r.c;
-                    out.c_t[row] = 0.0;
+                    out.c_t[row] = r.c_t;
                     out.gamma[row] = r.gamma;
                     for (body, frame, [lin, ang]) in [(j.body_i, &fi, r.i), (j.body_j, &fj, r.j)] {
                         if body.is_some() {

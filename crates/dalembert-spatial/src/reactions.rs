@@ -32,9 +32,10 @@ impl Reaction {
 }
 
 impl Model {
-    /// The reaction of every joint at `(q, λ)` (`λ` from a formulation or inverse dynamics), in
-    /// joint order. `lambda` must have one entry per constraint equation.
-    pub fn reactions(&self, q: &[f64], lambda: &[f64]) -> Vec<Reaction> {
+    /// The reaction of every joint at `(t, q, λ)` (`λ` from a formulation or inverse dynamics), in
+    /// joint order (drivers excluded: [`Model::driver_efforts`]). `lambda` has one entry per
+    /// constraint equation.
+    pub fn reactions(&self, t: f64, q: &[f64], lambda: &[f64]) -> Vec<Reaction> {
         let mut out = Vec::with_capacity(self.joints().len());
         let mut row = 0;
         let mut rows = [Row::default(); 3];
@@ -44,7 +45,7 @@ impl Model {
             let mut sums = [[Vector3::zeros(); 2]; 2];
             for prim in &j.primitives {
                 let n = prim.len();
-                prim.evaluate(&fi, &fj, &mut rows[..n]);
+                prim.evaluate(t, &fi, &fj, &mut rows[..n]);
                 for r in &rows[..n] {
                     let l = lambda[row];
                     for k in 0..2 {

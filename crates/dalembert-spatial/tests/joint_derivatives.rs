@@ -13,12 +13,17 @@
 //! `h = 1e-4`, truncation `h²C''''/12 ≈ 1e-9` and round-off `4e-16/h² ≈ 4e-8` (tolerance 1e-6).
 
 use dalembert_spatial::euler_parameters::from_axis_angle;
-use dalembert_spatial::{Body, BodyRef, Joint, JointKind, Model, ModelBuilder};
-use dalembert_system::{ConstraintSet, MultibodySystem};
+use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, Model, ModelBuilder};
+use dalembert_system::{ConstraintSet, MultibodySystem, TimeFunction};
 use nalgebra::Vector3;
 
 /// Two bodies in general poses, joined by `kind` (or the second joined to the ground).
 fn model(kind: JointKind, to_ground: bool) -> Model {
+    model_with_driver(kind, to_ground, None)
+}
+
+/// [`model`] with a driver of the joint (named "j") or of a body coordinate.
+fn model_with_driver(kind: JointKind, to_ground: bool, driver: Option<DriverTarget>) -> Model {
     let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
     let first = b.body(
         Body::new("first", 2.0, [0.3, 0.4, 0.5])
@@ -42,6 +47,15 @@ fn model(kind: JointKind, to_ground: bool) -> Model {
         _ => Joint::new("j", kind, i, second, point, axis),
     };
     b.joint(joint);
+    if let Some(target) = driver {
+        let f = TimeFunction::Harmonic {
+            offset: 0.1,
+            amplitude: 0.4,
+            frequency: 0.7,
+            phase: 0.3,
+        };
+        b.driver(Driver::new("motor", target, f));
+    }
     b.build().unwrap()
 }
 
@@ -56,12 +70,70 @@ fn state(m: &Model) -> (Vec<f64>, Vec<f64>) {
     (q, v)
 }
 
-fn constraint_at(m: &Model, q: &[f64], v: &[f64], t: f64) -> Vec<f64> {
+/// `C` at `(q ⊕ s v, t₀ + s)`.
+fn constraint_at(m: &Model, q: &[f64], v: &[f64], t0: f64, s: f64) -> Vec<f64> {
     let mut qt = q.to_vec();
-    m.integrate_positions(&mut qt, v, t);
+    m.integrate_positions(&mut qt, v, s);
     let mut values = m.values();
-    m.evaluate(0.0, &qt, &[], &mut values);
+    m.evaluate(t0 + s, &qt, &[], &mut values);
     values.c
+}
+
+/// Along `(q ⊕ s v, t₀ + s)`: `dC/ds = C_q v + C_t` and `d²C/ds² = −Q_d`, row by row; `passive`
+/// models must have `C_t = 0`.
+fn check_derivatives(m: &Model, t0: f64, what: &str, passive: bool) {
+    let (q, v) = state(m);
+    let mut values = m.values();
+    m.evaluate(t0, &q, &v, &mut values);
+    let rows = ConstraintSet::num_equations(m);
+    let mut cq_v = vec![0.0; rows];
+    m.jacobian_mul(&values, &v, &mut cq_v);
+    let (h1, h2) = (1e-5, 1e-4);
+    let (p1, m1) = (constraint_at(m, &q, &v, t0, h1), constraint_at(m, &q, &v, t0, -h1));
+    let (p2, m2) = (constraint_at(m, &q, &v, t0, h2), constraint_at(m, &q, &v, t0, -h2));
+    for r in 0..rows {
+        let rate = (p1[r] - m1[r]) / (2.0 * h1);
+        let accel = (p2[r] - 2.0 * values.c[r] + m2[r]) / (h2 * h2);
+        let cq = cq_v[r] + values.c_t[r];
+        assert!(
+            (cq - rate).abs() < 1e-8,
+            "{what} row {r}: C_q v + C_t = {cq} vs dC/dt = {rate}"
+        );
+        let qd = -values.gamma[r];
+        assert!(
+            (qd - accel).abs() < 1e-6,
+            "{what} row {r}: −Q_d = {qd} vs d²C/dt² = {accel}"
+        );
+        if passive {
+            assert_eq!(values.c_t[r], 0.0, "{what} row {r}: a passive joint has no C_t");
+        }
+    }
+}
+
+/// Drivers: joint angle (revolute, cylindrical), joint displacement (prismatic, cylindrical),
+/// body coordinate, following a harmonic `f(t)`, at `t₀ = 0.3` (so `f'` and `f''` are not zero).
+#[test]
+fn driver_terms_match_finite_differences() {
+    let cases = [
+        (JointKind::Revolute, DriverTarget::JointAngle("j".into())),
+        (JointKind::Cylindrical, DriverTarget::JointAngle("j".into())),
+        (JointKind::Prismatic, DriverTarget::JointDisplacement("j".into())),
+        (JointKind::Cylindrical, DriverTarget::JointDisplacement("j".into())),
+        (
+            JointKind::Spherical,
+            DriverTarget::BodyCoordinate {
+                body: BodyRef::Body(1),
+                axis: 2,
+            },
+        ),
+    ];
+    for (kind, target) in cases {
+        for to_ground in [false, true] {
+            let what = format!("{} driver {target:?} (ground: {to_ground})", kind.name());
+            let m = model_with_driver(kind, to_ground, Some(target.clone()));
+            check_derivatives(&m, 0.3, &what, false);
+        }
+    }
 }
 
 #[test]
@@ -69,30 +141,7 @@ fn jacobian_and_acceleration_terms_match_finite_differences() {
     for kind in JointKind::ALL {
         for to_ground in [false, true] {
             let m = model(kind, to_ground);
-            let (q, v) = state(&m);
-            let mut values = m.values();
-            m.evaluate(0.0, &q, &v, &mut values);
-            let mut cq_v = vec![0.0; ConstraintSet::num_equations(&m)];
-            m.jacobian_mul(&values, &v, &mut cq_v);
-            let (h1, h2) = (1e-5, 1e-4);
-            let (p1, m1) = (constraint_at(&m, &q, &v, h1), constraint_at(&m, &q, &v, -h1));
-            let (p2, m2) = (constraint_at(&m, &q, &v, h2), constraint_at(&m, &q, &v, -h2));
-            for r in 0..ConstraintSet::num_equations(&m) {
-                let rate = (p1[r] - m1[r]) / (2.0 * h1);
-                let accel = (p2[r] - 2.0 * values.c[r] + m2[r]) / (h2 * h2);
-                let what = format!("{} (ground: {to_ground}) row {r}", kind.name());
-                assert!(
-                    (cq_v[r] + values.c_t[r] - rate).abs() < 1e-8,
-                    "{what}: C_q v = {} vs dC/dt = {rate}",
-                    cq_v[r]
-                );
-                assert!(
-                    (-values.gamma[r] - accel).abs() < 1e-6,
-                    "{what}: −Q_d = {} vs d²C/dt² = {accel}",
-                    -values.gamma[r]
-                );
-                assert_eq!(values.c_t[r], 0.0, "{what}: a passive joint has no C_t");
-            }
+            check_derivatives(&m, 0.0, &format!("{} (ground: {to_ground})", kind.name()), true);
         }
     }
 }

@@ -177,10 +177,9 @@ pub fn complete_frame(axis: &V3) -> [V3; 3] {
 }
 
 /// A joint in body-frame terms: its primitives and the label of each equation.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub(crate) struct JointData {
     pub name: String,
-    pub kind: JointKind,
     pub body_i: Option<usize>,
     pub body_j: Option<usize>,
     pub primitives: Vec<Primitive>,
@@ -189,6 +188,12 @@ pub(crate) struct JointData {
     pub point_i: V3,
     /// The joint frame's axes `x, y, z` on body `i` (body frame, columns).
     pub axes_i: Matrix3<f64>,
+    /// The joint's point and axes on body `j` (drivers measure from them).
+    pub point_j: V3,
+    /// The joint frame's axes on body `j` (body frame, columns).
+    pub axes_j: Matrix3<f64>,
+    /// The joint's kind (`None` for a driver).
+    pub kind: Option<JointKind>,
 }
 
 fn invalid(joint: &Joint, what: impl Into<String>) -> ModelError {
@@ -287,13 +292,15 @@ impl JointData {
         };
         Ok(JointData {
             name: joint.name.clone(),
-            kind: joint.kind,
+            kind: Some(joint.kind),
             body_i,
             body_j,
             primitives,
             labels,
             point_i: si,
             axes_i: fi.a.transpose() * Matrix3::from_columns(&[x, y, z]),
+            point_j: sj,
+            axes_j: fj.a.transpose() * Matrix3::from_columns(&[x, y, z]),
         })
     }
 
