@@ -14,14 +14,22 @@ use dalembert::augmented::Augmented;
 use dalembert::embedding::Embedding;
 use dalembert::integrators::{integrate, IntegratorOptions, Method};
 use dalembert::spatial::{Body, BodyRef, Driver, DriverTarget, Joint, ModelBuilder};
-use dalembert::system::{Formulation, MultibodySystem, TimeFunction};
+use dalembert::system::inverse::InverseDynamics;
+use dalembert::system::{Formulation, KinematicOptions, MultibodySystem, TimeFunction};
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-#[test]
-fn driven_hinge_needs_the_closed_form_torque() {
-    let (m, a, g, j_yy) = (2.0, 0.4, 9.81, 0.05);
-    let (amplitude, frequency) = (0.8, 0.5);
+const M: f64 = 2.0;
+const A: f64 = 0.4;
+const G: f64 = 9.81;
+const J_YY: f64 = 0.05;
+const AMPLITUDE: f64 = 0.8;
+const FREQUENCY: f64 = 0.5;
+
+/// The driven rod, its angle `θ(t)` and the closed-form torque `τ(t)`.
+fn driven_rod() -> (Arc<dalembert::spatial::Model>, impl Fn(f64) -> (f64, f64)) {
+    let (m, a, g, j_yy) = (M, A, G, J_YY);
+    let (amplitude, frequency) = (AMPLITUDE, FREQUENCY);
     let w = 2.0 * PI * frequency;
     let f = TimeFunction::Harmonic {
         offset: 0.0,
@@ -45,7 +53,17 @@ fn driven_hinge_needs_the_closed_form_torque() {
         [0.0, 1.0, 0.0],
     ));
     b.driver(Driver::new("motor", DriverTarget::JointAngle("hinge".into()), f));
-    let model = Arc::new(b.build().unwrap());
+    let j_p = j_yy + m * a * a;
+    let closed_form = move |t: f64| {
+        let theta = amplitude * (w * t).sin();
+        (theta, j_p * (-w * w * theta) - m * g * a * theta.cos())
+    };
+    (Arc::new(b.build().unwrap()), closed_form)
+}
+
+#[test]
+fn driven_hinge_needs_the_closed_form_torque() {
+    let (model, closed_form) = driven_rod();
     let sys: Arc<dyn MultibodySystem> = model.clone();
     let (q0, v0) = model.initial_state();
     let formulations: Vec<Box<dyn Formulation>> = vec![
@@ -53,17 +71,14 @@ fn driven_hinge_needs_the_closed_form_torque() {
         Box::new(Embedding::with_defaults(sys.clone())),
         Box::new(Amalgamated::with_defaults(sys)),
     ];
-    let j_p = j_yy + m * a * a;
     for mut form in formulations {
         let (mut angle_error, mut torque_error, mut samples) = (0.0f64, 0.0f64, 0);
         let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05);
         integrate(form.as_mut(), 0.0, 2.0, &q0, &v0, &opts, &mut |s| {
-            let theta = amplitude * (w * s.t).sin();
-            let theta_dd = -w * w * theta;
-            let torque = j_p * theta_dd - m * g * a * theta.cos();
+            let (theta, torque) = closed_form(s.t);
             let angle = 2.0 * s.q[5].atan2(s.q[3]);
             angle_error = angle_error.max((angle - theta).abs());
-            torque_error = torque_error.max((model.driver_efforts(s.lambda)[0] - torque).abs() / (m * g * a));
+            torque_error = torque_error.max((model.driver_efforts(s.lambda)[0] - torque).abs() / (M * G * A));
             samples += 1;
         })
         .unwrap_or_else(|e| panic!("{}: {e}", form.name()));
@@ -72,6 +87,31 @@ fn driven_hinge_needs_the_closed_form_torque() {
             angle_error < 1e-9 && torque_error < 1e-8,
             "{}: angle off by {angle_error:e}, torque by {torque_error:e} (relative)",
             form.name()
+        );
+    }
+}
+
+/// Inverse dynamics on the seam (`dalembert_system::inverse`) runs the fully driven spatial model
+/// at any time (no integration): the same closed-form torque, to 1e-10 relative (one position
+/// analysis to 1e-12 and one linear solve).
+#[test]
+fn inverse_dynamics_of_the_driven_hinge_gives_the_closed_form_torque() {
+    let (model, closed_form) = driven_rod();
+    let (q0, _) = model.initial_state();
+    let opts = KinematicOptions {
+        tolerance: 1e-12,
+        ..Default::default()
+    };
+    let inverse = InverseDynamics::new(model.clone(), &q0, opts).unwrap();
+    for t in [0.0, 0.37, 0.5, 1.234, 1.9] {
+        let sol = inverse.solve(t, &q0).unwrap();
+        let (theta, torque) = closed_form(t);
+        let angle = 2.0 * sol.q[5].atan2(sol.q[3]);
+        let effort = model.driver_efforts(&sol.lambda)[0];
+        assert!((angle - theta).abs() < 1e-10, "t = {t}: angle {angle} vs {theta}");
+        assert!(
+            (effort - torque).abs() < 1e-10 * M * G * A,
+            "t = {t}: effort {effort} vs {torque}"
         );
     }
 }
