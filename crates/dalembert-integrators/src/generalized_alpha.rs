@@ -316,6 +316,7 @@ impl GeneralizedAlpha {
         w.qp.copy_from_slice(&w.q1);
         w.qdp.copy_from_slice(&w.qd1);
         w.unit.fill(0.0);
+        let largest_position = w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for j in 0..n {
             // K column j (perturbing the position along velocity coordinate j: q ⊕ ε e_j), scaled
             // by β'; D column j (the velocity), by γ'.
@@ -327,7 +328,7 @@ impl GeneralizedAlpha {
                 let size = match (velocity, w.q1.len() == n) {
                     (true, _) => x.abs(),
                     (false, true) => w.q1[j].abs(),
-                    (false, false) => w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs())),
+                    (false, false) => largest_position,
                 };
                 let h = 1e-7 * (1.0 + size);
                 for (sign, out) in [(1.0, &mut w.rp), (-1.0, &mut w.rm)] {
