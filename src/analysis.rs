@@ -186,14 +186,17 @@ impl Scene {
         let inv = InverseDynamics::new(model.clone(), &self.q, KinematicOptions::default())?;
         let sys = model.constraints();
         let steps = (end / every - 1e-9).ceil() as usize;
-        let mut q = self.q.clone();
         let mut cd = vec![0.0; model.num_equations()];
         let mut vals = sys.values();
         let inf = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let mut prev: Option<dalembert_augmented::InverseSolution> = None;
         for i in 0..=steps {
             let t = (i as f64 * every).min(end);
-            let sol = inv.solve(t, &q)?;
-            q.clone_from(&sol.q);
+            // Continuation from the previous instant keeps the motion on its branch.
+            let sol = match &prev {
+                None => inv.solve(t, &self.q)?,
+                Some(p) => inv.advance(p, t)?,
+            };
             sys.evaluate(t, &sol.q, &sol.qd, &mut vals);
             sys.velocity_residual(&vals, &sol.qd, &mut cd);
             observer(&Sample {
@@ -206,6 +209,7 @@ impl Scene {
                 velocity_violation: inf(&cd),
                 energy: model.kinetic_energy(&sol.q, &sol.qd) + model.potential_energy(t, &sol.q),
             });
+            prev = Some(sol);
         }
         Ok(())
     }

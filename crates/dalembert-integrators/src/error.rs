@@ -32,6 +32,20 @@ pub enum IntegrationError {
         /// The step in use.
         step: f64,
     },
+    /// An adaptive method's steps collapsed at a singular position of a closed chain (`C_q` nearly
+    /// rank deficient: links lining up). Stepping on would let the motion leave on the other
+    /// branch without notice, so the run stops here.
+    #[error("t = {time}: {method}'s steps collapse (to {step:.1e} s) at a singular position of the mechanism: the constraint Jacobian is nearly rank deficient (equations involved: {}); an adaptive error-controlled step resolves the perturbed geometry there and may leave on the other branch, so the run stops: pass singular positions with generalized-alpha (positions kept to round-off) or a fixed-step rk4 with projection (docs/stability.md)", list(.involved))]
+    SingularPass {
+        /// Time of the last accepted step.
+        time: f64,
+        /// The integrator.
+        method: &'static str,
+        /// The step the error control asked for.
+        step: f64,
+        /// The equations that become dependent.
+        involved: Vec<dalembert_system::EquationRef>,
+    },
     /// Invalid options.
     #[error("invalid integrator options: {0}")]
     Options(String),
@@ -42,6 +56,11 @@ pub enum IntegrationError {
         /// Time of the last accepted step.
         time: f64,
     },
+}
+
+fn list(eqs: &[dalembert_system::EquationRef]) -> String {
+    let names: Vec<String> = eqs.iter().map(|e| e.to_string()).collect();
+    names.join(", ")
 }
 
 /// An error together with the statistics of the run up to it.

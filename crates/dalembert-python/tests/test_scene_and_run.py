@@ -144,15 +144,33 @@ def test_bad_keywords_name_the_keyword(scenes):
 
 
 def test_integration_error_keeps_the_rows(scenes):
-    """The driven four-bar stops at its change point (t = π/2 s, issue 12): the exception carries
-    the time and every row computed before it."""
-    scene = dalembert.Scene.load(scenes / "driven-four-bar.toml")
+    """The driven four-bar with C rounded to five digits (coupler 3.3 um too long) locks at its dead
+    point, where |BD|^2 = 5 - 4 cos(phi) (phi = pi + 2t the crank angle) falls to (coupler - rocker)^2,
+    t = 1.5697 s: the exception carries the time of the last row kept and every row before it."""
+    text = (scenes / "driven-four-bar.toml").read_text()
+    exact = "at = [1.1666666666666665, -1.2472191289246475]"
+    assert exact in text
+    scene = dalembert.Scene.from_toml(text.replace(exact, "at = [1.16667, -1.24722]"), "rounded.toml")
     with pytest.raises(dalembert.IntegrationError) as info:
         scene.simulate()
     e = info.value
     assert "position analysis" in str(e) or "singular" in str(e) or "rank" in str(e)
-    assert 1.4 < e.time < math.pi / 2 + 0.05
+    # Dead point: 5 - 4 cos(phi) = (coupler - rocker)^2 with phi = 2t + pi, coupler from the points.
+    coupler = math.hypot(1.16667 + 1.0, -1.24722)
+    rocker = math.hypot(1.16667 - 2.0, -1.24722)
+    t_dead = (math.pi - math.acos((5.0 - (coupler - rocker) ** 2) / 4.0)) / 2.0
+    every = 0.05  # the scene's output interval: the last row kept is the one before the dead point
+    assert t_dead - every < e.time <= t_dead
     assert len(e.run) > 10 and e.run.t[-1] == e.time
+
+
+def test_driven_four_bar_passes_its_change_point(scenes):
+    """The shipped (exact) change-point four-bar runs to its end and leaves on the smooth branch: at
+    t = pi the crank is back at its start and the coupler is mirrored (angle +0.5223 instead of
+    -0.5223, from the circle intersection)."""
+    run = dalembert.Scene.load(scenes / "driven-four-bar.toml").simulate()
+    assert abs(run.t[-1] - math.pi) < 1e-12
+    assert abs(run["coupler.angle"][-1] - 0.5223148218060488) < 1e-6
 
 
 def test_scenes_pickle_as_their_text(scenes):

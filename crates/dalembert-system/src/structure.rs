@@ -165,6 +165,42 @@ pub fn dependent_equations<S: ConstraintSet + ?Sized>(
         .collect()
 }
 
+/// The equations of a **nearly** singular `C_q` (a closed chain close to a singular position, where
+/// links line up): `Some` when the singular values above `rank_tolerance × σ_max` (the numerical
+/// rank, which redundant constraints lower permanently) include some below `near_tolerance × σ_max`;
+/// the equations returned are those with weight in the left singular vectors of those values.
+/// `None` for a well-conditioned `C_q` and for more than 600 equations (not checked).
+pub fn near_singular<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    values: &ConstraintValues,
+    near_tolerance: f64,
+    rank_tolerance: f64,
+) -> Option<Vec<EquationRef>> {
+    let m = sys.num_equations();
+    if m == 0 || m > 600 {
+        return None;
+    }
+    let a = sys.jacobian_dense(values);
+    let svd = a.svd().ok()?;
+    let s = svd.S().column_vector();
+    let largest = (0..s.nrows()).map(|i| s[i]).fold(0.0, f64::max);
+    if !(largest > 0.0 && largest.is_finite()) {
+        return None;
+    }
+    let rank = (0..s.nrows()).filter(|&i| s[i] > rank_tolerance * largest).count();
+    let well = (0..s.nrows()).filter(|&i| s[i] > near_tolerance * largest).count();
+    if well >= rank {
+        return None;
+    }
+    let u = svd.U();
+    Some(
+        (0..m)
+            .filter(|&r| (well..rank).any(|j| u[(r, j)].abs() > 1e-3))
+            .map(|r| sys.equation(r))
+            .collect(),
+    )
+}
+
 /// The error for a rank-deficient `C_q` at `values`: rank, and the equations in the dependent set.
 pub fn redundancy_error<S: ConstraintSet + ?Sized>(sys: &S, t: f64, values: &ConstraintValues) -> crate::DynamicsError {
     let s = match analyse_structure(sys, values, 1e-9) {
