@@ -4,8 +4,8 @@
 //! plots it; the Python package returns it.
 
 use crate::scene::{unknown_name, IntegratorKind, StabilizationKind};
-use crate::{FormulationKind, Scene};
-use dalembert_integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use crate::{FormulationKind, Scene, SimulationError};
+use dalembert_integrators::{ConstraintTreatment, IntegrationError, IntegratorOptions, Method};
 
 /// The grid of settings to try. [`TradeGrid::default`] is the command line's default grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -99,23 +99,21 @@ fn samples(
     kind: FormulationKind,
     opts: IntegratorOptions,
     end: f64,
-) -> (Vec<Vec<f64>>, Result<Outcome, String>) {
+) -> (Vec<Vec<f64>>, Result<Outcome, SimulationError>) {
     let mut sim = scene.simulation();
     sim.formulation = kind;
     sim.integrator = opts;
     sim.end = end;
     let mut out = Vec::new();
     let res = sim.run(&mut |s| out.push([s.q, s.qd].concat()));
-    let r = res
-        .map(|st| {
-            (
-                st.wall_time.as_secs_f64(),
-                st.evaluations,
-                st.max_constraint_violation,
-                st.max_energy_change,
-            )
-        })
-        .map_err(|e| e.to_string());
+    let r = res.map(|st| {
+        (
+            st.wall_time.as_secs_f64(),
+            st.evaluations,
+            st.max_constraint_violation,
+            st.max_energy_change,
+        )
+    });
     (out, r)
 }
 
@@ -212,7 +210,11 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
         // An adaptive step cannot cross a singular position of a closed chain (it stops there
         // rather than switch branch): the reference is then a fixed-step RK4 with projection at
         // 1/50 of the smallest grid step (at most 1e-4 s), which steps across.
-        if !e.contains("singular position") {
+        let singular_pass = matches!(
+            &e,
+            SimulationError::Integration(f) if matches!(f.error, IntegrationError::SingularPass { .. })
+        );
+        if !singular_pass {
             return Err(format!("reference run failed: {e}"));
         }
         let smallest = g.steps.iter().cloned().fold(f64::INFINITY, f64::min);
@@ -256,7 +258,7 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
                 error: None,
                 constraint: f64::NAN,
                 energy: f64::NAN,
-                status: e,
+                status: e.to_string(),
             },
         });
         progress(k + 1, total);

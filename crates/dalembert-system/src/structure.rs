@@ -151,18 +151,35 @@ pub fn dependent_equations<S: ConstraintSet + ?Sized>(
     if m > 600 {
         return redundant();
     }
+    singular_vector_rows(sys, values, 1e-6, |s, largest| {
+        let rank = s.iter().filter(|&&v| v > rank_tolerance * largest).count();
+        Some((rank, m))
+    })
+    .unwrap_or_else(redundant)
+}
+
+/// The equations with weight above `weight` in the left singular vectors `from..to` of the dense
+/// `C_q`, the range chosen by `select(singular values, largest)`; `None` when the SVD fails or
+/// `select` declines.
+fn singular_vector_rows<S: ConstraintSet + ?Sized>(
+    sys: &S,
+    values: &ConstraintValues,
+    weight: f64,
+    select: impl Fn(&[f64], f64) -> Option<(usize, usize)>,
+) -> Option<Vec<EquationRef>> {
     let a = sys.jacobian_dense(values);
-    let Ok(svd) = a.svd() else {
-        return redundant();
-    };
-    let s = svd.S().column_vector();
-    let largest = (0..s.nrows()).map(|i| s[i]).fold(0.0, f64::max);
-    let rank = (0..s.nrows()).filter(|&i| s[i] > rank_tolerance * largest).count();
+    let svd = a.svd().ok()?;
+    let col = svd.S().column_vector();
+    let s: Vec<f64> = (0..col.nrows()).map(|i| col[i]).collect();
+    let largest = s.iter().cloned().fold(0.0, f64::max);
+    let (from, to) = select(&s, largest)?;
     let u = svd.U();
-    (0..m)
-        .filter(|&r| (rank..m).any(|j| u[(r, j)].abs() > 1e-6))
-        .map(|r| sys.equation(r))
-        .collect()
+    Some(
+        (0..sys.num_equations())
+            .filter(|&r| (from..to).any(|j| u[(r, j)].abs() > weight))
+            .map(|r| sys.equation(r))
+            .collect(),
+    )
 }
 
 /// The equations of a **nearly** singular `C_q` (a closed chain close to a singular position, where
@@ -180,25 +197,14 @@ pub fn near_singular<S: ConstraintSet + ?Sized>(
     if m == 0 || m > 600 {
         return None;
     }
-    let a = sys.jacobian_dense(values);
-    let svd = a.svd().ok()?;
-    let s = svd.S().column_vector();
-    let largest = (0..s.nrows()).map(|i| s[i]).fold(0.0, f64::max);
-    if !(largest > 0.0 && largest.is_finite()) {
-        return None;
-    }
-    let rank = (0..s.nrows()).filter(|&i| s[i] > rank_tolerance * largest).count();
-    let well = (0..s.nrows()).filter(|&i| s[i] > near_tolerance * largest).count();
-    if well >= rank {
-        return None;
-    }
-    let u = svd.U();
-    Some(
-        (0..m)
-            .filter(|&r| (well..rank).any(|j| u[(r, j)].abs() > 1e-3))
-            .map(|r| sys.equation(r))
-            .collect(),
-    )
+    singular_vector_rows(sys, values, 1e-3, |s, largest| {
+        if !(largest > 0.0 && largest.is_finite()) {
+            return None;
+        }
+        let rank = s.iter().filter(|&&v| v > rank_tolerance * largest).count();
+        let well = s.iter().filter(|&&v| v > near_tolerance * largest).count();
+        (well < rank).then_some((well, rank))
+    })
 }
 
 /// The error for a rank-deficient `C_q` at `values`: rank, and the equations in the dependent set.
