@@ -94,9 +94,14 @@ pub struct Simulation {
     /// Integrator settings.
     pub integrator: IntegratorOptions,
     /// Weights of the initial velocities in [`Simulation::assemble`]: a coordinate whose velocity
-    /// was given explicitly gets a large weight so that it changes least. `None`: all equal.
+    /// was given explicitly gets a large weight so that it changes least; `f64::INFINITY` holds it
+    /// exactly when the constraints allow (otherwise it gets weight 1e6 against the others). `None`:
+    /// all equal.
     pub velocity_weights: Option<Vec<f64>>,
 }
+
+/// Weight of a held velocity that the constraints do not allow to hold exactly.
+const HELD_FALLBACK_WEIGHT: f64 = 1e6;
 
 impl Simulation {
     /// Assembles the initial state: position analysis from the given `q` (least change), then the
@@ -105,13 +110,21 @@ impl Simulation {
         let opts = KinematicOptions::default();
         let sys = self.model.constraints();
         sys.solve_positions(self.start, &mut self.q, &opts)?;
-        sys.solve_velocities_weighted(
-            self.start,
-            &self.q,
-            &mut self.qd,
-            self.velocity_weights.as_deref(),
-            &opts,
-        )?;
+        let weights = self.velocity_weights.as_deref();
+        let given = self.qd.clone();
+        let held = sys.solve_velocities_weighted(self.start, &self.q, &mut self.qd, weights, &opts);
+        if held.is_err() && weights.is_some_and(|w| w.iter().any(|w| w.is_infinite())) {
+            // The held velocities contradict the constraints: keep them as far as they allow.
+            let finite: Vec<f64> = weights
+                .unwrap_or_default()
+                .iter()
+                .map(|&w| if w.is_infinite() { HELD_FALLBACK_WEIGHT } else { w })
+                .collect();
+            self.qd.copy_from_slice(&given);
+            sys.solve_velocities_weighted(self.start, &self.q, &mut self.qd, Some(&finite), &opts)?;
+        } else {
+            held?;
+        }
         Ok(())
     }
 

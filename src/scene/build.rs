@@ -20,9 +20,9 @@ use std::ops::Range;
 use std::sync::Arc;
 use toml::Spanned;
 
-/// Weight of a velocity given in the file in the initial velocity analysis (others weigh 1): the
-/// given values change by about 1e-6 of what unconstrained ones would.
-const GIVEN_VELOCITY_WEIGHT: f64 = 1e6;
+/// Weight of a velocity given in the file in the initial velocity analysis (others weigh 1): held
+/// exactly when the constraints allow it ([`Simulation::velocity_weights`]).
+const GIVEN_VELOCITY_WEIGHT: f64 = f64::INFINITY;
 
 /// Context for errors: file name, text, and the span of the element being built.
 struct Ctx<'a> {

@@ -276,7 +276,9 @@ pub fn solve_positions<S: ConstraintSet + ?Sized>(
 }
 
 /// Velocity analysis minimising the weighted change `Σ w_i Δq̇_i²`: coordinates with a large
-/// weight (velocities the user gave) change least. `None` weighs all equally.
+/// weight (velocities the user gave) change least; a weight of `f64::INFINITY` does not change at
+/// all (an error [`ConstraintError`] if the constraints then cannot be met). `None` weighs all
+/// equally.
 pub fn solve_velocities_weighted<S: ConstraintSet + ?Sized>(
     sys: &S,
     t: f64,

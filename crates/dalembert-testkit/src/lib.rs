@@ -9,6 +9,7 @@ pub mod fuzz;
 pub mod generator;
 pub mod jet;
 pub mod mechanisms;
+pub mod n_four_bar;
 pub mod spatial;
 
 pub use mechanisms::Mechanism;

@@ -1,0 +1,134 @@
+//! The IFToMM A02 N-four-bar (issue 12) against its exact one-degree-of-freedom reduction
+//! (`dalembert_testkit::n_four_bar`: `k θ̈ = −g c cos θ`, derived there by Lagrange's equations).
+//! Every window passes a singular position (all links on the x axis, `C_q` loses `N` ranks) twice
+//! per crank turn: 20 passes in 20 s (21 for N = 1).
+//!
+//! The error measure is the benchmark's: the largest deviation of the point `B₀` (tip of the first
+//! crank) over 400 output steps of 20 s. Its targets: 1e-3 for N = 40, and the issue's 1e-6 for
+//! N = 2.
+//!
+//! What is pinned is what holds today, with the setting docs/stability.md recommends (RK4 with
+//! projection at h = 1 ms). It is **not** robust to the step: measured with
+//! `cargo run --release --example n_four_bar -- 2`, a smaller step lands closer to the singular
+//! position and the embedding and amalgamated formulations leave the branch silently from
+//! h = 5e-4 (B₀ error 2.9e-2 / 4.2e-2, 2.0 at 1e-4), the augmented one at h = 1e-4 (2.6e-2).
+//! `smaller_steps_keep_the_branch` states that target and is ignored until it holds.
+
+use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::scene::Scene;
+use dalembert::simulation::{FormulationKind, SimulationError};
+use dalembert_testkit::n_four_bar::NFourBar;
+
+const END: f64 = 20.0;
+const EVERY: f64 = END / 400.0;
+const PROJECTION: ConstraintTreatment = ConstraintTreatment::Projection { tolerance: 1e-12 };
+
+/// Largest `B₀` error against the reduction over the benchmark's output grid.
+fn b0_error(n: usize, kind: FormulationKind, h: f64) -> Result<f64, SimulationError> {
+    let bar = NFourBar { n };
+    let reference = bar.reference(EVERY, END);
+    let scene = Scene::from_toml(&bar.toml(END), "n-four-bar").unwrap();
+    let mut sim = scene.simulation();
+    sim.formulation = kind;
+    sim.integrator = IntegratorOptions::fixed(Method::Rk4, h, EVERY).with_treatment(PROJECTION);
+    let (mut worst, mut k) = (0.0f64, 0);
+    sim.run(&mut |s| {
+        let (t, th, _) = reference[k];
+        assert!((t - s.t).abs() < 1e-9, "output times {t} and {}", s.t);
+        let (x, y) = NFourBar::b0(s.q);
+        worst = worst.max((x - th.cos()).abs()).max((y - th.sin()).abs());
+        k += 1;
+    })?;
+    assert_eq!(k, reference.len());
+    Ok(worst)
+}
+
+const KINDS: [FormulationKind; 3] = [
+    FormulationKind::Augmented,
+    FormulationKind::Embedding,
+    FormulationKind::Amalgamated,
+];
+
+#[test]
+fn the_scene_starts_on_the_reduction() {
+    // Assembled start: cranks vertical, B₀ at (0, 1) moving at ẋ = 1 m/s exactly (the given crank
+    // rate is held, not merely weighted), every crank at the same rate, couplers translating.
+    let bar = NFourBar { n: 3 };
+    let scene = Scene::from_toml(&bar.toml(1.0), "n-four-bar").unwrap();
+    let sim = scene.simulation();
+    let (x, y) = NFourBar::b0(&sim.q);
+    assert!(x.abs() < 1e-15 && (y - 1.0).abs() < 1e-15, "B0 = ({x}, {y})");
+    for i in 0..=3 {
+        assert!(
+            (sim.qd[3 * i + 2] + 1.0).abs() < 1e-14,
+            "crank {i} rate {}",
+            sim.qd[3 * i + 2]
+        );
+        // Crank centre at half the tip speed: ẋ = +0.5 m/s.
+        assert!((sim.qd[3 * i] - 0.5).abs() < 1e-14 && sim.qd[3 * i + 1].abs() < 1e-14);
+    }
+    for i in 0..3 {
+        let c = 3 * (4 + i);
+        assert!((sim.qd[c] - 1.0).abs() < 1e-14 && sim.qd[c + 1].abs() < 1e-14 && sim.qd[c + 2].abs() < 1e-14);
+    }
+}
+
+#[test]
+fn reference_conserves_the_reduced_energy() {
+    // The reduction's own check: ½ k θ̇² + g c sin θ is its first integral.
+    let bar = NFourBar { n: 40 };
+    let (k, c) = bar.reduced();
+    let energy = |th: f64, w: f64| 0.5 * k * w * w + dalembert_testkit::mechanisms::G * c * th.sin();
+    let r = bar.reference(EVERY, END);
+    let e0 = energy(r[0].1, r[0].2);
+    let worst = r
+        .iter()
+        .map(|&(_, th, w)| (energy(th, w) - e0).abs())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-10 * e0.abs(), "reduced energy drifts by {worst:e}");
+}
+
+#[test]
+fn two_windows_within_the_target_with_every_formulation() {
+    // Target 1e-6 (issue 12). Measured at h = 1 ms: augmented 1.1e-8, embedding 1.1e-7,
+    // amalgamated 1.7e-8.
+    for kind in KINDS {
+        let e = b0_error(2, kind, 1e-3).unwrap();
+        assert!(e < 1e-6, "{}: B0 error {e:e}", kind.name());
+    }
+}
+
+#[test]
+fn one_and_four_windows() {
+    // Measured at h = 1 ms: N = 1: 1.0e-8 / 6.8e-8 / 7.1e-8; N = 4: 1.9e-7 / 9.0e-5 / 1.2e-4
+    // (augmented / embedding / amalgamated). Asserted: 1e-6 for N = 1, and the benchmark's 1e-3
+    // for N = 4 (the embedding and amalgamated lose accuracy at the passes: open in issue 12).
+    for kind in KINDS {
+        let e = b0_error(1, kind, 1e-3).unwrap();
+        assert!(e < 1e-6, "N = 1, {}: B0 error {e:e}", kind.name());
+        let e = b0_error(4, kind, 1e-3).unwrap();
+        assert!(e < 1e-3, "N = 4, {}: B0 error {e:e}", kind.name());
+    }
+}
+
+#[test]
+fn forty_windows_augmented_within_the_benchmark() {
+    // A02 as specified (N = 40, 20 s, high precision 1e-3). Measured: 2.9e-5 in 6.3 s (release).
+    // Embedding 1.9e-2 in 61 s and amalgamated 4.3e-3 in 73 s do not meet it (issue 12 / 11).
+    let e = b0_error(40, FormulationKind::Augmented, 1e-3).unwrap();
+    assert!(e < 1e-3, "B0 error {e:e}");
+}
+
+#[test]
+#[ignore = "open in issue 12: smaller steps land nearer the singular position and leave the branch silently"]
+fn smaller_steps_keep_the_branch() {
+    for kind in KINDS {
+        for h in [5e-4, 2.5e-4, 1e-4] {
+            match b0_error(2, kind, h) {
+                Ok(e) => assert!(e < 1e-6, "{} h = {h}: B0 error {e:e}", kind.name()),
+                // Stopping with the cause is acceptable; a silent branch switch is not.
+                Err(e) => assert!(e.to_string().contains("singular position"), "{e}"),
+            }
+        }
+    }
+}
