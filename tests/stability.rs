@@ -218,18 +218,8 @@ fn stiffness_sweep() {
 /// Reference crank angle of the parallelogram's one-degree-of-freedom equation
 /// `I φ̈ = −g c cos φ`, integrated by RK4 at h = 1e-5 (error ≈ 1e-14).
 fn parallelogram_reference(phi0: f64, w0: f64, inertia: f64, moment: f64, t_end: f64) -> f64 {
-    let acc = |p: f64| -G * moment * p.cos() / inertia;
     let h = 1e-5;
-    let (mut p, mut w) = (phi0, w0);
-    for _ in 0..(t_end / h).round() as usize {
-        let (k1p, k1w) = (w, acc(p));
-        let (k2p, k2w) = (w + 0.5 * h * k1w, acc(p + 0.5 * h * k1p));
-        let (k3p, k3w) = (w + 0.5 * h * k2w, acc(p + 0.5 * h * k2p));
-        let (k4p, k4w) = (w + h * k3w, acc(p + h * k3p));
-        p += h / 6.0 * (k1p + 2.0 * k2p + 2.0 * k3p + k4p);
-        w += h / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
-    }
-    p
+    dalembert_testkit::n_four_bar::crank_rk4(phi0, w0, inertia, moment, h, (t_end / h).round() as usize).0
 }
 
 /// A parallelogram four-bar whirling through its flat (singular) positions, where the degrees of

@@ -85,21 +85,12 @@ impl NFourBar {
     /// error below 1e-13 rad over 20 s, measured by halving).
     pub fn reference(&self, every: f64, end: f64) -> Vec<(f64, f64, f64)> {
         let (k, c) = self.reduced();
-        let f = |th: f64| -G * c * th.cos() / k;
         let (mut th, mut w) = (FRAC_PI_2, -1.0);
         let count = (end / every).round() as usize;
         let sub = 1000.max((every / 5e-5).ceil() as usize);
-        let h = every / sub as f64;
         let mut out = vec![(0.0, th, w)];
         for j in 1..=count {
-            for _ in 0..sub {
-                let (k1q, k1v) = (w, f(th));
-                let (k2q, k2v) = (w + 0.5 * h * k1v, f(th + 0.5 * h * k1q));
-                let (k3q, k3v) = (w + 0.5 * h * k2v, f(th + 0.5 * h * k2q));
-                let (k4q, k4v) = (w + h * k3v, f(th + h * k3q));
-                th += h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
-                w += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-            }
+            (th, w) = crank_rk4(th, w, k, c, every / sub as f64, sub);
             out.push((j as f64 * every, th, w));
         }
         out
@@ -110,4 +101,20 @@ impl NFourBar {
         let (x, y, a) = (q[0], q[1], q[2]);
         (x + 0.5 * a.cos(), y + 0.5 * a.sin())
     }
+}
+
+/// `steps` classic RK4 steps of `h` of a crank under gravity, `k θ̈ = −g c cos θ` (any mechanism
+/// whose one degree of freedom is such a crank angle: the N-four-bar, a parallelogram): `(θ, θ̇)`.
+pub fn crank_rk4(theta: f64, omega: f64, k: f64, c: f64, h: f64, steps: usize) -> (f64, f64) {
+    let f = |th: f64| -G * c * th.cos() / k;
+    let (mut th, mut w) = (theta, omega);
+    for _ in 0..steps {
+        let (k1q, k1v) = (w, f(th));
+        let (k2q, k2v) = (w + 0.5 * h * k1v, f(th + 0.5 * h * k1q));
+        let (k3q, k3v) = (w + 0.5 * h * k2v, f(th + 0.5 * h * k2q));
+        let (k4q, k4v) = (w + h * k3v, f(th + h * k3q));
+        th += h / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
+        w += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    }
+    (th, w)
 }
