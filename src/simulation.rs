@@ -100,9 +100,6 @@ pub struct Simulation {
     pub velocity_weights: Option<Vec<f64>>,
 }
 
-/// Weight of a held velocity that the constraints do not allow to hold exactly.
-const HELD_FALLBACK_WEIGHT: f64 = 1e6;
-
 impl Simulation {
     /// Assembles the initial state: position analysis from the given `q` (least change), then the
     /// least (weighted) change to `q̇` that satisfies the velocity constraints.
@@ -110,21 +107,13 @@ impl Simulation {
         let opts = KinematicOptions::default();
         let sys = self.model.constraints();
         sys.solve_positions(self.start, &mut self.q, &opts)?;
-        let weights = self.velocity_weights.as_deref();
-        let given = self.qd.clone();
-        let held = sys.solve_velocities_weighted(self.start, &self.q, &mut self.qd, weights, &opts);
-        if held.is_err() && weights.is_some_and(|w| w.iter().any(|w| w.is_infinite())) {
-            // The held velocities contradict the constraints: keep them as far as they allow.
-            let finite: Vec<f64> = weights
-                .unwrap_or_default()
-                .iter()
-                .map(|&w| if w.is_infinite() { HELD_FALLBACK_WEIGHT } else { w })
-                .collect();
-            self.qd.copy_from_slice(&given);
-            sys.solve_velocities_weighted(self.start, &self.q, &mut self.qd, Some(&finite), &opts)?;
-        } else {
-            held?;
-        }
+        sys.solve_velocities_weighted(
+            self.start,
+            &self.q,
+            &mut self.qd,
+            self.velocity_weights.as_deref(),
+            &opts,
+        )?;
         Ok(())
     }
 

@@ -276,9 +276,9 @@ pub fn solve_positions<S: ConstraintSet + ?Sized>(
 }
 
 /// Velocity analysis minimising the weighted change `Σ w_i Δq̇_i²`: coordinates with a large
-/// weight (velocities the user gave) change least; a weight of `f64::INFINITY` does not change at
-/// all (an error [`ConstraintError`] if the constraints then cannot be met). `None` weighs all
-/// equally.
+/// weight (velocities the user gave) change least. A weight of `f64::INFINITY` holds the velocity
+/// exactly when the constraints allow it; when they forbid the held values, those weigh
+/// [`HELD_FALLBACK_WEIGHT`] against the others instead. `None` weighs all equally.
 pub fn solve_velocities_weighted<S: ConstraintSet + ?Sized>(
     sys: &S,
     t: f64,
@@ -287,18 +287,57 @@ pub fn solve_velocities_weighted<S: ConstraintSet + ?Sized>(
     weights: Option<&[f64]>,
     opts: &KinematicOptions,
 ) -> Result<(), ConstraintError> {
-    let scale: Option<Vec<f64>> = weights.map(|w| w.iter().map(|w| 1.0 / w.max(f64::MIN_POSITIVE).sqrt()).collect());
+    let scale = |held: f64| -> Option<Vec<f64>> {
+        weights.map(|w| {
+            w.iter()
+                .map(|&w| {
+                    1.0 / if w.is_infinite() {
+                        held
+                    } else {
+                        w.max(f64::MIN_POSITIVE)
+                    }
+                    .sqrt()
+                })
+                .collect()
+        })
+    };
     let mut values = sys.values();
     sys.evaluate(t, q, qd, &mut values);
     let mut rhs = vec![0.0; sys.num_equations()];
     sys.velocity_residual(&values, qd, &mut rhs);
     rhs.iter_mut().for_each(|r| *r = -*r);
     let mut delta = vec![0.0; sys.num_coordinates()];
-    min_norm_step(sys, &values, &rhs, &mut delta, opts, scale.as_deref(), &mut None)
-        .map_err(|e| step_error(sys, t, &values, e, opts))?;
+    let exact = min_norm_step(
+        sys,
+        &values,
+        &rhs,
+        &mut delta,
+        opts,
+        scale(f64::INFINITY).as_deref(),
+        &mut None,
+    );
+    let holds = weights.is_some_and(|w| w.iter().any(|w| w.is_infinite()));
+    if exact.is_err() && holds {
+        min_norm_step(
+            sys,
+            &values,
+            &rhs,
+            &mut delta,
+            opts,
+            scale(HELD_FALLBACK_WEIGHT).as_deref(),
+            &mut None,
+        )
+    } else {
+        exact
+    }
+    .map_err(|e| step_error(sys, t, &values, e, opts))?;
     qd.iter_mut().zip(&delta).for_each(|(x, d)| *x += d);
     Ok(())
 }
+
+/// Weight of a held velocity (`f64::INFINITY` in [`solve_velocities_weighted`]) that the
+/// constraints do not allow to hold exactly, against 1 for the others.
+pub const HELD_FALLBACK_WEIGHT: f64 = 1e6;
 
 /// Acceleration analysis: the least change to `q̈` that satisfies `C_q q̈ = Q_d(q, q̇, t)`.
 pub fn solve_accelerations<S: ConstraintSet + ?Sized>(

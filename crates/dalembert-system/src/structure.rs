@@ -136,7 +136,7 @@ fn has_full_row_rank_sparse<S: ConstraintSet + ?Sized>(
 
 /// Equations involved in a rank loss: the rows with a significant component in the left null
 /// space of `C_q` (from an SVD; systems above 600 equations fall back to the redundant set of
-/// [`ConstraintSystem::analyse_structure`], and to none when that analysis is too large).
+/// [`analyse_structure`], and to none when that analysis is too large).
 pub fn dependent_equations<S: ConstraintSet + ?Sized>(
     sys: &S,
     values: &ConstraintValues,
