@@ -75,8 +75,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let result = sim.run(&mut |s| {
                 if let Some(&(t, th, _)) = reference.get(k) {
                     if (t - s.t).abs() < 1e-9 {
-                        let (x, y) = NFourBar::b0(s.q);
-                        worst = worst.max((x - th.cos()).abs()).max((y - th.sin()).abs());
+                        worst = worst.max(NFourBar::b0_error(s.q, th));
                         k += 1;
                     }
                 }

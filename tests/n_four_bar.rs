@@ -35,8 +35,7 @@ fn b0_error(n: usize, kind: FormulationKind, h: f64) -> Result<f64, SimulationEr
     sim.run(&mut |s| {
         let (t, th, _) = reference[k];
         assert!((t - s.t).abs() < 1e-9, "output times {t} and {}", s.t);
-        let (x, y) = NFourBar::b0(s.q);
-        worst = worst.max((x - th.cos()).abs()).max((y - th.sin()).abs());
+        worst = worst.max(NFourBar::b0_error(s.q, th));
         k += 1;
     })?;
     assert_eq!(k, reference.len());

@@ -101,6 +101,12 @@ impl NFourBar {
         let (x, y, a) = (q[0], q[1], q[2]);
         (x + 0.5 * a.cos(), y + 0.5 * a.sin())
     }
+
+    /// The benchmark's error at one output: `max(|Δx|, |Δy|)` of `B₀` against the crank angle `θ`.
+    pub fn b0_error(q: &[f64], theta: f64) -> f64 {
+        let (x, y) = Self::b0(q);
+        (x - theta.cos()).abs().max((y - theta.sin()).abs())
+    }
 }
 
 /// `steps` classic RK4 steps of `h` of a crank under gravity, `k θ̈ = −g c cos θ` (any mechanism
