@@ -47,7 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let h = 1e-3;
     let mut sim = Simulation {
-        model: model.clone(),
+        model: model.clone().into(),
         qd: vec![0.0; q.len()],
         q,
         start: 0.0,

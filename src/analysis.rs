@@ -3,10 +3,9 @@
 //! ([`Scene::inverse`]) and a simulation kept in memory ([`Scene::record`]). The command line and
 //! the Python package print or convert these; neither computes anything of its own.
 
-use crate::constraints::{ConstraintSet as _, MultibodySystem as _};
 use crate::output::{Recorder, Rows, Table};
 use crate::simulation::SimulationError;
-use crate::Scene;
+use crate::{Mechanism, Scene};
 use dalembert_augmented::InverseDynamics;
 use dalembert_constraints::{ConstraintRole, DynamicsError, KinematicOptions, RedundancyTreatment, Stabilization};
 use dalembert_integrators::{Sample, Statistics};
@@ -82,17 +81,13 @@ impl Scene {
     /// for it, named).
     pub fn check(&self) -> Result<CheckReport, SimulationError> {
         let model = &self.model;
-        let sys = model.constraints();
+        let sys = model.as_system().constraints();
         let mut vals = sys.values();
         sys.evaluate(0.0, &self.q, &self.qd, &mut vals);
         let s = sys.analyse_structure(&vals, 1e-9)?;
         let mut rows = Rows::new(model);
-        let coordinate_names = model
-            .bodies()
-            .iter()
-            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
-            .collect();
-        let (n, m) = (model.num_coordinates(), model.num_equations());
+        let coordinate_names = model.velocity_names();
+        let (n, m) = (model.num_velocities(), model.num_equations());
         let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
         let accelerations = self
             .simulation()
@@ -117,19 +112,18 @@ impl Scene {
                 };
                 let mut row = Vec::new();
                 rows.push(model, &sample, &mut row);
-                let first = 1 + 2 * n;
-                let last = row.len() - 3;
-                rows.names()[first..last]
+                let columns = rows.reaction_columns();
+                rows.names()[columns.clone()]
                     .iter()
                     .cloned()
-                    .zip(row[first..last].iter().copied())
+                    .zip(row[columns].iter().copied())
                     .collect()
             }
             Err(_) => Vec::new(),
         };
         Ok(CheckReport {
             scene: self.name.clone(),
-            bodies: model.bodies().len(),
+            bodies: model.num_bodies(),
             coordinates: s.coordinates,
             equations: s.equations,
             rank: s.rank,
@@ -148,12 +142,13 @@ impl Scene {
     pub fn record(&self, cancel: &AtomicBool) -> Recording {
         let sim = self.simulation();
         let mut rec = Recorder::new(&self.model);
-        let model = self.model.clone();
+        let mechanism = self.model.clone();
+        let model = mechanism.as_system();
         let mut largest_kinetic = 0.0f64;
         let outcome = sim.run_cancellable(
             &mut |s| {
                 largest_kinetic = largest_kinetic.max(model.kinetic_energy(s.q, s.qd));
-                rec.record(&model, s)
+                rec.record(&mechanism, s)
             },
             cancel,
         );
@@ -182,8 +177,8 @@ impl Scene {
                 what: format!("inverse dynamics needs a positive end and interval, got end {end}, every {every}"),
             });
         }
-        let model = &self.model;
-        let inv = InverseDynamics::new(model.clone(), &self.q, KinematicOptions::default())?;
+        let model = self.model.as_system();
+        let inv = InverseDynamics::new(self.model.system(), &self.q, KinematicOptions::default())?;
         let sys = model.constraints();
         let steps = (end / every - 1e-9).ceil() as usize;
         let mut cd = vec![0.0; model.num_equations()];
@@ -225,12 +220,15 @@ impl Scene {
 
     /// The names of the scene's drivers, in the order of their `<driver>.effort` columns.
     pub fn drivers(&self) -> Vec<String> {
-        self.model
-            .constraints()
-            .constraints()
-            .iter()
-            .filter(|c| c.role() == ConstraintRole::Driver)
-            .map(|c| c.name().to_string())
-            .collect()
+        match &self.model {
+            Mechanism::Planar(m) => m
+                .constraints()
+                .constraints()
+                .iter()
+                .filter(|c| c.role() == ConstraintRole::Driver)
+                .map(|c| c.name().to_string())
+                .collect(),
+            Mechanism::Spatial(m) => m.driver_names().map(String::from).collect(),
+        }
     }
 }

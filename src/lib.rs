@@ -19,6 +19,7 @@
 
 pub mod analysis;
 pub mod animation;
+pub mod mechanism;
 pub mod output;
 pub mod scene;
 pub mod simulation;
@@ -35,6 +36,7 @@ pub use dalembert_spatial as spatial;
 pub use dalembert_system as system;
 
 pub use analysis::{CheckReport, Recording};
+pub use mechanism::Mechanism;
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError, SceneValue};
 pub use simulation::{energy_warning, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION};

@@ -1,16 +1,13 @@
 //! A model, a formulation and an integrator, run together.
 
-use crate::constraints::{ConstraintSet as _, MultibodySystem as _};
+use crate::mechanism::Mechanism;
 use dalembert_amalgamated::Amalgamated;
 use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::structure::dense_fits;
-use dalembert_constraints::{
-    ConstraintError, DynamicsError, Formulation, KinematicOptions, Model, RedundancyTreatment,
-};
+use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, RedundancyTreatment};
 use dalembert_embedding::{Embedding, EmbeddingOptions};
 use dalembert_integrators::{integrate_cancellable, IntegrationFailure, IntegratorOptions, Sample, Statistics};
 use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
 use thiserror::Error;
 
 /// Which formulation of the equations of motion to use.
@@ -76,8 +73,8 @@ pub enum SimulationError {
 /// A model with an initial state and the settings of a run.
 #[derive(Debug, Clone)]
 pub struct Simulation {
-    /// The model.
-    pub model: Arc<Model>,
+    /// The model (planar or spatial).
+    pub model: Mechanism,
     /// Initial positions (approximate is fine: [`Simulation::assemble`] fixes them).
     pub q: Vec<f64>,
     /// Initial velocities (made consistent by [`Simulation::assemble`]).
@@ -105,7 +102,7 @@ impl Simulation {
     /// least (weighted) change to `q̇` that satisfies the velocity constraints.
     pub fn assemble(&mut self) -> Result<(), SimulationError> {
         let opts = KinematicOptions::default();
-        let sys = self.model.constraints();
+        let sys = self.model.as_system().constraints();
         sys.solve_positions(self.start, &mut self.q, &opts)?;
         sys.solve_velocities_weighted(
             self.start,
@@ -122,7 +119,7 @@ impl Simulation {
         // The embedding and amalgamated formulations still partition the coordinates on a dense
         // C_q (m × n) and the embedding keeps a dense B_i (n × dof): refuse models whose dense
         // matrices would not fit, naming the size, instead of failing in the allocator.
-        let (n, m) = (self.model.num_coordinates(), self.model.num_equations());
+        let (n, m) = (self.model.num_velocities(), self.model.num_equations());
         let too_large = match self.formulation {
             FormulationKind::Augmented => None,
             _ if !dense_fits(m, n) => Some((m, n)),
@@ -143,22 +140,23 @@ impl Simulation {
             )));
         }
         let redundancy = self.redundancy;
+        let system = self.model.system();
         Ok(match self.formulation {
             FormulationKind::Augmented => Box::new(Augmented::new(
-                self.model.clone(),
+                system,
                 AugmentedOptions {
                     redundancy,
                     ..Default::default()
                 },
             )?),
             FormulationKind::Embedding => Box::new(Embedding::new(
-                self.model.clone(),
+                system,
                 EmbeddingOptions {
                     redundancy,
                     ..Default::default()
                 },
             )),
-            FormulationKind::Amalgamated => Box::new(Amalgamated::new(self.model.clone(), redundancy)),
+            FormulationKind::Amalgamated => Box::new(Amalgamated::new(system, redundancy)),
         })
     }
 

@@ -152,7 +152,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
     let (model, q) = chain(40_000);
     let n = q.len();
     let mut sim = Simulation {
-        model: std::sync::Arc::new(model),
+        model: model.into(),
         q,
         qd: vec![0.0; n],
         start: 0.0,
@@ -184,7 +184,7 @@ fn generalized_alpha_refuses_models_its_dense_matrix_cannot_hold() {
     let (model, q) = chain(40_000);
     let n = q.len();
     let sim = Simulation {
-        model: std::sync::Arc::new(model),
+        model: model.into(),
         q,
         qd: vec![0.0; n],
         start: 0.0,

@@ -35,7 +35,7 @@ fn every_method_runs_on_every_formulation() {
             FormulationKind::Amalgamated,
         ] {
             let sim = Simulation {
-                model: mech.model.clone(),
+                model: mech.model.clone().into(),
                 q: mech.q.clone(),
                 qd: mech.qd.clone(),
                 start: 0.0,

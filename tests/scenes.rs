@@ -38,8 +38,8 @@ fn every_shipped_scene_loads_assembles_and_runs() {
 fn issue_example_loads_as_written() {
     let scene = Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/slider-crank.toml")).unwrap();
     assert_eq!(scene.name, "slider-crank driven by a spring");
-    assert_eq!(scene.model.bodies().len(), 3);
-    assert_eq!(scene.model.num_equations(), 8);
+    assert_eq!(scene.model.planar().unwrap().bodies().len(), 3);
+    assert_eq!(scene.model.planar().unwrap().num_equations(), 8);
     // Held exactly: the constraints leave the crank rate free (one degree of freedom).
     assert!((scene.qd[2] - 2.0).abs() < 1e-14, "crank ω {}", scene.qd[2]);
     // The crank's centre is its midpoint in the file, so the crank pin B is at twice its centre.
@@ -50,7 +50,7 @@ fn issue_example_loads_as_written() {
     let l = ((2.2026f64 - 0.25).powi(2) + 0.4330f64.powi(2)).sqrt();
     let x = r * phi.cos() + (l * l - r * r * phi.sin().powi(2)).sqrt();
     assert!((scene.q[6] - x).abs() < 1e-10, "slider x {} vs {x}", scene.q[6]);
-    let sys = scene.model.constraints();
+    let sys = scene.model.planar().unwrap().constraints();
     let mut v = sys.values();
     sys.evaluate(0.0, &scene.q, &scene.qd, &mut v);
     let mut cd = vec![0.0; 8];
@@ -297,9 +297,9 @@ integrator = "dopri5"
 stabilization = "projection"
 "#;
     let scene = Scene::from_toml(text, "all.toml").unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(scene.model.constraints().constraints().len(), 10);
-    assert_eq!(scene.model.forces().len(), 5); // gravity + 4
-    let sys = scene.model.constraints();
+    assert_eq!(scene.model.planar().unwrap().constraints().constraints().len(), 10);
+    assert_eq!(scene.model.planar().unwrap().forces().len(), 5); // gravity + 4
+    let sys = scene.model.planar().unwrap().constraints();
     let mut v = sys.values();
     sys.evaluate(0.0, &scene.q, &[], &mut v);
     let s = sys.analyse_structure(&v, 1e-9).unwrap();

@@ -10,9 +10,9 @@ mod read;
 mod table;
 
 pub use read::{read_columns, ResultCsvError, ResultTable};
-pub use table::{Recorder, Rows, Table};
+pub use table::{Recorder, Rows, Table, SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS};
 
-use dalembert_constraints::Model;
+use crate::mechanism::Mechanism;
 use dalembert_integrators::Sample;
 use std::io::{self, Write};
 use std::time::{Duration, Instant};
@@ -49,7 +49,7 @@ pub fn write_number(w: &mut impl Write, x: f64) -> io::Result<()> {
 
 impl<W: Write> CsvOutput<W> {
     /// Writes the header for `model` and returns the writer.
-    pub fn new(model: &Model, mut out: W) -> io::Result<Self> {
+    pub fn new(model: &Mechanism, mut out: W) -> io::Result<Self> {
         let rows_of = Rows::new(model);
         {
             let mut header = csv::WriterBuilder::new()
@@ -82,7 +82,7 @@ impl<W: Write> CsvOutput<W> {
     }
 
     /// Writes one sample. I/O errors are kept and reported by [`CsvOutput::finish`].
-    pub fn write(&mut self, model: &Model, s: &Sample<'_>) {
+    pub fn write(&mut self, model: &Mechanism, s: &Sample<'_>) {
         if self.error.is_some() {
             return;
         }

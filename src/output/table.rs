@@ -5,28 +5,62 @@
 //! a numpy array and a sweep.
 
 use crate::constraints::ConstraintSet as _;
+use crate::mechanism::Mechanism;
 use dalembert_constraints::{ConstraintRole, ConstraintValues, Model, Reaction};
 use dalembert_integrators::Sample;
+use dalembert_spatial::frame::Frame;
 
 /// The output columns of one model and the scratch space to compute a row (allocation-free after
 /// construction).
 #[derive(Debug, Clone)]
 pub struct Rows {
     names: Vec<String>,
-    roles: Vec<ConstraintRole>,
-    values: ConstraintValues,
-    reactions: Vec<Reaction>,
+    /// Index of the first reaction or effort column.
+    first_reaction: usize,
+    scratch: Scratch,
 }
+
+/// What a row is computed with, per kind of model.
+#[derive(Debug, Clone)]
+enum Scratch {
+    Planar {
+        roles: Vec<ConstraintRole>,
+        values: ConstraintValues,
+        reactions: Vec<Reaction>,
+    },
+    Spatial {
+        reactions: Vec<dalembert_spatial::Reaction>,
+        drivers: usize,
+    },
+}
+
+/// The columns of a spatial body: centre of mass, Euler parameters, centre-of-mass velocity and
+/// angular velocity (global components).
+pub const SPATIAL_BODY_COLUMNS: [&str; 13] = [
+    "x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
+];
+
+/// The columns of a spatial joint: force and moment (about the joint's point) that its second body
+/// exerts on its first, global components.
+pub const SPATIAL_JOINT_COLUMNS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
 
 impl Rows {
     /// The columns of `model` (see the module documentation of [`crate::output`]).
-    pub fn new(model: &Model) -> Self {
+    pub fn new(model: &Mechanism) -> Self {
+        match model {
+            Mechanism::Planar(m) => Rows::planar(m),
+            Mechanism::Spatial(m) => Rows::spatial(m),
+        }
+    }
+
+    fn planar(model: &Model) -> Self {
         let mut names = vec!["t".to_string()];
         for b in model.bodies() {
             for c in ["x", "y", "angle", "vx", "vy", "omega"] {
                 names.push(format!("{}.{c}", b.name));
             }
         }
+        let first_reaction = names.len();
         let sys = model.constraints();
         let roles: Vec<ConstraintRole> = sys.constraints().iter().map(|c| c.role()).collect();
         for (c, role) in sys.constraints().iter().zip(&roles) {
@@ -41,12 +75,46 @@ impl Rows {
                 ConstraintRole::Driver => names.push(format!("{}.effort", c.name())),
             }
         }
-        names.extend(["energy", "constraint_violation", "velocity_violation"].map(String::from));
+        names.extend(TRAILING_COLUMNS.map(String::from));
         Rows {
             names,
-            values: sys.values(),
-            reactions: vec![Reaction::default(); roles.len()],
-            roles,
+            first_reaction,
+            scratch: Scratch::Planar {
+                values: sys.values(),
+                reactions: vec![Reaction::default(); roles.len()],
+                roles,
+            },
+        }
+    }
+
+    fn spatial(model: &dalembert_spatial::Model) -> Self {
+        let mut names = vec!["t".to_string()];
+        for b in model.bodies() {
+            names.extend(SPATIAL_BODY_COLUMNS.iter().map(|c| format!("{}.{c}", b.name)));
+        }
+        let first_reaction = names.len();
+        for j in model.joint_names() {
+            names.extend(SPATIAL_JOINT_COLUMNS.iter().map(|c| format!("{j}.{c}")));
+        }
+        let drivers: Vec<String> = model.driver_names().map(|d| format!("{d}.effort")).collect();
+        let n_drivers = drivers.len();
+        names.extend(drivers);
+        names.extend(TRAILING_COLUMNS.map(String::from));
+        Rows {
+            names,
+            first_reaction,
+            scratch: Scratch::Spatial {
+                reactions: vec![
+                    dalembert_spatial::Reaction {
+                        force: Default::default(),
+                        moment: Default::default(),
+                        point: Default::default(),
+                        axes: Default::default(),
+                    };
+                    model.joint_names().count()
+                ],
+                drivers: n_drivers,
+            },
         }
     }
 
@@ -55,31 +123,67 @@ impl Rows {
         &self.names
     }
 
+    /// The indices of the reaction and driver-effort columns (`<joint>.fx`, …, `<driver>.effort`).
+    pub fn reaction_columns(&self) -> std::ops::Range<usize> {
+        self.first_reaction..self.names.len() - TRAILING_COLUMNS.len()
+    }
+
     /// Appends the row of sample `s` (one number per column) to `row`: positions and velocities,
     /// the reactions from the sample's multipliers, energy and constraint violations.
-    pub fn push(&mut self, model: &Model, s: &Sample<'_>, row: &mut Vec<f64>) {
-        let sys = model.constraints();
-        sys.evaluate(s.t, s.q, s.qd, &mut self.values);
-        sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
+    ///
+    /// # Panics
+    /// When `model` is not the model these rows were made for (another kind of model).
+    pub fn push(&mut self, model: &Mechanism, s: &Sample<'_>, row: &mut Vec<f64>) {
         row.push(s.t);
-        for i in 0..s.q.len() / 3 {
-            row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
-            row.extend_from_slice(&s.qd[3 * i..3 * i + 3]);
-        }
-        for (r, role) in self.reactions.iter().zip(&self.roles) {
-            match role {
-                ConstraintRole::Joint { carries_torque } => {
-                    row.extend_from_slice(&[r.force.x, r.force.y]);
-                    if *carries_torque {
-                        row.push(r.torque);
+        match (&mut self.scratch, model) {
+            (
+                Scratch::Planar {
+                    roles,
+                    values,
+                    reactions,
+                },
+                Mechanism::Planar(model),
+            ) => {
+                let sys = model.constraints();
+                sys.evaluate(s.t, s.q, s.qd, values);
+                sys.reactions(s.q, values, s.lambda, reactions);
+                for i in 0..s.q.len() / 3 {
+                    row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
+                    row.extend_from_slice(&s.qd[3 * i..3 * i + 3]);
+                }
+                for (r, role) in reactions.iter().zip(roles.iter()) {
+                    match role {
+                        ConstraintRole::Joint { carries_torque } => {
+                            row.extend_from_slice(&[r.force.x, r.force.y]);
+                            if *carries_torque {
+                                row.push(r.torque);
+                            }
+                        }
+                        ConstraintRole::Driver => row.push(r.effort.unwrap_or(f64::NAN)),
                     }
                 }
-                ConstraintRole::Driver => row.push(r.effort.unwrap_or(f64::NAN)),
             }
+            (Scratch::Spatial { reactions, drivers }, Mechanism::Spatial(model)) => {
+                for i in 0..model.bodies().len() {
+                    let f = Frame::of(i, s.q, s.qd);
+                    row.extend_from_slice(&s.q[7 * i..7 * i + 7]);
+                    row.extend(f.v.iter().chain(f.w.iter()));
+                }
+                model.reactions_into(s.t, s.q, s.lambda, reactions);
+                for r in reactions.iter() {
+                    row.extend(r.force.iter().chain(r.moment.iter()));
+                }
+                let first = s.lambda.len() - *drivers;
+                row.extend(s.lambda[first..].iter().map(|l| -l));
+            }
+            _ => panic!("output rows made for another kind of model"),
         }
         row.extend_from_slice(&[s.energy, s.constraint_violation, s.velocity_violation]);
     }
 }
+
+/// The last columns of every row.
+const TRAILING_COLUMNS: [&str; 3] = ["energy", "constraint_violation", "velocity_violation"];
 
 /// A run's output in memory: named columns, one row per output sample (row-major).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -132,7 +236,7 @@ pub struct Recorder {
 
 impl Recorder {
     /// An empty table with the columns of `model`.
-    pub fn new(model: &Model) -> Self {
+    pub fn new(model: &Mechanism) -> Self {
         let rows = Rows::new(model);
         let table = Table {
             columns: rows.names().to_vec(),
@@ -142,7 +246,7 @@ impl Recorder {
     }
 
     /// Appends sample `s`.
-    pub fn record(&mut self, model: &Model, s: &Sample<'_>) {
+    pub fn record(&mut self, model: &Mechanism, s: &Sample<'_>) {
         self.rows.push(model, s, &mut self.table.data);
     }
 

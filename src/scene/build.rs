@@ -22,7 +22,7 @@ use toml::Spanned;
 
 /// Weight of a velocity given in the file in the initial velocity analysis (others weigh 1): held
 /// exactly when the constraints allow it ([`Simulation::velocity_weights`]).
-const GIVEN_VELOCITY_WEIGHT: f64 = f64::INFINITY;
+pub(crate) const GIVEN_VELOCITY_WEIGHT: f64 = f64::INFINITY;
 
 /// Context for errors: file name, text, and the span of the element being built.
 struct Ctx<'a> {
@@ -346,10 +346,10 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         forces.push(element);
     }
     let model = Model::new(bodies, forces, constraints).map_err(|e| b.ctx.err(None, e.to_string()))?;
-    let settings = settings(&b, file.simulation.as_ref())?;
+    let settings = settings(b.ctx.file, b.ctx.text, file.simulation.as_ref())?;
     let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
     let mut sim = Simulation {
-        model: Arc::new(model),
+        model: Arc::new(model).into(),
         q: b.q.clone(),
         qd,
         start: 0.0,
@@ -586,7 +586,8 @@ fn force(
     Ok((element, mark))
 }
 
-fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSettings, SceneError> {
+/// The run settings of a `[simulation]` table (`file` and `text` for errors).
+pub(crate) fn settings(file: &str, text: &str, sim: Option<&Spanned<SimDef>>) -> Result<RunSettings, SceneError> {
     let mut s = RunSettings {
         end: 1.0,
         formulation: FormulationKind::Augmented,
@@ -602,7 +603,7 @@ fn settings(b: &Builder<'_>, sim: Option<&Spanned<SimDef>>) -> Result<RunSetting
     let Some(sim) = sim else { return Ok(s) };
     let span = sim.span();
     let d = sim.get_ref();
-    let err = |m: String| b.ctx.err(Some(span.clone()), format!("[simulation]: {m}"));
+    let err = |m: String| SceneError::at(file, text, Some(span.clone()), format!("[simulation]: {m}"));
     if let Some(f) = &d.formulation {
         s.formulation =
             FormulationKind::parse(f).ok_or_else(|| err(unknown_name("formulation", f, FormulationKind::NAMES)))?;

@@ -10,6 +10,7 @@ mod error;
 mod format;
 mod functions;
 mod overrides;
+mod spatial;
 mod strict;
 mod values;
 
@@ -17,11 +18,11 @@ pub use error::{one_line, SceneError};
 pub use overrides::{RunOverrides, Spelling};
 pub use values::SceneValue;
 
+use crate::mechanism::Mechanism;
 use crate::simulation::{FormulationKind, Simulation};
-use dalembert_constraints::{Model, RedundancyTreatment, Stabilization};
+use dalembert_constraints::{RedundancyTreatment, Stabilization};
 use dalembert_integrators::{ConstraintTreatment, IntegratorOptions, Method};
 use std::path::Path;
-use std::sync::Arc;
 
 /// Settings of the `[simulation]` table, with defaults for everything but `end`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -177,13 +178,22 @@ impl RunSettings {
     }
 }
 
+/// True when the scene's `[scene] gravity` has three components: a spatial scene.
+fn is_spatial(text: &str) -> bool {
+    let Ok(table) = toml::from_str::<toml::Table>(text) else {
+        return false;
+    };
+    let gravity = table.get("scene").and_then(|s| s.get("gravity"));
+    matches!(gravity, Some(toml::Value::Array(a)) if a.len() == 3)
+}
+
 /// A loaded, assembled scene.
 #[derive(Debug, Clone)]
 pub struct Scene {
     /// `[scene] name`, or the file name.
     pub name: String,
-    /// The model.
-    pub model: Arc<Model>,
+    /// The model (planar, or spatial when the scene's gravity has three components).
+    pub model: Mechanism,
     /// Assembled positions.
     pub q: Vec<f64>,
     /// Consistent velocities.
@@ -210,6 +220,13 @@ impl Scene {
 
     /// Builds and assembles a scene from TOML text; `origin` names it in errors.
     pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        if is_spatial(text) {
+            let file: spatial::SpatialFile = toml::from_str(text).map_err(|e| {
+                spatial::planar_body_in_spatial_scene(text, origin)
+                    .unwrap_or_else(|| SceneError::parse(origin, text, &e))
+            })?;
+            return spatial::build(file, text, origin);
+        }
         let file: format::SceneFile = toml::from_str(text).map_err(|e| SceneError::parse(origin, text, &e))?;
         build::build(file, text, origin)
     }

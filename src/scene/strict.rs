@@ -53,17 +53,12 @@ pub(crate) fn xy_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>
     xy(d).map(Some)
 }
 
-/// Deserializes an optional `[gx, gy]` gravity: a third component is refused with the reason.
+/// Deserializes an optional `[gx, gy]` gravity (a scene with `[gx, gy, gz]` is spatial and read by
+/// the spatial format).
 pub(crate) fn gravity_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
-    let v = Value::deserialize(d)?;
-    if let Value::Array(a) = &v {
-        if a.len() == 3 {
-            return Err(D::Error::custom(
-                "expected [gx, gy]: scenes are planar (a 3-vector gravity will mean a spatial scene once spatial bodies exist)",
-            ));
-        }
-    }
-    pair(&v, "[gx, gy] (two numbers)").map(Some).map_err(D::Error::custom)
+    pair(&Value::deserialize(d)?, "[gx, gy] (planar) or [gx, gy, gz] (spatial)")
+        .map(Some)
+        .map_err(D::Error::custom)
 }
 
 /// Deserializes `[first, second]`: exactly two names.
@@ -152,5 +147,107 @@ impl<'de> Deserialize<'de> for ValueDef {
                 describe(&other)
             ))),
         }
+    }
+}
+
+/// Exactly `N` numbers; `what` says what was expected.
+fn numbers<const N: usize>(v: &Value, what: &str) -> Result<[f64; N], String> {
+    match v {
+        Value::Array(a) if a.len() == N => {
+            let mut out = [0.0; N];
+            for (o, e) in out.iter_mut().zip(a) {
+                *o = number(e).ok_or_else(|| format!("expected {what}, found {} in it", describe(e)))?;
+            }
+            Ok(out)
+        }
+        Value::Array(a) if a.len() == 1 => Err(format!("expected {what}, got 1 element")),
+        Value::Array(a) => Err(format!("expected {what}, got {} elements", a.len())),
+        other => Err(format!("expected {what}, got {}", describe(other))),
+    }
+}
+
+/// Deserializes `[x, y, z]` (a spatial scene's vector: two numbers get a reminder of why three
+/// are expected).
+pub(crate) fn xyz<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    let v = Value::deserialize(d)?;
+    if matches!(&v, Value::Array(a) if a.len() == 2) {
+        return Err(D::Error::custom(
+            "expected [x, y, z] (three numbers): the scene is spatial because its gravity has three components, got 2 elements",
+        ));
+    }
+    numbers(&v, "[x, y, z] (three numbers)").map_err(D::Error::custom)
+}
+
+/// Deserializes an optional `[x, y, z]`.
+pub(crate) fn xyz_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 3]>, D::Error> {
+    xyz(d).map(Some)
+}
+
+/// Deserializes an optional quaternion `[e0, e1, e2, e3]`.
+pub(crate) fn quaternion_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[f64; 4]>, D::Error> {
+    numbers(
+        &Value::deserialize(d)?,
+        "[e0, e1, e2, e3] (four numbers, e0 the scalar part)",
+    )
+    .map(Some)
+    .map_err(D::Error::custom)
+}
+
+/// Deserializes an optional pair of axes `[[x1, y1, z1], [x2, y2, z2]]`.
+pub(crate) fn two_axes_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f64; 3]; 2]>, D::Error> {
+    two_xyz(&Value::deserialize(d)?, "two axes [[x1, y1, z1], [x2, y2, z2]]")
+        .map(Some)
+        .map_err(D::Error::custom)
+}
+
+fn two_xyz(v: &Value, what: &str) -> Result<[[f64; 3]; 2], String> {
+    match v {
+        Value::Array(a) if a.len() == 2 => {
+            let p = |k: usize| numbers(&a[k], "each as [x, y, z] (three numbers)").map_err(|e| format!("{what}: {e}"));
+            Ok([p(0)?, p(1)?])
+        }
+        other => Err(format!("expected {what}, got {}", describe(other))),
+    }
+}
+
+/// One global point `[x, y, z]`, or two (for elements between two points).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Points3 {
+    One([f64; 3]),
+    Two([[f64; 3]; 2]),
+}
+
+impl<'de> Deserialize<'de> for Points3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        let nested = matches!(&v, Value::Array(a) if a.first().is_some_and(|e| e.is_array()));
+        if nested {
+            two_xyz(&v, "two points [[x1, y1, z1], [x2, y2, z2]]").map(Points3::Two)
+        } else {
+            numbers(&v, "a point [x, y, z] or two points [[x1, y1, z1], [x2, y2, z2]]").map(Points3::One)
+        }
+        .map_err(D::Error::custom)
+    }
+}
+
+/// A spatial body's inertia: three principal moments along the body axes, or the six components
+/// `[Jxx, Jyy, Jzz, Jxy, Jxz, Jyz]` of the tensor in the body frame.
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Inertia3 {
+    Principal([f64; 3]),
+    Tensor([f64; 6]),
+}
+
+impl<'de> Deserialize<'de> for Inertia3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Value::deserialize(d)?;
+        const WHAT: &str =
+            "[Jx, Jy, Jz] (principal moments along the body axes) or [Jxx, Jyy, Jzz, Jxy, Jxz, Jyz] (tensor components)";
+        match &v {
+            Value::Array(a) if a.len() == 6 => numbers(&v, WHAT).map(Inertia3::Tensor),
+            Value::Array(a) if a.len() == 3 => numbers(&v, WHAT).map(Inertia3::Principal),
+            _ => numbers::<3>(&v, WHAT).map(Inertia3::Principal),
+        }
+        .map_err(D::Error::custom)
     }
 }

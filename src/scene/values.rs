@@ -94,7 +94,7 @@ impl Scene {
     /// # fn main() -> Result<(), dalembert::SceneError> {
     /// let scene = dalembert::Scene::from_path("scenes/slider-crank.toml")?;
     /// let heavier = scene.with_values(&[("bodies.slider.mass", 2.0.into())])?;
-    /// assert_eq!(heavier.model.bodies()[2].mass, 2.0);
+    /// assert_eq!(heavier.model.planar().unwrap().bodies()[2].mass, 2.0);
     /// # Ok(()) }
     /// ```
     pub fn with_values(&self, values: &[(&str, SceneValue)]) -> Result<Scene, SceneError> {

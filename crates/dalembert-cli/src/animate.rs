@@ -27,6 +27,12 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), String> {
     let scene = load(&a.scene, &a.run)?;
+    if scene.model.is_spatial() {
+        return Err(format!(
+            "{}: the scene is spatial and the animation viewer draws planar scenes only (simulate --output writes its motion as CSV)",
+            a.scene.display()
+        ));
+    }
     let traces = a
         .trace
         .iter()

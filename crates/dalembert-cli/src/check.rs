@@ -1,6 +1,6 @@
 //! `dalembert check`: prints [`dalembert::Scene::check`].
 
-use dalembert::Scene;
+use dalembert::{CheckReport, Scene};
 use std::path::Path;
 
 pub fn run(path: &Path) -> Result<(), String> {
@@ -25,57 +25,10 @@ pub fn run(path: &Path) -> Result<(), String> {
     }
     outln!("assembled    largest |C| = {:.2e}", r.max_violation);
     if let Ok(qdd) = &r.accelerations {
-        outln!("\ninitial accelerations (t = 0)");
-        outln!(
-            "{:>16} {:>14} {:>14} {:>14}",
-            "body",
-            "ẍ [m/s²]",
-            "ÿ [m/s²]",
-            "θ̈ [rad/s²]"
-        );
-        for (i, b) in scene.model.bodies().iter().enumerate() {
-            outln!(
-                "{:>16} {:14.6} {:14.6} {:14.6}",
-                b.name,
-                qdd[3 * i],
-                qdd[3 * i + 1],
-                qdd[3 * i + 2]
-            );
-        }
-        outln!("\ninitial reactions (on the first body from the second, global)");
-        outln!(
-            "{:>16} {:>14} {:>14} {:>14}",
-            "joint / driver",
-            "fx [N]",
-            "fy [N]",
-            "torque / effort"
-        );
-        // One line per joint or driver: its columns `<name>.fx`, `.fy`, `.torque` / `.effort`.
-        let mut k = 0;
-        while k < r.reactions.len() {
-            let (name, field) = r.reactions[k].0.rsplit_once('.').unwrap_or((&r.reactions[k].0, ""));
-            let value = |f: &str| {
-                r.reactions[k..]
-                    .iter()
-                    .take(3)
-                    .find(|(n, _)| n.rsplit_once('.') == Some((name, f)))
-                    .map(|&(_, v)| v)
-            };
-            if field == "effort" {
-                outln!("{:>16} {:>14} {:>14} {:14.6}", name, "", "", r.reactions[k].1);
-                k += 1;
-                continue;
-            }
-            let (fx, fy, torque) = (value("fx"), value("fy"), value("torque"));
-            let t = torque.map(|t| format!("{t:14.6}")).unwrap_or_default();
-            outln!(
-                "{:>16} {:14.6} {:14.6} {:>14}",
-                name,
-                fx.unwrap_or(f64::NAN),
-                fy.unwrap_or(f64::NAN),
-                t
-            );
-            k += 2 + usize::from(torque.is_some());
+        if scene.model.is_spatial() {
+            print_spatial(&r, qdd);
+        } else {
+            print_planar(&r, qdd);
         }
     }
     let problems = r.problems();
@@ -85,4 +38,112 @@ pub fn run(path: &Path) -> Result<(), String> {
     } else {
         Err(problems.join("; "))
     }
+}
+
+/// The accelerations and reactions of a planar scene: `ẍ, ÿ, θ̈` per body; `fx, fy` and the torque
+/// or effort per joint or driver.
+fn print_planar(r: &CheckReport, qdd: &[f64]) {
+    outln!("\ninitial accelerations (t = 0)");
+    outln!(
+        "{:>16} {:>14} {:>14} {:>14}",
+        "body",
+        "ẍ [m/s²]",
+        "ÿ [m/s²]",
+        "θ̈ [rad/s²]"
+    );
+    for (i, chunk) in qdd.chunks(3).enumerate() {
+        outln!(
+            "{:>16} {:14.6} {:14.6} {:14.6}",
+            body_of(&r.coordinate_names[3 * i]),
+            chunk[0],
+            chunk[1],
+            chunk[2]
+        );
+    }
+    outln!("\ninitial reactions (on the first body from the second, global)");
+    outln!(
+        "{:>16} {:>14} {:>14} {:>14}",
+        "joint / driver",
+        "fx [N]",
+        "fy [N]",
+        "torque / effort"
+    );
+    for (name, fields) in grouped(&r.reactions) {
+        let value = |f: &str| fields.iter().find(|(n, _)| *n == f).map(|&(_, v)| v);
+        if let Some(e) = value("effort") {
+            outln!("{:>16} {:>14} {:>14} {:14.6}", name, "", "", e);
+            continue;
+        }
+        let t = value("torque").map(|t| format!("{t:14.6}")).unwrap_or_default();
+        outln!(
+            "{:>16} {:14.6} {:14.6} {:>14}",
+            name,
+            value("fx").unwrap_or(f64::NAN),
+            value("fy").unwrap_or(f64::NAN),
+            t
+        );
+    }
+}
+
+/// The accelerations and reactions of a spatial scene: `r̈` (global) and `ω̇'` (body frame) per
+/// body; force and moment (about the joint's point, global) per joint, effort per driver.
+fn print_spatial(r: &CheckReport, qdd: &[f64]) {
+    outln!("\ninitial accelerations (t = 0; r̈ global [m/s²], ω̇' body frame [rad/s²])");
+    outln!(
+        "{:>16} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}",
+        "body",
+        "ẍ",
+        "ÿ",
+        "z̈",
+        "ω̇x'",
+        "ω̇y'",
+        "ω̇z'"
+    );
+    for (i, a) in qdd.chunks(6).enumerate() {
+        out!("{:>16}", body_of(&r.coordinate_names[6 * i]));
+        for x in a {
+            out!(" {x:11.5}");
+        }
+        outln!();
+    }
+    outln!("\ninitial reactions (on the first body from the second, global; moment about the joint's point)");
+    outln!(
+        "{:>16} {:>11} {:>11} {:>11} {:>11} {:>11} {:>11}",
+        "joint / driver",
+        "fx [N]",
+        "fy [N]",
+        "fz [N]",
+        "mx [N·m]",
+        "my [N·m]",
+        "mz [N·m]"
+    );
+    for (name, fields) in grouped(&r.reactions) {
+        out!("{name:>16}");
+        if let [("effort", e)] = fields.as_slice() {
+            outln!(" effort {e:.6}");
+            continue;
+        }
+        for (_, v) in &fields {
+            out!(" {v:11.5}");
+        }
+        outln!();
+    }
+}
+
+/// The body of a coordinate name `body.label`.
+fn body_of(coordinate: &str) -> &str {
+    coordinate.rsplit_once('.').map_or(coordinate, |(b, _)| b)
+}
+
+/// Reaction columns `name.field` grouped by name, in order: `(name, [(field, value)])`.
+fn grouped(columns: &[(String, f64)]) -> Vec<(&str, Vec<(&str, f64)>)> {
+    let mut out: Vec<(&str, Vec<(&str, f64)>)> = Vec::new();
+    for (column, v) in columns {
+        let (name, field) = column.rsplit_once('.').unwrap_or((column, ""));
+        match out.last_mut() {
+            Some((last, fields)) if *last == name => fields.push((field, *v)),
+            _ => out.push((name, vec![(field, *v)])),
+        }
+    }
+    out
 }

@@ -1,6 +1,5 @@
 //! `dalembert simulate`.
 
-use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert::integrators::Sample;
 use dalembert::scene::{IntegratorKind, RunOverrides, Spelling};
 use dalembert::{CsvOutput, Scene};
@@ -88,7 +87,8 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
 pub fn run(a: Args) -> Result<(), String> {
     let scene = load(&a.scene, &a.run)?;
     let sim = scene.simulation();
-    let model = scene.model.clone();
+    let mechanism = scene.model.clone();
+    let model = mechanism.as_system();
     let s = &scene.settings;
     let dof = {
         let sys = model.constraints();
@@ -114,8 +114,8 @@ pub fn run(a: Args) -> Result<(), String> {
     outln!("scene        {}", scene.name);
     outln!(
         "model        {} bodies, {} coordinates, {} constraint equations, {} degree(s) of freedom",
-        model.bodies().len(),
-        model.num_coordinates(),
+        mechanism.num_bodies(),
+        mechanism.num_velocities(),
         model.num_equations(),
         dof
     );
@@ -132,7 +132,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let mut csv = match &a.output {
         Some(p) => {
             let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            Some(CsvOutput::new(&model, std::io::BufWriter::new(f)).map_err(|e| e.to_string())?)
+            Some(CsvOutput::new(&mechanism, std::io::BufWriter::new(f)).map_err(|e| e.to_string())?)
         }
         None => None,
     };
@@ -144,15 +144,16 @@ pub fn run(a: Args) -> Result<(), String> {
     let tty = std::io::stderr().is_terminal();
     let mut last_bar = Instant::now();
     let end = s.end;
-    let energy0 = rows_energy0(&model, &scene);
+    let energy0 = model.kinetic_energy(&scene.q, &scene.qd) + model.potential_energy(0.0, &scene.q);
+    let summary = mechanism.summary_coordinates();
     let mut largest_kinetic = 0.0f64;
     let mut observer = |smp: &Sample<'_>| {
         largest_kinetic = largest_kinetic.max(model.kinetic_energy(smp.q, smp.qd));
         if let Some(c) = csv.as_mut() {
-            c.write(&model, smp);
+            c.write(&mechanism, smp);
         }
         if k.is_multiple_of(every_row) || (smp.t - end).abs() < 1e-12 {
-            let angles = (0..smp.q.len() / 3).map(|i| smp.q[3 * i + 2]).collect();
+            let angles = summary.iter().take(6).map(|&(_, k)| smp.q[k]).collect();
             rows.push((smp.t, angles, smp.energy, smp.constraint_violation));
         }
         k += 1;
@@ -174,7 +175,7 @@ pub fn run(a: Args) -> Result<(), String> {
     if tty && start.elapsed().as_secs_f64() > 1.0 {
         eprintln!();
     }
-    print_rows(&model, &rows);
+    print_rows(&summary, &rows);
     let stats = match result {
         Ok(stats) => stats,
         Err(e) => {
@@ -229,11 +230,6 @@ pub fn run(a: Args) -> Result<(), String> {
     Ok(())
 }
 
-/// `T + V` of the scene's initial state.
-fn rows_energy0(model: &dalembert::constraints::Model, scene: &Scene) -> f64 {
-    model.kinetic_energy(&scene.q, &scene.qd) + model.potential_energy(0.0, &scene.q)
-}
-
 /// The fixed step as run: a whole number of steps spans each output interval, so a step that does
 /// not divide the interval (or is longer than it) is shortened, and the summary says so.
 fn fixed_step(s: &dalembert::scene::RunSettings) -> String {
@@ -262,13 +258,10 @@ pub fn short(x: f64) -> String {
     }
 }
 
-fn print_rows(model: &dalembert::constraints::Model, rows: &[(f64, Vec<f64>, f64, f64)]) {
-    let names: Vec<String> = model
-        .bodies()
-        .iter()
-        .take(6)
-        .map(|b| format!("{}.angle", b.name))
-        .collect();
+/// Prints the sampled rows: up to six summary coordinates (`Mechanism::summary_coordinates`),
+/// energy and `|C|`.
+fn print_rows(summary: &[(String, usize)], rows: &[(f64, Vec<f64>, f64, f64)]) {
+    let names: Vec<&String> = summary.iter().take(6).map(|(n, _)| n).collect();
     out!("\n{:>9}", "t [s]");
     for n in &names {
         out!(" {:>14}", truncate(n, 14));

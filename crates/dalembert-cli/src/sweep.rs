@@ -53,11 +53,17 @@ pub fn run(a: Args) -> Result<(), String> {
         parameters.push((path.to_string(), values));
     }
     let names: Vec<String> = if a.outputs.is_empty() {
+        // Each body's position: x, y, angle (planar) or x, y, z (spatial).
+        let labels: &[&str] = if scene.model.is_spatial() {
+            &["x", "y", "z"]
+        } else {
+            &["x", "y", "angle"]
+        };
         scene
             .model
-            .bodies()
+            .body_names()
             .iter()
-            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
+            .flat_map(|b| labels.iter().map(move |c| format!("{b}.{c}")))
             .collect()
     } else {
         a.outputs.clone()

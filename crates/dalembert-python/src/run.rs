@@ -159,11 +159,17 @@ impl PyRun {
                 "max_frames must be at least 2, got {max_frames}"
             )));
         }
-        let bodies = self.scene.model.bodies();
+        if self.scene.model.is_spatial() {
+            return Err(PyValueError::new_err(format!(
+                "scene '{}' is spatial: the animation viewer draws planar scenes only",
+                self.scene.name
+            )));
+        }
+        let bodies = self.scene.model.body_names();
         let mut frames = Frames::new(bodies.len());
         let cols: Vec<usize> = bodies
             .iter()
-            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
+            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{b}.{c}")))
             .map(|n| {
                 self.table
                     .index(&n)

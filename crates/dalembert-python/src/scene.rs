@@ -96,19 +96,13 @@ impl PyScene {
     /// Names of the moving bodies.
     #[getter]
     fn bodies(&self) -> Vec<String> {
-        self.inner.model.bodies().iter().map(|b| b.name.clone()).collect()
+        self.inner.model.body_names()
     }
 
     /// Names of the joints and drivers, in the order of their reaction columns.
     #[getter]
     fn constraints(&self) -> Vec<String> {
-        self.inner
-            .model
-            .constraints()
-            .constraints()
-            .iter()
-            .map(|c| c.name().to_string())
-            .collect()
+        self.inner.model.constraint_names()
     }
 
     /// The run settings of the scene's `[simulation]` table, defaults filled in.
@@ -338,7 +332,7 @@ impl PyScene {
             "<dalembert.Scene '{}' from {}: {} bodies>",
             self.inner.name,
             self.inner.origin,
-            self.inner.model.bodies().len()
+            self.inner.model.num_bodies()
         )
     }
 

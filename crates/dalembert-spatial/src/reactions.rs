@@ -36,10 +36,23 @@ impl Model {
     /// joint order (drivers excluded: [`Model::driver_efforts`]). `lambda` has one entry per
     /// constraint equation.
     pub fn reactions(&self, t: f64, q: &[f64], lambda: &[f64]) -> Vec<Reaction> {
-        let mut out = Vec::with_capacity(self.joints().len());
+        let zero = Reaction {
+            force: Vector3::zeros(),
+            moment: Vector3::zeros(),
+            point: Vector3::zeros(),
+            axes: Matrix3::identity(),
+        };
+        let mut out = vec![zero; self.joints().len()];
+        self.reactions_into(t, q, lambda, &mut out);
+        out
+    }
+
+    /// [`Model::reactions`] into `out` (one entry per joint), without allocating.
+    pub fn reactions_into(&self, t: f64, q: &[f64], lambda: &[f64], out: &mut [Reaction]) {
+        assert_eq!(out.len(), self.joints().len(), "one reaction per joint");
         let mut row = 0;
         let mut rows = [Row::default(); 3];
-        for j in self.joints() {
+        for (j, slot) in self.joints().iter().zip(out.iter_mut()) {
             let (fi, fj) = (self.frame(j.body_i, q, &[]), self.frame(j.body_j, q, &[]));
             // Σ λ_r × (row on i), Σ λ_r × (row on j): the generalized constraint forces with a minus.
             let mut sums = [[Vector3::zeros(); 2]; 2];
@@ -63,13 +76,12 @@ impl Model {
                 let (f, n) = (-sums[1][0], -sums[1][1]);
                 (-f, -(n + (fj.r - point).cross(&f)))
             };
-            out.push(Reaction {
+            *slot = Reaction {
                 force,
                 moment,
                 point,
                 axes: fi.a * j.axes_i,
-            });
+            };
         }
-        out
     }
 }

@@ -125,3 +125,38 @@ pub fn state_errors(q: &[f64], v: &[f64], rows: &[Vec<f64>]) -> (f64, f64) {
     }
     (pos, vel)
 }
+
+/// `chain3d` with `n` links as a scene file (the format of `docs/scenes.md`): bodies `link0` …
+/// with `shape = { box = [1, 0.1, 0.1] }` (the anchors' inertia follows from the box), joints
+/// `joint0` … as in [`chain3d`]; RK4 at 1 ms with projection for `end` seconds.
+pub fn chain3d_toml(n: usize, end: f64) -> String {
+    let mut s = format!(
+        "# The spatial chain of shared/anchors with {n} links: boxes 1 m x 0.1 m x 0.1 m of 1 kg along +x,\n\
+         # revolute joint i at x = i about global y (even i) or z (odd i), released from rest.\n\
+         [scene]\nname = \"chain3d-{n}\"\ngravity = [0.0, 0.0, -{G}]\n"
+    );
+    for i in 0..n {
+        s += &format!(
+            "\n[[bodies]]\nname = \"link{i}\"\nmass = 1.0\nshape = {{ box = [1.0, 0.1, 0.1] }}\nposition = [{}, 0.0, 0.0]\n",
+            i as f64 + 0.5
+        );
+    }
+    for i in 0..n {
+        let parent = if i == 0 {
+            "ground".to_string()
+        } else {
+            format!("link{}", i - 1)
+        };
+        let axis = if i % 2 == 0 {
+            "[0.0, 1.0, 0.0]"
+        } else {
+            "[0.0, 0.0, 1.0]"
+        };
+        s += &format!(
+            "\n[[joints]]\nname = \"joint{i}\"\ntype = \"revolute\"\nbodies = [\"{parent}\", \"link{i}\"]\nat = [{}, 0.0, 0.0]\naxis = {axis}\n",
+            i as f64
+        );
+    }
+    s += &format!("\n[simulation]\nend = {end:?}\nintegrator = \"rk4\"\nstep = 1e-3\noutput_every = 0.01\n");
+    s
+}

@@ -1,0 +1,149 @@
+//! The model of a scene or a simulation: planar or spatial.
+//!
+//! Formulations and integrators see either through the system seam
+//! ([`MultibodySystem`](dalembert_system::MultibodySystem)); what differs between the two is only
+//! what a user reads: the output columns ([`crate::output`]), the reactions (a planar joint
+//! carries `fx, fy` and perhaps a torque, a spatial one a force and a moment) and the drawing.
+
+use dalembert_system::MultibodySystem;
+use std::sync::Arc;
+
+/// A planar or a spatial multibody model.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum Mechanism {
+    /// Planar bodies (`x, y, angle`), [`dalembert_constraints::Model`].
+    Planar(Arc<dalembert_constraints::Model>),
+    /// Spatial bodies (centre of mass and Euler parameters), [`dalembert_spatial::Model`].
+    Spatial(Arc<dalembert_spatial::Model>),
+}
+
+impl Mechanism {
+    /// The model as the formulations and integrators see it.
+    pub fn system(&self) -> Arc<dyn MultibodySystem> {
+        match self {
+            Mechanism::Planar(m) => m.clone(),
+            Mechanism::Spatial(m) => m.clone(),
+        }
+    }
+
+    /// The model through the seam, borrowed.
+    pub fn as_system(&self) -> &dyn MultibodySystem {
+        match self {
+            Mechanism::Planar(m) => m.as_ref(),
+            Mechanism::Spatial(m) => m.as_ref(),
+        }
+    }
+
+    /// The planar model, if this is one.
+    pub fn planar(&self) -> Option<&Arc<dalembert_constraints::Model>> {
+        match self {
+            Mechanism::Planar(m) => Some(m),
+            Mechanism::Spatial(_) => None,
+        }
+    }
+
+    /// The spatial model, if this is one.
+    pub fn spatial(&self) -> Option<&Arc<dalembert_spatial::Model>> {
+        match self {
+            Mechanism::Spatial(m) => Some(m),
+            Mechanism::Planar(_) => None,
+        }
+    }
+
+    /// True for a spatial model.
+    pub fn is_spatial(&self) -> bool {
+        matches!(self, Mechanism::Spatial(_))
+    }
+
+    /// The bodies' names, in coordinate order.
+    pub fn body_names(&self) -> Vec<String> {
+        self.as_system()
+            .layout()
+            .bodies()
+            .iter()
+            .map(|b| b.name.clone())
+            .collect()
+    }
+
+    /// Number of bodies.
+    pub fn num_bodies(&self) -> usize {
+        self.as_system().layout().bodies().len()
+    }
+
+    /// The names of the joints and drivers, in the order of their reaction and effort columns.
+    pub fn constraint_names(&self) -> Vec<String> {
+        match self {
+            Mechanism::Planar(m) => m
+                .constraints()
+                .constraints()
+                .iter()
+                .map(|c| c.name().to_string())
+                .collect(),
+            Mechanism::Spatial(m) => m.joint_names().chain(m.driver_names()).map(String::from).collect(),
+        }
+    }
+
+    /// Number of position coordinates `n_q`.
+    pub fn num_positions(&self) -> usize {
+        self.as_system().layout().n_q()
+    }
+
+    /// Number of velocity coordinates `n_v` (the length of accelerations and of `C_q`'s rows).
+    pub fn num_velocities(&self) -> usize {
+        self.as_system().layout().n_v()
+    }
+
+    /// Number of constraint equations (joints and drivers).
+    pub fn num_equations(&self) -> usize {
+        self.as_system().num_equations()
+    }
+
+    /// `<body>.<label>` of every velocity coordinate (`crank.x`, `crank.angle` for a planar body;
+    /// `top.vx`, …, `top.wz'` for a spatial one, `'` marking body-frame components): the names
+    /// of the entries of an acceleration vector.
+    pub fn velocity_names(&self) -> Vec<String> {
+        self.as_system()
+            .layout()
+            .bodies()
+            .iter()
+            .flat_map(|b| b.v_labels.iter().map(move |l| format!("{}.{l}", b.name)))
+            .collect()
+    }
+
+    /// One position coordinate per body for a short printed summary, as `(column name, index in
+    /// q)`: the angle of a planar body, the height `z` of a spatial one.
+    pub fn summary_coordinates(&self) -> Vec<(String, usize)> {
+        let (label, k) = if self.is_spatial() { ("z", 2) } else { ("angle", 2) };
+        self.as_system()
+            .layout()
+            .bodies()
+            .iter()
+            .map(|b| (format!("{}.{label}", b.name), b.q_offset + k))
+            .collect()
+    }
+}
+
+impl From<Arc<dalembert_constraints::Model>> for Mechanism {
+    fn from(m: Arc<dalembert_constraints::Model>) -> Self {
+        Mechanism::Planar(m)
+    }
+}
+
+impl From<Arc<dalembert_spatial::Model>> for Mechanism {
+    fn from(m: Arc<dalembert_spatial::Model>) -> Self {
+        Mechanism::Spatial(m)
+    }
+}
+
+impl From<dalembert_constraints::Model> for Mechanism {
+    fn from(m: dalembert_constraints::Model) -> Self {
+        Mechanism::Planar(Arc::new(m))
+    }
+}
+
+impl From<dalembert_spatial::Model> for Mechanism {
+    fn from(m: dalembert_spatial::Model) -> Self {
+        Mechanism::Spatial(Arc::new(m))
+    }
+}

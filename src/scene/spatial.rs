@@ -1,0 +1,680 @@
+//! Spatial scenes: the scene format with three-component vectors (`docs/scenes.md`, "Spatial
+//! scenes"). A scene whose `[scene] gravity` has three components is read here.
+//!
+//! Bodies carry a centre of mass `position = [x, y, z]`, an `orientation` (axis and angle, a
+//! sequence of rotations about body axes, or Euler parameters), `inertia` (principal moments or the
+//! six tensor components, body frame) or a `shape` (box, sphere, cylinder), and optional
+//! `velocity` / `angular_velocity` (global). Joints are placed by a global point `at` and a global
+//! `axis` (`axes = [first, second]` for universal and perpendicular joints), as in the initial
+//! configuration.
+
+use super::error::SceneError;
+use super::format::{FunctionDef, SimDef};
+use super::functions::time_function;
+use super::strict::{self, Inertia3, Points3};
+use super::{build, Scene};
+use crate::animation::Drawing;
+use crate::simulation::Simulation;
+use dalembert_spatial::euler_parameters::{self, EulerParameters};
+use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Force, Joint, JointKind, ModelBuilder};
+use nalgebra::{Matrix3, Vector3};
+use serde::Deserialize;
+use std::collections::HashMap;
+use std::ops::Range;
+use std::sync::Arc;
+use toml::Spanned;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SpatialFile {
+    pub scene: Meta,
+    #[serde(default)]
+    pub bodies: Vec<Spanned<BodyDef>>,
+    #[serde(default)]
+    pub joints: Vec<Spanned<JointDef>>,
+    #[serde(default)]
+    pub drivers: Vec<Spanned<DriverDef>>,
+    #[serde(default)]
+    pub forces: Vec<Spanned<ForceDef>>,
+    pub simulation: Option<Spanned<SimDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct Meta {
+    pub name: Option<String>,
+    #[serde(deserialize_with = "strict::xyz")]
+    pub gravity: [f64; 3],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct BodyDef {
+    pub name: String,
+    pub mass: f64,
+    pub inertia: Option<Inertia3>,
+    pub shape: Option<ShapeDef>,
+    #[serde(deserialize_with = "strict::xyz")]
+    pub position: [f64; 3],
+    pub orientation: Option<OrientationDef>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub velocity: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub angular_velocity: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShapeDef {
+    pub sphere: Option<f64>,
+    #[serde(rename = "box", default, deserialize_with = "strict::xyz_opt")]
+    pub cuboid: Option<[f64; 3]>,
+    pub cylinder: Option<CylinderDef>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CylinderDef {
+    pub radius: f64,
+    pub length: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct OrientationDef {
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub axis: Option<[f64; 3]>,
+    pub angle: Option<f64>,
+    pub sequence: Option<String>,
+    pub angles: Option<Vec<f64>>,
+    pub degrees: Option<toml::Value>,
+    #[serde(default, deserialize_with = "strict::quaternion_opt")]
+    pub quaternion: Option<[f64; 4]>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub x_axis: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub y_axis: Option<[f64; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct JointDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    #[serde(deserialize_with = "strict::two_names")]
+    pub bodies: [String; 2],
+    pub at: Option<Points3>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub axis: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "strict::two_axes_opt")]
+    pub axes: Option<[[f64; 3]; 2]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct DriverDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub joint: Option<String>,
+    pub body: Option<String>,
+    pub coordinate: Option<String>,
+    pub function: FunctionDef,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ForceDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub body: Option<String>,
+    #[serde(default, deserialize_with = "strict::two_names_opt")]
+    pub bodies: Option<[String; 2]>,
+    pub at: Option<Points3>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub value: Option<[f64; 3]>,
+    pub stiffness: Option<f64>,
+    pub damping: Option<f64>,
+    pub free_length: Option<f64>,
+}
+
+/// Errors with the file's name and text; element names mapped to their spans (so that an error the
+/// model reports about a named element points at it).
+struct Ctx<'a> {
+    file: &'a str,
+    text: &'a str,
+    spans: HashMap<String, Range<usize>>,
+}
+
+impl Ctx<'_> {
+    fn err(&self, span: Option<Range<usize>>, msg: impl Into<String>) -> SceneError {
+        SceneError::at(self.file, self.text, span, msg)
+    }
+
+    /// An error from the model builder, placed at the first element it names (`joint 'B': …`).
+    fn model_err(&self, message: String) -> SceneError {
+        let span = message
+            .split('\'')
+            .skip(1)
+            .step_by(2)
+            .find_map(|name| self.spans.get(name).cloned());
+        self.err(span, message)
+    }
+
+    fn unique(&mut self, name: &str, span: &Range<usize>, what: &str) -> Result<(), SceneError> {
+        if name == "ground" && what == "body" {
+            return Err(self.err(
+                Some(span.clone()),
+                "body 'ground': the name is reserved for the fixed frame",
+            ));
+        }
+        if self.spans.insert(name.to_string(), span.clone()).is_some() {
+            return Err(self.err(Some(span.clone()), format!("{what} '{name}': the name is used twice")));
+        }
+        Ok(())
+    }
+}
+
+/// Body names to references, with the one-line error for an unknown name.
+struct Names(HashMap<String, BodyRef>);
+
+impl Names {
+    fn get(&self, ctx: &Ctx<'_>, name: &str, span: &Range<usize>, owner: &str) -> Result<BodyRef, SceneError> {
+        self.0.get(name).copied().ok_or_else(|| {
+            let mut known: Vec<&str> = self.0.keys().map(String::as_str).collect();
+            known.sort_unstable();
+            ctx.err(
+                Some(span.clone()),
+                format!("{owner}: unknown body '{name}' (bodies: {})", known.join(", ")),
+            )
+        })
+    }
+}
+
+/// The inertia tensor (body frame, about the centre of mass) that `inertia` or `shape` gives.
+fn inertia(def: &BodyDef) -> Result<Matrix3<f64>, String> {
+    let m = def.mass;
+    let positive = |v: f64, what: &str| {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(format!("shape: {what} must be positive and finite, got {v}"))
+        }
+    };
+    match (&def.inertia, &def.shape) {
+        (Some(Inertia3::Principal(j)), None) => Ok(Matrix3::from_diagonal(&Vector3::from(*j))),
+        (Some(Inertia3::Tensor([xx, yy, zz, xy, xz, yz])), None) => {
+            Ok(Matrix3::new(*xx, *xy, *xz, *xy, *yy, *yz, *xz, *yz, *zz))
+        }
+        (None, Some(s)) => {
+            let principal = match (s.sphere, s.cuboid, &s.cylinder) {
+                (Some(r), None, None) => {
+                    let r = positive(r, "sphere radius")?;
+                    [0.4 * m * r * r; 3]
+                }
+                (None, Some([a, b, c]), None) => {
+                    let (a, b, c) = (positive(a, "box x")?, positive(b, "box y")?, positive(c, "box z")?);
+                    let k = m / 12.0;
+                    [k * (b * b + c * c), k * (a * a + c * c), k * (a * a + b * b)]
+                }
+                (None, None, Some(c)) => {
+                    let (r, l) = (positive(c.radius, "cylinder radius")?, positive(c.length, "cylinder length")?);
+                    let across = m * (3.0 * r * r + l * l) / 12.0;
+                    [across, across, 0.5 * m * r * r]
+                }
+                _ => {
+                    return Err(
+                        "shape takes exactly one of sphere = r, box = [a, b, c], cylinder = { radius = r, length = l }"
+                            .into(),
+                    )
+                }
+            };
+            Ok(Matrix3::from_diagonal(&Vector3::from(principal)))
+        }
+        (Some(_), Some(_)) => Err("give 'inertia' or 'shape', not both".into()),
+        (None, None) => Err("give 'inertia' ([Jx, Jy, Jz] or [Jxx, Jyy, Jzz, Jxy, Jxz, Jyz], kg·m² about the centre of mass, body axes) or 'shape'".into()),
+    }
+}
+
+/// Euler parameters from an `orientation` table.
+fn orientation(def: &OrientationDef) -> Result<EulerParameters, String> {
+    let degrees = |v: &toml::Value| -> Option<Vec<f64>> {
+        match v {
+            toml::Value::Array(a) => a
+                .iter()
+                .map(|x| x.as_float().or(x.as_integer().map(|i| i as f64)))
+                .collect(),
+            x => x.as_float().or(x.as_integer().map(|i| i as f64)).map(|d| vec![d]),
+        }
+    };
+    let radians = |d: Vec<f64>| d.into_iter().map(f64::to_radians).collect::<Vec<_>>();
+    if def.x_axis.is_some() || def.y_axis.is_some() {
+        let only_axes = def.axis.is_none()
+            && def.sequence.is_none()
+            && def.quaternion.is_none()
+            && def.angle.is_none()
+            && def.angles.is_none()
+            && def.degrees.is_none();
+        let (Some(x), Some(y), true) = (def.x_axis, def.y_axis, only_axes) else {
+            return Err("an orientation by axes gives both 'x_axis' and 'y_axis' (global) and nothing else".into());
+        };
+        return frame_from_axes(x, y);
+    }
+    let p = match (def.axis, def.sequence.as_deref(), def.quaternion) {
+        (Some(axis), None, None) => {
+            let angle = match (def.angle, &def.degrees, &def.angles) {
+                (Some(a), None, None) => a,
+                (None, Some(d), None) => match degrees(d).as_deref() {
+                    Some([d]) => d.to_radians(),
+                    _ => return Err("'degrees' with an 'axis' is one number".into()),
+                },
+                _ => return Err("an 'axis' takes one 'angle' (radians) or 'degrees'".into()),
+            };
+            let a = Vector3::from(axis);
+            let n = a.norm();
+            if !(n.is_finite() && n > 0.0) {
+                return Err(format!("'axis' must be a non-zero finite vector, got {axis:?}"));
+            }
+            euler_parameters::from_axis_angle(&(a / n), angle)
+        }
+        (None, Some(seq), None) => {
+            let angles = match (&def.angles, &def.degrees, def.angle) {
+                (Some(a), None, None) => a.clone(),
+                (None, Some(d), None) => radians(degrees(d).ok_or("'degrees' must be numbers")?),
+                _ => return Err("a 'sequence' takes 'angles' (radians) or 'degrees', one per axis".into()),
+            };
+            if seq.is_empty() || seq.chars().count() != angles.len() {
+                return Err(format!(
+                    "sequence \"{seq}\" names {} axes but {} angles are given",
+                    seq.chars().count(),
+                    angles.len()
+                ));
+            }
+            // Rotations about the body's own (successively rotated) axes: A = A₁(θ₁) A₂(θ₂) ….
+            let mut p = euler_parameters::IDENTITY;
+            for (c, angle) in seq.chars().zip(angles) {
+                let axis = match c {
+                    'x' => Vector3::x(),
+                    'y' => Vector3::y(),
+                    'z' => Vector3::z(),
+                    other => return Err(format!("sequence \"{seq}\": '{other}' is not an axis (x, y or z)")),
+                };
+                p = euler_parameters::product(&p, &euler_parameters::from_axis_angle(&axis, angle));
+            }
+            p
+        }
+        (None, None, Some(e)) => {
+            if def.angle.is_some() || def.angles.is_some() || def.degrees.is_some() {
+                return Err("a 'quaternion' takes no angles".into());
+            }
+            let n = e.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !(n.is_finite() && (n - 1.0).abs() < 1e-6) {
+                return Err(format!(
+                    "'quaternion' [e0, e1, e2, e3] must have unit length (to 1e-6), got length {n}"
+                ));
+            }
+            e
+        }
+        _ => {
+            return Err(
+                "orientation takes one of { axis = [x, y, z], angle = a }, { sequence = \"zyx\", angles = [a, b, c] }, { x_axis = [..], y_axis = [..] } or { quaternion = [e0, e1, e2, e3] } (angles in radians; 'degrees' instead of 'angle'/'angles')"
+                    .into(),
+            )
+        }
+    };
+    if !p.iter().all(|x| x.is_finite()) {
+        return Err("orientation must be finite".into());
+    }
+    Ok(p)
+}
+
+/// Euler parameters of the body frame whose `x` axis is along `x` and whose `y` axis is `y` made
+/// perpendicular to `x` (global components); `z = x × y`.
+fn frame_from_axes(x: [f64; 3], y: [f64; 3]) -> Result<EulerParameters, String> {
+    let x = Vector3::from(x);
+    let y = Vector3::from(y);
+    let nx = x.norm();
+    if !(nx.is_finite() && nx > 0.0) {
+        return Err(format!(
+            "'x_axis' must be a non-zero finite vector, got {:?}",
+            x.as_slice()
+        ));
+    }
+    let ex = x / nx;
+    let yp = y - ex * ex.dot(&y);
+    let ny = yp.norm();
+    if !(ny.is_finite() && ny > 1e-9 * y.norm()) {
+        return Err("'y_axis' must be finite and not parallel to 'x_axis'".into());
+    }
+    let ey = yp / ny;
+    let a = Matrix3::from_columns(&[ex, ey, ex.cross(&ey)]);
+    Ok(euler_parameters::from_rotation(&a))
+}
+
+/// The error for a planar body (`position = [x, y]` or an `angle`) in a scene whose three-component
+/// gravity makes it spatial, placed at the body: clearer than the format's complaint about the
+/// body's keys. `None` when no body looks planar.
+pub(crate) fn planar_body_in_spatial_scene(text: &str, origin: &str) -> Option<SceneError> {
+    #[derive(Deserialize)]
+    struct Probe {
+        #[serde(default)]
+        bodies: Vec<Spanned<ProbeBody>>,
+    }
+    #[derive(Deserialize)]
+    struct ProbeBody {
+        name: Option<String>,
+        position: Option<toml::Value>,
+        angle: Option<toml::Value>,
+    }
+    let probe: Probe = toml::from_str(text).ok()?;
+    let planar = probe.bodies.iter().find(|b| {
+        let b = b.get_ref();
+        b.angle.is_some() || matches!(&b.position, Some(toml::Value::Array(a)) if a.len() == 2)
+    })?;
+    let name = planar.get_ref().name.as_deref().unwrap_or("?");
+    Some(SceneError::at(
+        origin,
+        text,
+        Some(planar.span()),
+        format!(
+            "body '{name}' is planar (position [x, y] or an angle) but the scene is spatial because its gravity has three components: write gravity = [gx, gy] for a planar scene, or give the body position = [x, y, z] and an orientation"
+        ),
+    ))
+}
+
+/// Builds and assembles a spatial scene.
+pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
+    let mut ctx = Ctx {
+        file: origin,
+        text,
+        spans: HashMap::new(),
+    };
+    let g = file.scene.gravity;
+    if !g.iter().all(|x| x.is_finite()) {
+        return Err(ctx.err(None, format!("[scene] gravity must be finite, got {g:?}")));
+    }
+    if file.bodies.is_empty() {
+        return Err(ctx.err(None, "the scene has no [[bodies]]"));
+    }
+    let mut model = ModelBuilder::new(g);
+    let mut names = Names(HashMap::from([("ground".to_string(), BodyRef::Ground)]));
+    let mut positions = Vec::new();
+    let mut weights = Vec::new();
+    for sb in &file.bodies {
+        let span = sb.span();
+        let d = sb.get_ref();
+        ctx.unique(&d.name, &span, "body")?;
+        let at = |m: String| ctx.err(Some(span.clone()), format!("body '{}': {m}", d.name));
+        let j = inertia(d).map_err(at)?;
+        let p = d
+            .orientation
+            .as_ref()
+            .map_or(Ok(euler_parameters::IDENTITY), orientation)
+            .map_err(at)?;
+        let (v, w) = (d.velocity.unwrap_or_default(), d.angular_velocity.unwrap_or_default());
+        let body = Body::new(&d.name, d.mass, [0.0; 3])
+            .with_inertia(j)
+            .at(d.position)
+            .oriented(p)
+            .moving(v, w);
+        // Velocities given in the file are kept as far as the constraints allow.
+        let weight = |given: bool| if given { build::GIVEN_VELOCITY_WEIGHT } else { 1.0 };
+        weights.extend([weight(d.velocity.is_some()); 3]);
+        weights.extend([weight(d.angular_velocity.is_some()); 3]);
+        positions.push(d.position);
+        let r = model.body(body);
+        names.0.insert(d.name.clone(), r);
+    }
+    let mut joint_kinds = HashMap::new();
+    for sj in &file.joints {
+        let span = sj.span();
+        let d = sj.get_ref();
+        ctx.unique(&d.name, &span, "joint")?;
+        let owner = format!("joint '{}'", d.name);
+        let pair = [
+            names.get(&ctx, &d.bodies[0], &span, &owner)?,
+            names.get(&ctx, &d.bodies[1], &span, &owner)?,
+        ];
+        if pair[0] == pair[1] {
+            return Err(ctx.err(
+                Some(span.clone()),
+                format!("{owner}: both bodies are '{}'", d.bodies[0]),
+            ));
+        }
+        let joint = joint(d, pair).map_err(|m| ctx.err(Some(span.clone()), format!("{owner}: {m}")))?;
+        joint_kinds.insert(d.name.clone(), joint.kind);
+        model.joint(joint);
+    }
+    for sd in &file.drivers {
+        let span = sd.span();
+        let d = sd.get_ref();
+        ctx.unique(&d.name, &span, "driver")?;
+        let owner = format!("driver '{}'", d.name);
+        let err = |m: String| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+        let joint_name = |kind: &str| -> Result<String, SceneError> {
+            let name = d
+                .joint
+                .as_deref()
+                .ok_or_else(|| err(format!("a {kind} driver needs 'joint'")))?;
+            if !joint_kinds.contains_key(name) {
+                return Err(err(format!("unknown joint '{name}'")));
+            }
+            Ok(name.to_string())
+        };
+        // A joint's angle and displacement are 0 in the file's configuration; a coordinate is
+        // what the file says.
+        let (target, start) = match d.kind.as_str() {
+            "joint-angle" => (DriverTarget::JointAngle(joint_name("joint-angle")?), 0.0),
+            "joint-displacement" => (DriverTarget::JointDisplacement(joint_name("joint-displacement")?), 0.0),
+            "body-coordinate" => {
+                let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+                let body = names.get(&ctx, name, &span, &owner)?;
+                let BodyRef::Body(i) = body else {
+                    return Err(err("cannot drive the ground".into()));
+                };
+                let axis = match d.coordinate.as_deref() {
+                    Some("x") => 0,
+                    Some("y") => 1,
+                    Some("z") => 2,
+                    Some(other) => {
+                        return Err(err(format!(
+                            "'coordinate' must be \"x\", \"y\" or \"z\", got \"{other}\""
+                        )))
+                    }
+                    None => return Err(err("needs 'coordinate' (\"x\", \"y\" or \"z\")".into())),
+                };
+                (DriverTarget::BodyCoordinate { body, axis }, positions[i][axis])
+            }
+            other => {
+                return Err(err(format!(
+                    "unknown type '{other}' (expected joint-angle, joint-displacement, body-coordinate)"
+                )))
+            }
+        };
+        if d.kind != "body-coordinate" && (d.body.is_some() || d.coordinate.is_some()) {
+            return Err(err("'body' and 'coordinate' belong to a body-coordinate driver".into()));
+        }
+        let function = time_function(&d.function, Some(start)).map_err(err)?;
+        model.driver(Driver::new(&d.name, target, function));
+    }
+    for sf in &file.forces {
+        let span = sf.span();
+        let d = sf.get_ref();
+        ctx.unique(&d.name, &span, "force")?;
+        let owner = format!("force '{}'", d.name);
+        let f = force(d, &names, &ctx, &span, &owner, &positions)?;
+        model.force(f);
+    }
+    let model = model.build().map_err(|e| ctx.model_err(e.to_string()))?;
+    let settings = build::settings(ctx.file, ctx.text, file.simulation.as_ref())?;
+    let name = file.scene.name.unwrap_or_else(|| origin.to_string());
+    let (q, qd) = model.initial_state();
+    let mut sim = Simulation {
+        model: Arc::new(model).into(),
+        q,
+        qd,
+        start: 0.0,
+        end: settings.end,
+        formulation: settings.formulation,
+        redundancy: settings.redundancy,
+        integrator: settings.integrator_options(),
+        velocity_weights: Some(weights),
+    };
+    sim.assemble()
+        .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
+    Ok(Scene {
+        name,
+        model: sim.model,
+        q: sim.q,
+        qd: sim.qd,
+        settings,
+        drawing: Drawing::default(),
+        source: text.to_string(),
+        origin: origin.to_string(),
+    })
+}
+
+/// The joint a `[[joints]]` table describes.
+fn joint(d: &JointDef, [bi, bj]: [BodyRef; 2]) -> Result<Joint, String> {
+    let kind = JointKind::ALL.into_iter().find(|k| k.name() == d.kind).ok_or_else(|| {
+        let names: Vec<&str> = JointKind::ALL.iter().map(|k| k.name()).collect();
+        format!("unknown type '{}' (expected {})", d.kind, names.join(", "))
+    })?;
+    let uses_axis = !matches!(kind, JointKind::Spherical | JointKind::Fixed | JointKind::Distance);
+    let crossed = matches!(kind, JointKind::Universal | JointKind::Perpendicular);
+    let finite_nonzero = |a: &[f64; 3], what: &str| {
+        let n = Vector3::from(*a).norm();
+        if n.is_finite() && n > 0.0 {
+            Ok(())
+        } else {
+            Err(format!("'{what}' must be a non-zero finite vector, got {a:?}"))
+        }
+    };
+    let point = |p: &[f64; 3]| {
+        if p.iter().all(|x| x.is_finite()) {
+            Ok(*p)
+        } else {
+            Err(format!("'at' must be finite, got {p:?}"))
+        }
+    };
+    match (d.axis, d.axes) {
+        (Some(_), _) if !uses_axis || crossed => {
+            return Err(if crossed {
+                format!(
+                    "a {} joint takes 'axes = [[on first body], [on second body]]', not 'axis'",
+                    kind.name()
+                )
+            } else {
+                format!("a {} joint has no axis", kind.name())
+            })
+        }
+        (_, Some(_)) if !crossed => {
+            return Err(format!(
+                "'axes' belongs to universal and perpendicular joints; a {} joint takes 'axis'",
+                kind.name()
+            ))
+        }
+        (None, None) if uses_axis => {
+            return Err(if crossed {
+                "needs 'axes = [[x1, y1, z1], [x2, y2, z2]]' (an axis on each body, global)".to_string()
+            } else {
+                "needs 'axis = [x, y, z]' (global)".to_string()
+            })
+        }
+        _ => {}
+    }
+    if let Some(a) = &d.axis {
+        finite_nonzero(a, "axis")?;
+    }
+    if let Some([a, b]) = &d.axes {
+        finite_nonzero(a, "axes")?;
+        finite_nonzero(b, "axes")?;
+    }
+    let axis = d.axis.unwrap_or([0.0, 0.0, 1.0]);
+    Ok(match (kind, d.at) {
+        (JointKind::Distance, Some(Points3::Two([p, q]))) => Joint::distance(&d.name, bi, point(&p)?, bj, point(&q)?),
+        (JointKind::Distance, _) => {
+            return Err("needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (a point on each body, global)".into())
+        }
+        (_, Some(Points3::One(p))) if crossed => {
+            let [a, b] = d.axes.unwrap_or_default();
+            Joint::crossed(&d.name, kind, bi, bj, point(&p)?, a, b)
+        }
+        (_, Some(Points3::One(p))) => Joint::new(&d.name, kind, bi, bj, point(&p)?, axis),
+        (_, Some(Points3::Two(_))) => return Err("'at' is one point [x, y, z] for this joint".into()),
+        (JointKind::Parallel | JointKind::Perpendicular, None) => {
+            let [a, b] = d.axes.unwrap_or([axis, axis]);
+            Joint::crossed(&d.name, kind, bi, bj, [0.0; 3], a, b)
+        }
+        (_, None) => return Err("needs 'at = [x, y, z]' (the joint's point, global)".into()),
+    })
+}
+
+/// The force element a `[[forces]]` table describes.
+fn force(
+    d: &ForceDef,
+    names: &Names,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+    positions: &[[f64; 3]],
+) -> Result<Force, SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let body = || -> Result<BodyRef, SceneError> {
+        let n = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+        names.get(ctx, n, span, owner)
+    };
+    let value = |what: &str| {
+        d.value
+            .ok_or_else(|| err(&format!("needs 'value = [{what}]' (global, constant)")))
+    };
+    Ok(match d.kind.as_str() {
+        "force" => {
+            let body = body()?;
+            let point = match (d.at, body) {
+                (Some(Points3::One(p)), _) => p,
+                (None, BodyRef::Body(i)) => positions[i],
+                (None, BodyRef::Ground) => [0.0; 3],
+                (Some(Points3::Two(_)), _) => return Err(err("'at' is one point [x, y, z] (global)")),
+            };
+            Force::PointForce {
+                name: d.name.clone(),
+                body,
+                point,
+                force: value("fx, fy, fz")?,
+            }
+        }
+        "torque" => Force::Torque {
+            name: d.name.clone(),
+            body: body()?,
+            torque: value("tx, ty, tz")?,
+        },
+        "spring-damper" => {
+            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
+            let (bi, bj) = (names.get(ctx, n0, span, owner)?, names.get(ctx, n1, span, owner)?);
+            let Some(Points3::Two([p, q])) = d.at else {
+                return Err(err(
+                    "needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (global attachment points)",
+                ));
+            };
+            let initial = (Vector3::from(q) - Vector3::from(p)).norm();
+            Force::SpringDamper {
+                name: d.name.clone(),
+                body_i: bi,
+                point_i: p,
+                body_j: bj,
+                point_j: q,
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'"))?,
+                damping: d.damping.unwrap_or(0.0),
+                free_length: d.free_length.unwrap_or(initial),
+            }
+        }
+        other => {
+            return Err(err(&format!(
+                "unknown type '{other}' (expected force, torque, spring-damper)"
+            )))
+        }
+    })
+}

@@ -1,0 +1,220 @@
+//! Spatial scene files (`docs/scenes.md`, "Spatial scenes") against numbers from elsewhere:
+//!
+//! - the shipped `scenes/heavy-top.toml` and `scenes/slider-crank-3d.toml`, and the generated
+//!   chain of 4 (`examples/spatial_chain.rs`), written from the anchors' README, against the
+//!   anchors' reference states at t = 1 s (`tests/data/anchors_reference_spatial.json`, scipy DOP853
+//!   at 1e-12 on minimal coordinates), read from the output columns `<body>.x … <body>.wz` with
+//!   every formulation (Dormand–Prince at 1e-11; tolerances as in `tests/spatial_anchors_reference.rs`:
+//!   1e-7 on positions and orientation angles, 1e-6 on velocities);
+//! - the scene's initial energy against the anchors' E0;
+//! - each way of writing an orientation against the rotation matrix built by hand;
+//! - the shapes' inertia against textbook facts (a cube's `m a²/6`, a sphere's `2/5 m r²`, a
+//!   cylinder with `l = √3 r` having equal moments `m r²/2`);
+//! - inverse dynamics of a driven hinge written as a scene against `τ = J_P θ̈ − m g a cos θ`.
+
+use dalembert::output::Table;
+use dalembert::{FormulationKind, Scene, SceneValue};
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use std::sync::atomic::AtomicBool;
+
+fn reference(scene: &str) -> Vec<Vec<f64>> {
+    let json: serde_json::Value = serde_json::from_str(include_str!("data/anchors_reference_spatial.json")).unwrap();
+    serde_json::from_value(json["scenes"][scene]["bodies"].clone()).unwrap()
+}
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+/// The scene run to 1 s with Dormand–Prince at 1e-11 and `formulation`; the output table.
+fn run_to_one_second(scene: &Scene, formulation: FormulationKind) -> Table {
+    let s = scene
+        .with_values(&[
+            ("simulation.end", 1.0.into()),
+            ("simulation.integrator", "dopri5".into()),
+            ("simulation.rtol", 1e-11.into()),
+            ("simulation.atol", 1e-11.into()),
+            ("simulation.step", 1e-4.into()),
+            ("simulation.output_every", 0.5.into()),
+            ("simulation.formulation", SceneValue::Text(formulation.name().into())),
+        ])
+        .unwrap();
+    let rec = s.record(&AtomicBool::new(false));
+    rec.outcome
+        .unwrap_or_else(|e| panic!("{} {}: {e}", scene.name, formulation.name()));
+    rec.table
+}
+
+/// Largest position / orientation-angle error and velocity error of the last row of `table`
+/// against the reference rows `[x, y, z, qw, qx, qy, qz, vx, vy, vz, wx, wy, wz]`.
+fn errors(table: &Table, bodies: &[String], rows: &[Vec<f64>]) -> (f64, f64) {
+    let last = table.row(table.rows() - 1);
+    assert_eq!(last[0], 1.0);
+    let col = |b: &str, c: &str| last[table.index(&format!("{b}.{c}")).unwrap()];
+    let (mut pos, mut vel) = (0.0f64, 0.0f64);
+    for (b, r) in bodies.iter().zip(rows) {
+        for (k, c) in ["x", "y", "z"].iter().enumerate() {
+            pos = pos.max((col(b, c) - r[k]).abs());
+        }
+        // Angle between the orientations: 2 acos |e · e_ref| (unit quaternions, either sign).
+        let dot: f64 = ["e0", "e1", "e2", "e3"]
+            .iter()
+            .enumerate()
+            .map(|(k, c)| col(b, c) * r[3 + k])
+            .sum();
+        pos = pos.max(2.0 * dot.abs().min(1.0).acos());
+        for (k, c) in ["vx", "vy", "vz", "wx", "wy", "wz"].iter().enumerate() {
+            vel = vel.max((col(b, c) - r[7 + k]).abs());
+        }
+    }
+    (pos, vel)
+}
+
+#[test]
+fn spatial_scene_files_match_the_anchors_reference() {
+    let chain = dalembert_testkit::spatial::chain3d_toml(4, 10.0);
+    let scenes = [
+        (
+            "heavytop/1",
+            Scene::from_path(root().join("scenes/heavy-top.toml")).unwrap(),
+            5435.6968,
+        ),
+        (
+            "slidercrank3d/1",
+            Scene::from_path(root().join("scenes/slider-crank-3d.toml")).unwrap(),
+            0.766908,
+        ),
+        ("chain3d/4", Scene::from_toml(&chain, "chain3d-4").unwrap(), 0.0),
+    ];
+    for (name, scene, e0) in &scenes {
+        // The anchors' README gives E0 to 8 significant digits (the velocities it lists are
+        // rounded to 6).
+        let sys = scene.model.as_system();
+        let energy = sys.kinetic_energy(&scene.q, &scene.qd) + sys.potential_energy(0.0, &scene.q);
+        assert!(
+            (energy - e0).abs() <= 1e-6 * e0.abs().max(1.0),
+            "{name}: E0 = {energy}, README {e0}"
+        );
+        let bodies = scene.model.body_names();
+        let rows = reference(name);
+        assert_eq!(rows.len(), bodies.len(), "{name}");
+        for f in [
+            FormulationKind::Augmented,
+            FormulationKind::Embedding,
+            FormulationKind::Amalgamated,
+        ] {
+            let (pos, vel) = errors(&run_to_one_second(scene, f), &bodies, &rows);
+            assert!(
+                pos < 1e-7 && vel < 1e-6,
+                "{name} {}: position error {pos:e}, velocity error {vel:e}",
+                f.name()
+            );
+        }
+    }
+}
+
+/// A free body oriented by `orientation` (a TOML inline table); its rotation matrix.
+fn oriented(orientation: &str) -> Matrix3<f64> {
+    let text = format!(
+        "[scene]\ngravity = [0.0, 0.0, -9.81]\n[[bodies]]\nname = \"b\"\nmass = 1.0\ninertia = [1.0, 2.0, 2.5]\nposition = [0.0, 0.0, 0.0]\norientation = {orientation}\n"
+    );
+    let scene = Scene::from_toml(&text, "orientation").unwrap_or_else(|e| panic!("{orientation}: {e}"));
+    let p = [scene.q[3], scene.q[4], scene.q[5], scene.q[6]];
+    dalembert::spatial::euler_parameters::rotation(&p)
+}
+
+#[test]
+fn every_way_of_writing_an_orientation_gives_the_rotation_built_by_hand() {
+    let (a, b, c) = (0.3, -1.1, 2.0);
+    // Rotations about the body's successive axes z, y', x'': A = Rz(a) Ry(b) Rx(c).
+    let zyx = Rotation3::from_axis_angle(&Vector3::z_axis(), a)
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), b)
+        * Rotation3::from_axis_angle(&Vector3::x_axis(), c);
+    let u = Vector3::new(1.0, -2.0, 0.5);
+    let about_u = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(u), 0.7);
+    let quarter_z = Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let cases: Vec<(String, Matrix3<f64>)> = vec![
+        (
+            format!("{{ sequence = \"zyx\", angles = [{a}, {b}, {c}] }}"),
+            *zyx.matrix(),
+        ),
+        (
+            format!(
+                "{{ sequence = \"zyx\", degrees = [{}, {}, {}] }}",
+                a.to_degrees(),
+                b.to_degrees(),
+                c.to_degrees()
+            ),
+            *zyx.matrix(),
+        ),
+        ("{ axis = [1.0, -2.0, 0.5], angle = 0.7 }".into(), *about_u.matrix()),
+        ("{ axis = [0.0, 0.0, 2.0], degrees = 90 }".into(), quarter_z),
+        (format!("{{ quaternion = [{h}, 0.0, 0.0, {h}] }}"), quarter_z),
+        // Body x along global y, body y along −x (the given y need not be perpendicular).
+        (
+            "{ x_axis = [0.0, 3.0, 0.0], y_axis = [-1.0, 5.0, 0.0] }".into(),
+            quarter_z,
+        ),
+    ];
+    for (text, expected) in cases {
+        let got = oriented(&text);
+        // Round-off of a few products of sines and cosines.
+        assert!((got - expected).amax() < 1e-14, "{text}: {got} != {expected}");
+    }
+}
+
+#[test]
+fn shapes_give_the_textbook_inertia() {
+    let inertia = |shape: &str| {
+        let text = format!(
+            "[scene]\ngravity = [0.0, 0.0, 0.0]\n[[bodies]]\nname = \"b\"\nmass = 3.0\nshape = {shape}\nposition = [0.0, 0.0, 0.0]\n"
+        );
+        let scene = Scene::from_toml(&text, "shape").unwrap();
+        scene.model.spatial().unwrap().bodies()[0].inertia
+    };
+    let (m, a, r) = (3.0, 0.4, 0.25);
+    let cube = inertia(&format!("{{ box = [{a}, {a}, {a}] }}"));
+    let sphere = inertia(&format!("{{ sphere = {r} }}"));
+    let cylinder = inertia(&format!(
+        "{{ cylinder = {{ radius = {r}, length = {} }} }}",
+        3f64.sqrt() * r
+    ));
+    for (j, moment) in [
+        (cube, m * a * a / 6.0),
+        (sphere, 0.4 * m * r * r),
+        (cylinder, 0.5 * m * r * r),
+    ] {
+        assert!(
+            (j - Matrix3::identity() * moment).amax() < 1e-14 * moment,
+            "{j} vs {moment}"
+        );
+    }
+}
+
+#[test]
+fn inverse_dynamics_of_a_driven_hinge_scene_is_the_closed_form() {
+    // A rod of mass m with its centre of mass a from a hinge about global y, driven at
+    // θ = A sin(2π f t): τ = J_P θ̈ − m g a cos θ, J_P = J_yy + m a² (derivation in
+    // tests/spatial_drivers.rs).
+    let (m, a, g, j_yy, amp, f) = (2.0, 0.4, 9.81, 0.05, 0.8, 0.5);
+    let text = format!(
+        "[scene]\nname = \"driven hinge\"\ngravity = [0.0, 0.0, -{g}]\n\
+         [[bodies]]\nname = \"rod\"\nmass = {m}\ninertia = [0.004, {j_yy}, {j_yy}]\nposition = [{a}, 0.0, 0.0]\n\
+         [[joints]]\nname = \"hinge\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n\
+         [[drivers]]\nname = \"motor\"\ntype = \"joint-angle\"\njoint = \"hinge\"\nfunction = {{ kind = \"harmonic\", amplitude = {amp}, frequency = {f} }}\n"
+    );
+    let scene = Scene::from_toml(&text, "driven hinge").unwrap();
+    let (table, outcome) = scene.inverse_table(2.0, 0.01);
+    outcome.unwrap();
+    let w = 2.0 * std::f64::consts::PI * f;
+    let j_p = j_yy + m * a * a;
+    let (t, effort) = (table.column("t").unwrap(), table.column("motor.effort").unwrap());
+    assert_eq!(t.len(), 201);
+    for (t, e) in t.iter().zip(effort) {
+        let theta = amp * (w * t).sin();
+        let tau = j_p * (-w * w * theta) - m * g * a * theta.cos();
+        // The kinematics are solved to ~1e-12; the torque is ~10 N·m.
+        assert!((e - tau).abs() < 1e-8 * tau.abs().max(1.0), "t = {t}: {e} vs {tau}");
+    }
+}
