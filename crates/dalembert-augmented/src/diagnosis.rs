@@ -1,6 +1,7 @@
 //! What went wrong when the saddle-point matrix is singular, and the minimum-norm treatment of
 //! redundant constraints.
 
+use dalembert_system::structure::MINIMUM_NORM_RANK_TOLERANCE;
 use dalembert_system::{BlockDiagonal, ConstraintValues, DynamicsError, MultibodySystem};
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -42,7 +43,7 @@ pub(crate) fn minimum_norm_solve(
     n: usize,
 ) -> Result<(), DynamicsError> {
     let sys = model.constraints();
-    let s = sys.analyse_structure(vals, RANK_TOLERANCE)?;
+    let s = sys.analyse_structure(vals, MINIMUM_NORM_RANK_TOLERANCE)?;
     let rows = &s.independent_rows;
     let r = rows.len();
     let jac = sys.jacobian_dense(vals);
@@ -81,7 +82,9 @@ pub(crate) fn minimum_norm_solve(
     }
     for row in 0..m {
         let lhs: f64 = (0..n).map(|c| jac[(row, c)] * sol[(c, 0)]).sum();
-        if (lhs - b[n + row]).abs() > 1e-8 * (1.0 + b[n + row].abs() + scale) {
+        // Consistent to the rank tolerance: a row counted as dependent at singular values below
+        // MINIMUM_NORM_RANK_TOLERANCE × σ_max may miss its right-hand side by as much, relative.
+        if (lhs - b[n + row]).abs() > MINIMUM_NORM_RANK_TOLERANCE * (1.0 + b[n + row].abs() + scale) {
             return Err(DynamicsError::RedundantConstraints {
                 time: t,
                 rank: r,

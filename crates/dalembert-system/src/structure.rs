@@ -76,7 +76,12 @@ pub fn column_rank(a: faer::MatRef<'_, f64>, rank_tolerance: f64) -> (usize, Vec
     (rank, order)
 }
 
-/// Rank, degrees of freedom and redundant equations of `C_q` held in `values`.
+/// Most equations for which [`analyse_structure`] confirms the rank by singular values.
+const SVD_RANK_UP_TO: usize = 600;
+
+/// Rank, degrees of freedom and redundant equations of `C_q` held in `values`: the numerical rank
+/// counts singular values above `rank_tolerance × σ_max` (LU pivots beyond 600 equations); the
+/// independent rows are the first `rank` of a full-pivot LU of `C_qᵀ`.
 pub fn analyse_structure<S: ConstraintSet + ?Sized>(
     sys: &S,
     values: &ConstraintValues,
@@ -103,7 +108,18 @@ pub fn analyse_structure<S: ConstraintSet + ?Sized>(
         });
     }
     let jt = sys.jacobian_dense(values).transpose().to_owned();
-    let (rank, order) = column_rank(jt.as_ref(), rank_tolerance);
+    let (pivot_rank, order) = column_rank(jt.as_ref(), rank_tolerance);
+    // LU pivots can overstate the rank: off the constraint manifold (|C| ~ 1e-10 after a
+    // projected step) an over-constrained loop such as Bricard's has one singular value of about
+    // 1e-10 that a pivot test may count (measured on scenes/bricard.toml). The singular values
+    // decide where they are affordable; the pivot order still picks the independent rows.
+    let rank = if m <= SVD_RANK_UP_TO {
+        let s = jt.singular_values().unwrap_or_default();
+        let largest = s.iter().cloned().fold(0.0, f64::max);
+        pivot_rank.min(s.iter().filter(|&&v| v > rank_tolerance * largest).count())
+    } else {
+        pivot_rank
+    };
     let mut independent_rows: Vec<usize> = order[..rank].to_vec();
     independent_rows.sort_unstable();
     let mut redundant_rows: Vec<usize> = order[rank..].to_vec();
@@ -248,33 +264,53 @@ pub fn scatter_multipliers<S: ConstraintSet + ?Sized>(
     Ok(())
 }
 
+/// Relative singular value below which the minimum-norm treatment counts a direction of `C_q` as
+/// redundant. Looser than the `1e-9` of structure reports: a run with redundant constraints leaves
+/// the constraint manifold by the projection tolerance (~1e-10), and an over-constrained loop's
+/// redundant direction then has a singular value of 1e-10 … 2e-9 of the largest (measured on
+/// `scenes/bricard.toml`), which must still count as redundant.
+pub const MINIMUM_NORM_RANK_TOLERANCE: f64 = 1e-6;
+
 /// The minimum-norm multipliers `λ = (C_qᵀ)⁺ f` for a generalized constraint force `f` in the
 /// range of `C_qᵀ` (for redundant constraints, one admissible distribution of the reactions).
 ///
-/// The minimum-norm solution lies in the range of `C_q`, which the `r` independent columns `J`
-/// of `C_q` span (full-pivot LU, no iterative SVD): `λ = C_q,J z` with
-/// `(C_q,Jᵀ C_q,J) z = f_J`, an `r × r` positive definite system. Dense; allocates (a
-/// fallback path for redundant constraints). `None` when `f` is not in the range of `C_qᵀ`.
+/// With the SVD `C_q = U Σ Vᵀ`, `λ = Σ_k u_k (v_kᵀ f) / σ_k` over the singular values above
+/// [`MINIMUM_NORM_RANK_TOLERANCE`]` × σ_max`. The cut is on singular values, not
+/// on LU pivots: off the constraint manifold (a projected step leaves `|C| ~ 1e-10`) an
+/// over-constrained loop such as Bricard's has a singular value of that size, which a pivot test
+/// can count as independent and a Gram matrix `C_qᵀC_q` then squares to ~1e-20 (measured:
+/// `scenes/bricard.toml` stopped at t = 0.0275 s). Dense; allocates (a fallback path for
+/// redundant constraints). `None` when `f` is not in the range of `C_qᵀ` (reproduced to 1e-8 of
+/// its size, plus what the directions cut off may carry).
 pub fn minimum_norm_multipliers<S: ConstraintSet + ?Sized>(
     sys: &S,
     values: &ConstraintValues,
     f: &[f64],
 ) -> Option<Vec<f64>> {
-    use faer::linalg::solvers::Solve;
     let a = sys.jacobian_dense(values);
     let (m, n) = (a.nrows(), a.ncols());
-    let (r, order) = column_rank(a.as_ref(), 1e-9);
-    let cols = &order[..r];
-    let cj = faer::Mat::from_fn(m, r, |i, k| a[(i, cols[k])]);
-    let g = cj.transpose() * &cj;
-    let fj = faer::Mat::from_fn(r, 1, |k, _| f[cols[k]]);
-    let z = g.partial_piv_lu().solve(&fj);
-    let lam = &cj * &z;
-    let lam: Vec<f64> = (0..m).map(|i| lam[(i, 0)]).collect();
-    // f must be reproduced on every coordinate, not only on the independent ones.
+    let svd = a.thin_svd().ok()?;
+    let sigma = svd.S().column_vector();
+    let (u, v) = (svd.U(), svd.V());
+    let largest = (0..sigma.nrows()).map(|k| sigma[k]).fold(0.0, f64::max);
+    let mut lam = vec![0.0; m];
+    for k in 0..sigma.nrows() {
+        if !(sigma[k] > MINIMUM_NORM_RANK_TOLERANCE * largest) {
+            continue;
+        }
+        let c = (0..n).map(|j| v[(j, k)] * f[j]).sum::<f64>() / sigma[k];
+        for (i, l) in lam.iter_mut().enumerate() {
+            *l += u[(i, k)] * c;
+        }
+    }
+    // f must be reproduced on every coordinate.
     let mut back = vec![0.0; n];
     sys.jacobian_transpose_mul_add(values, 1.0, &lam, &mut back);
-    let scale = f.iter().fold(1.0f64, |s, v| s.max(v.abs()));
-    let ok = lam.iter().all(|l| l.is_finite()) && back.iter().zip(f).all(|(b, fi)| (b - fi).abs() <= 1e-8 * scale);
+    // What the dropped directions may carry: f's part along them is σ_k (u_kᵀ λ) with
+    // σ_k ≤ MINIMUM_NORM_RANK_TOLERANCE σ_max.
+    let lam_size = lam.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let tolerance = 1e-8 * f.iter().fold(1.0f64, |s, v| s.max(v.abs()))
+        + MINIMUM_NORM_RANK_TOLERANCE * largest * lam_size * (m as f64).sqrt();
+    let ok = lam.iter().all(|l| l.is_finite()) && back.iter().zip(f).all(|(b, fi)| (b - fi).abs() <= tolerance);
     ok.then_some(lam)
 }
