@@ -295,7 +295,7 @@ pub fn minimum_norm_multipliers<S: ConstraintSet + ?Sized>(
     let largest = (0..sigma.nrows()).map(|k| sigma[k]).fold(0.0, f64::max);
     let mut lam = vec![0.0; m];
     for k in 0..sigma.nrows() {
-        if !(sigma[k] > MINIMUM_NORM_RANK_TOLERANCE * largest) {
+        if sigma[k] <= MINIMUM_NORM_RANK_TOLERANCE * largest {
             continue;
         }
         let c = (0..n).map(|j| v[(j, k)] * f[j]).sum::<f64>() / sigma[k];
