@@ -3,8 +3,10 @@
 use super::error::SceneError;
 use super::format::{BodyDef, DriverDef, ForceDef, JointDef, Points, SceneFile, SimDef, ValueDef};
 use super::functions::time_function;
+use super::names::{Ctx, Names};
 use super::{unknown_name, IntegratorKind, RunSettings, Scene, StabilizationKind};
 use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
+use crate::mechanism::Mechanism;
 use crate::simulation::{FormulationKind, Simulation};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
@@ -23,18 +25,6 @@ use toml::Spanned;
 /// Weight of a velocity given in the file in the initial velocity analysis (others weigh 1): held
 /// exactly when the constraints allow it ([`Simulation::velocity_weights`]).
 pub(crate) const GIVEN_VELOCITY_WEIGHT: f64 = f64::INFINITY;
-
-/// Context for errors: file name, text, and the span of the element being built.
-struct Ctx<'a> {
-    file: &'a str,
-    text: &'a str,
-}
-
-impl Ctx<'_> {
-    fn err(&self, span: Option<Range<usize>>, msg: impl Into<String>) -> SceneError {
-        SceneError::at(self.file, self.text, span, msg)
-    }
-}
 
 fn v2(p: [f64; 2]) -> Vec2 {
     Vec2::new(p[0], p[1])
@@ -59,36 +49,17 @@ impl JointInfo {
 
 struct Builder<'a> {
     ctx: Ctx<'a>,
-    names: HashMap<String, BodyRef>,
+    names: Names<BodyRef>,
     q: Vec<f64>,
-    element_names: HashMap<String, Range<usize>>,
 }
 
 impl Builder<'_> {
     fn body(&self, name: &str, span: &Range<usize>, owner: &str) -> Result<BodyRef, SceneError> {
-        self.names.get(name).copied().ok_or_else(|| {
-            let mut known: Vec<&str> = self.names.keys().map(|s| s.as_str()).collect();
-            known.sort_unstable();
-            self.ctx.err(
-                Some(span.clone()),
-                format!("{owner}: unknown body '{name}' (bodies: {})", known.join(", ")),
-            )
-        })
+        self.names.body(&self.ctx, name, span, owner)
     }
 
     fn unique(&mut self, name: &str, span: &Range<usize>, what: &str) -> Result<(), SceneError> {
-        if name == "ground" && what == "body" {
-            return Err(self.ctx.err(
-                Some(span.clone()),
-                "body 'ground': the name is reserved for the fixed frame",
-            ));
-        }
-        if self.element_names.insert(name.to_string(), span.clone()).is_some() {
-            return Err(self
-                .ctx
-                .err(Some(span.clone()), format!("{what} '{name}': the name is used twice")));
-        }
-        Ok(())
+        self.names.unique(&self.ctx, name, span, what)
     }
 
     fn local_points(&self, def: &JointDef, pair: [BodyRef; 2], span: &Range<usize>) -> Result<[Vec2; 2], SceneError> {
@@ -164,11 +135,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     let ctx = Ctx { file: origin, text };
     let mut b = Builder {
         ctx,
-        names: HashMap::new(),
+        names: Names::new(BodyRef::Ground),
         q: Vec::new(),
-        element_names: HashMap::new(),
     };
-    b.names.insert("ground".into(), BodyRef::Ground);
     if file.bodies.is_empty() {
         return Err(b.ctx.err(None, "the scene has no [[bodies]]"));
     }
@@ -203,7 +172,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
             point_mass: j == 0.0 && d.shape.is_none(),
         });
         bodies.push(body);
-        b.names.insert(d.name.clone(), BodyRef::Body(BodyId(i)));
+        b.names.add_body(&d.name, BodyRef::Body(BodyId(i)));
         b.q.extend_from_slice(&[d.position[0], d.position[1], d.angle]);
         let v = d.velocity.unwrap_or([0.0, 0.0]);
         qd.extend_from_slice(&[v[0], v[1], d.angular_velocity.unwrap_or(0.0)]);
@@ -348,9 +317,23 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     let model = Model::new(bodies, forces, constraints).map_err(|e| b.ctx.err(None, e.to_string()))?;
     let settings = settings(b.ctx.file, b.ctx.text, file.simulation.as_ref())?;
     let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
+    let state = (b.q.clone(), qd, weights);
+    assembled(&b.ctx, name, Arc::new(model).into(), state, settings, drawing)
+}
+
+/// The scene of `model` with its initial state `(q, q̇, velocity weights)` assembled (position
+/// analysis, then the least weighted change of the velocities: velocities the file gave are held).
+pub(crate) fn assembled(
+    ctx: &Ctx<'_>,
+    name: String,
+    model: Mechanism,
+    (q, qd, weights): (Vec<f64>, Vec<f64>, Vec<f64>),
+    settings: RunSettings,
+    drawing: Drawing,
+) -> Result<Scene, SceneError> {
     let mut sim = Simulation {
-        model: Arc::new(model).into(),
-        q: b.q.clone(),
+        model,
+        q,
         qd,
         start: 0.0,
         end: settings.end,
@@ -360,7 +343,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         velocity_weights: Some(weights),
     };
     sim.assemble()
-        .map_err(|e| b.ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
+        .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
     Ok(Scene {
         name,
         model: sim.model,
@@ -368,8 +351,8 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         qd: sim.qd,
         settings,
         drawing,
-        source: text.to_string(),
-        origin: origin.to_string(),
+        source: ctx.text.to_string(),
+        origin: ctx.file.to_string(),
     })
 }
 

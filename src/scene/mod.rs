@@ -9,6 +9,7 @@ mod build;
 mod error;
 mod format;
 mod functions;
+mod names;
 mod overrides;
 mod spatial;
 mod strict;

@@ -11,10 +11,10 @@
 use super::error::SceneError;
 use super::format::{FunctionDef, SimDef};
 use super::functions::time_function;
+use super::names::{Ctx, Names};
 use super::strict::{self, Inertia3, Points3};
 use super::{build, Scene};
 use crate::animation::Drawing;
-use crate::simulation::Simulation;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
 use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Force, Joint, JointKind, ModelBuilder};
 use nalgebra::{Matrix3, Vector3};
@@ -140,57 +140,10 @@ pub(crate) struct ForceDef {
     pub free_length: Option<f64>,
 }
 
-/// Errors with the file's name and text; element names mapped to their spans (so that an error the
-/// model reports about a named element points at it).
-struct Ctx<'a> {
-    file: &'a str,
-    text: &'a str,
-    spans: HashMap<String, Range<usize>>,
-}
-
-impl Ctx<'_> {
-    fn err(&self, span: Option<Range<usize>>, msg: impl Into<String>) -> SceneError {
-        SceneError::at(self.file, self.text, span, msg)
-    }
-
-    /// An error from the model builder, placed at the first element it names (`joint 'B': …`).
-    fn model_err(&self, message: String) -> SceneError {
-        let span = message
-            .split('\'')
-            .skip(1)
-            .step_by(2)
-            .find_map(|name| self.spans.get(name).cloned());
-        self.err(span, message)
-    }
-
-    fn unique(&mut self, name: &str, span: &Range<usize>, what: &str) -> Result<(), SceneError> {
-        if name == "ground" && what == "body" {
-            return Err(self.err(
-                Some(span.clone()),
-                "body 'ground': the name is reserved for the fixed frame",
-            ));
-        }
-        if self.spans.insert(name.to_string(), span.clone()).is_some() {
-            return Err(self.err(Some(span.clone()), format!("{what} '{name}': the name is used twice")));
-        }
-        Ok(())
-    }
-}
-
-/// Body names to references, with the one-line error for an unknown name.
-struct Names(HashMap<String, BodyRef>);
-
-impl Names {
-    fn get(&self, ctx: &Ctx<'_>, name: &str, span: &Range<usize>, owner: &str) -> Result<BodyRef, SceneError> {
-        self.0.get(name).copied().ok_or_else(|| {
-            let mut known: Vec<&str> = self.0.keys().map(String::as_str).collect();
-            known.sort_unstable();
-            ctx.err(
-                Some(span.clone()),
-                format!("{owner}: unknown body '{name}' (bodies: {})", known.join(", ")),
-            )
-        })
-    }
+/// An error from the model builder, placed at the first element it names (`joint 'B': …`).
+fn model_err(ctx: &Ctx<'_>, names: &Names<BodyRef>, message: String) -> SceneError {
+    let span = message.split('\'').skip(1).step_by(2).find_map(|name| names.span(name));
+    ctx.err(span, message)
 }
 
 /// The inertia tensor (body frame, about the centre of mass) that `inertia` or `shape` gives.
@@ -386,11 +339,7 @@ pub(crate) fn planar_body_in_spatial_scene(text: &str, origin: &str) -> Option<S
 
 /// Builds and assembles a spatial scene.
 pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
-    let mut ctx = Ctx {
-        file: origin,
-        text,
-        spans: HashMap::new(),
-    };
+    let ctx = Ctx { file: origin, text };
     let g = file.scene.gravity;
     if !g.iter().all(|x| x.is_finite()) {
         return Err(ctx.err(None, format!("[scene] gravity must be finite, got {g:?}")));
@@ -399,13 +348,13 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         return Err(ctx.err(None, "the scene has no [[bodies]]"));
     }
     let mut model = ModelBuilder::new(g);
-    let mut names = Names(HashMap::from([("ground".to_string(), BodyRef::Ground)]));
+    let mut names = Names::new(BodyRef::Ground);
     let mut positions = Vec::new();
     let mut weights = Vec::new();
     for sb in &file.bodies {
         let span = sb.span();
         let d = sb.get_ref();
-        ctx.unique(&d.name, &span, "body")?;
+        names.unique(&ctx, &d.name, &span, "body")?;
         let at = |m: String| ctx.err(Some(span.clone()), format!("body '{}': {m}", d.name));
         let j = inertia(d).map_err(at)?;
         let p = d
@@ -425,17 +374,17 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         weights.extend([weight(d.angular_velocity.is_some()); 3]);
         positions.push(d.position);
         let r = model.body(body);
-        names.0.insert(d.name.clone(), r);
+        names.add_body(&d.name, r);
     }
     let mut joint_kinds = HashMap::new();
     for sj in &file.joints {
         let span = sj.span();
         let d = sj.get_ref();
-        ctx.unique(&d.name, &span, "joint")?;
+        names.unique(&ctx, &d.name, &span, "joint")?;
         let owner = format!("joint '{}'", d.name);
         let pair = [
-            names.get(&ctx, &d.bodies[0], &span, &owner)?,
-            names.get(&ctx, &d.bodies[1], &span, &owner)?,
+            names.body(&ctx, &d.bodies[0], &span, &owner)?,
+            names.body(&ctx, &d.bodies[1], &span, &owner)?,
         ];
         if pair[0] == pair[1] {
             return Err(ctx.err(
@@ -450,7 +399,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     for sd in &file.drivers {
         let span = sd.span();
         let d = sd.get_ref();
-        ctx.unique(&d.name, &span, "driver")?;
+        names.unique(&ctx, &d.name, &span, "driver")?;
         let owner = format!("driver '{}'", d.name);
         let err = |m: String| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
         let joint_name = |kind: &str| -> Result<String, SceneError> {
@@ -470,7 +419,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             "joint-displacement" => (DriverTarget::JointDisplacement(joint_name("joint-displacement")?), 0.0),
             "body-coordinate" => {
                 let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
-                let body = names.get(&ctx, name, &span, &owner)?;
+                let body = names.body(&ctx, name, &span, &owner)?;
                 let BodyRef::Body(i) = body else {
                     return Err(err("cannot drive the ground".into()));
                 };
@@ -502,38 +451,23 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     for sf in &file.forces {
         let span = sf.span();
         let d = sf.get_ref();
-        ctx.unique(&d.name, &span, "force")?;
+        names.unique(&ctx, &d.name, &span, "force")?;
         let owner = format!("force '{}'", d.name);
         let f = force(d, &names, &ctx, &span, &owner, &positions)?;
         model.force(f);
     }
-    let model = model.build().map_err(|e| ctx.model_err(e.to_string()))?;
+    let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
     let settings = build::settings(ctx.file, ctx.text, file.simulation.as_ref())?;
     let name = file.scene.name.unwrap_or_else(|| origin.to_string());
     let (q, qd) = model.initial_state();
-    let mut sim = Simulation {
-        model: Arc::new(model).into(),
-        q,
-        qd,
-        start: 0.0,
-        end: settings.end,
-        formulation: settings.formulation,
-        redundancy: settings.redundancy,
-        integrator: settings.integrator_options(),
-        velocity_weights: Some(weights),
-    };
-    sim.assemble()
-        .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
-    Ok(Scene {
+    build::assembled(
+        &ctx,
         name,
-        model: sim.model,
-        q: sim.q,
-        qd: sim.qd,
+        Arc::new(model).into(),
+        (q, qd, weights),
         settings,
-        drawing: Drawing::default(),
-        source: text.to_string(),
-        origin: origin.to_string(),
-    })
+        Drawing::default(),
+    )
 }
 
 /// The joint a `[[joints]]` table describes.
@@ -615,7 +549,7 @@ fn joint(d: &JointDef, [bi, bj]: [BodyRef; 2]) -> Result<Joint, String> {
 /// The force element a `[[forces]]` table describes.
 fn force(
     d: &ForceDef,
-    names: &Names,
+    names: &Names<BodyRef>,
     ctx: &Ctx<'_>,
     span: &Range<usize>,
     owner: &str,
@@ -624,7 +558,7 @@ fn force(
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
     let body = || -> Result<BodyRef, SceneError> {
         let n = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
-        names.get(ctx, n, span, owner)
+        names.body(ctx, n, span, owner)
     };
     let value = |what: &str| {
         d.value
@@ -653,7 +587,7 @@ fn force(
         },
         "spring-damper" => {
             let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
-            let (bi, bj) = (names.get(ctx, n0, span, owner)?, names.get(ctx, n1, span, owner)?);
+            let (bi, bj) = (names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?);
             let Some(Points3::Two([p, q])) = d.at else {
                 return Err(err(
                     "needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (global attachment points)",
