@@ -290,3 +290,82 @@ fn bricard_moves_with_the_degree_of_freedom_grubler_does_not_count() {
         }
     }
 }
+
+#[test]
+fn rssr_rocker_follows_the_closed_form_and_the_motor_supplies_the_power() {
+    // Crank a about z at A = 0: B = (a cos θ, a sin θ, 0); rocker c about x at D = (d, 0, h):
+    // C = D + c (0, cos φ, sin φ). |C − B|² = L² with L² = d² + a² + c² + h² gives
+    // P cos φ + Q sin φ = R, P = −2 a c sin θ, Q = 2 h c, R = 2 a d cos θ.
+    let (a, c, d, h) = (0.2, 0.5, 1.0, 0.5);
+    let phi_of = |theta: f64, near: f64| {
+        let (p, q, r) = (-2.0 * a * c * theta.sin(), 2.0 * h * c, 2.0 * a * d * theta.cos());
+        let (base, spread) = (q.atan2(p), (r / p.hypot(q)).acos());
+        let wrap =
+            |x: f64| (x - near + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI + near;
+        let (x, y) = (wrap(base + spread), wrap(base - spread));
+        if (x - near).abs() < (y - near).abs() {
+            x
+        } else {
+            y
+        }
+    };
+    let scene = Scene::from_path(root().join("scenes/rssr.toml")).unwrap();
+    let r = scene.check().unwrap();
+    // 3 x 6 − (5 + 3 + 3 + 5 + 1 driver) = 1: the coupler's spin about its own axis.
+    assert_eq!(r.degrees_of_freedom, 1);
+    let s = scene
+        .with_values(&[("simulation.output_every", 1e-3.into()), ("simulation.end", 1.0.into())])
+        .unwrap();
+    let rec = s.record(&AtomicBool::new(false));
+    rec.outcome.unwrap();
+    let t = &rec.table;
+    let col = |c: &str| t.column(c).unwrap();
+    // A body's x axis in global components: the first column of its rotation matrix.
+    let x_axis = |b: &str, k: usize| {
+        let e: Vec<f64> = ["e0", "e1", "e2", "e3"]
+            .iter()
+            .map(|c| col(&format!("{b}.{c}"))[k])
+            .collect();
+        [
+            e[0] * e[0] + e[1] * e[1] - e[2] * e[2] - e[3] * e[3],
+            2.0 * (e[1] * e[2] + e[0] * e[3]),
+            2.0 * (e[1] * e[3] - e[0] * e[2]),
+        ]
+    };
+    let mut phi = 0.8f64.asin();
+    let mut worst = 0.0f64;
+    for k in 0..t.rows() {
+        // The crank's x axis is (cos θ, sin θ, 0), the rocker's (0, cos φ, sin φ).
+        let (xc, xr) = (x_axis("crank", k), x_axis("rocker", k));
+        assert!(
+            xc[2].abs() < 1e-9 && xr[0].abs() < 1e-9,
+            "axes leave their planes: {xc:?} {xr:?}"
+        );
+        let theta = xc[1].atan2(xc[0]);
+        phi = phi_of(theta, phi);
+        let simulated = xr[2].atan2(xr[1]);
+        let d = (simulated - phi + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        worst = worst.max(d.abs());
+    }
+    // Positions hold the constraints to the projection tolerance (1e-10).
+    assert!(worst < 1e-8, "rocker angle off the closed form by {worst:e} rad");
+    // Power balance: the motor's torque times the crank rate (2π rad/s) is d(T + V)/dt. The
+    // derivative by the five-point stencil over 1 ms samples: truncation δ⁴ E⁽⁵⁾ / 30, about 2e-6 W
+    // here (the three-point stencil's δ² E‴ / 6 is 5e-3 W, too coarse to test anything); round-off
+    // ~ 1e-15 J / 1e-3 s. Tolerance 1e-4 W against powers of ~15 W.
+    let (effort, energy) = (col("motor.effort"), col("energy"));
+    let w = std::f64::consts::TAU;
+    let mut largest = 0.0f64;
+    for k in 2..t.rows() - 2 {
+        let power = (-energy[k + 2] + 8.0 * energy[k + 1] - 8.0 * energy[k - 1] + energy[k - 2]) / 12e-3;
+        largest = largest.max(power.abs());
+        assert!(
+            (effort[k] * w - power).abs() < 1e-4,
+            "t = {}: motor {} W, dE/dt {} W",
+            k as f64 * 1e-3,
+            effort[k] * w,
+            power
+        );
+    }
+    assert!(largest > 1.0, "the motor does work: largest power {largest} W");
+}
