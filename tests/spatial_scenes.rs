@@ -318,6 +318,9 @@ fn rssr_rocker_follows_the_closed_form_and_the_motor_supplies_the_power() {
         .unwrap();
     let rec = s.record(&AtomicBool::new(false));
     rec.outcome.unwrap();
+    // The motor does work: T + V is no first integral, so no energy warning (a driven model once
+    // counted as conservative and was warned about its own motor's work).
+    assert_eq!(rec.warning, None);
     let t = &rec.table;
     let col = |c: &str| t.column(c).unwrap();
     // A body's x axis in global components: the first column of its rotation matrix.

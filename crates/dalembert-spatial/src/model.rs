@@ -411,8 +411,9 @@ impl MultibodySystem for Model {
         gravity + self.forces.iter().map(|f| f.potential(&frame)).sum::<f64>()
     }
 
+    /// Every force element is conservative and nothing is driven (a driver does work).
     fn is_conservative(&self) -> bool {
-        self.forces.iter().all(ForceData::is_conservative)
+        self.forces.iter().all(ForceData::is_conservative) && self.drivers.is_empty()
     }
 
     fn bodies_without_inertia(&self) -> Vec<String> {
