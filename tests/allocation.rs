@@ -115,6 +115,7 @@ fn stepping_allocates_nothing_after_setup() {
     let chain = planar(mechanisms::chain(1.0, 1.0, &[-0.3; 64], &[0.0; 64], &[]));
     let slider_crank_3d = spatial(dalembert_testkit::spatial::slider_crank_3d());
     let chain_3d = spatial(dalembert_testkit::spatial::chain3d(64));
+    let forced_3d = spatial(dalembert_testkit::spatial::forced_double_pendulum());
     // Every integrator, including the implicit one, with the augmented formulation.
     let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
     let baum = ConstraintTreatment::baumgarte_for_step(1e-3);
@@ -187,6 +188,24 @@ fn stepping_allocates_nothing_after_setup() {
             "amalgamated",
             Backend::Auto,
             "spatial chain of 64, amalgamated",
+        ),
+        (
+            &forced_3d,
+            "augmented",
+            Backend::Auto,
+            "spatial pendulum with every force element, augmented",
+        ),
+        (
+            &forced_3d,
+            "embedding",
+            Backend::Auto,
+            "spatial pendulum with every force element, embedding",
+        ),
+        (
+            &forced_3d,
+            "amalgamated",
+            Backend::Auto,
+            "spatial pendulum with every force element, amalgamated",
         ),
     ] {
         for (name, opts) in &cases {

@@ -12,6 +12,7 @@ mod functions;
 mod names;
 mod overrides;
 mod spatial;
+mod spatial_forces;
 mod strict;
 mod values;
 

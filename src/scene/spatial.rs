@@ -12,15 +12,15 @@ use super::error::SceneError;
 use super::format::{FunctionDef, SimDef};
 use super::functions::time_function;
 use super::names::{Ctx, Names};
+use super::spatial_forces::{self, ForceDef};
 use super::strict::{self, Inertia3, Points3};
 use super::{build, Scene};
 use crate::animation::Drawing;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
-use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Force, Joint, JointKind, ModelBuilder};
+use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 use std::collections::HashMap;
-use std::ops::Range;
 use std::sync::Arc;
 use toml::Spanned;
 
@@ -121,23 +121,6 @@ pub(crate) struct DriverDef {
     pub body: Option<String>,
     pub coordinate: Option<String>,
     pub function: FunctionDef,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct ForceDef {
-    pub name: String,
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub body: Option<String>,
-    #[serde(default, deserialize_with = "strict::two_names_opt")]
-    pub bodies: Option<[String; 2]>,
-    pub at: Option<Points3>,
-    #[serde(default, deserialize_with = "strict::xyz_opt")]
-    pub value: Option<[f64; 3]>,
-    pub stiffness: Option<f64>,
-    pub damping: Option<f64>,
-    pub free_length: Option<f64>,
 }
 
 /// An error from the model builder, placed at the first element it names (`joint 'B': …`).
@@ -453,7 +436,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let d = sf.get_ref();
         names.unique(&ctx, &d.name, &span, "force")?;
         let owner = format!("force '{}'", d.name);
-        let f = force(d, &names, &ctx, &span, &owner, &positions)?;
+        let f = spatial_forces::force(d, &names, &ctx, &span, &owner, &positions)?;
         model.force(f);
     }
     let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
@@ -543,72 +526,5 @@ fn joint(d: &JointDef, [bi, bj]: [BodyRef; 2]) -> Result<Joint, String> {
             Joint::crossed(&d.name, kind, bi, bj, [0.0; 3], a, b)
         }
         (_, None) => return Err("needs 'at = [x, y, z]' (the joint's point, global)".into()),
-    })
-}
-
-/// The force element a `[[forces]]` table describes.
-fn force(
-    d: &ForceDef,
-    names: &Names<BodyRef>,
-    ctx: &Ctx<'_>,
-    span: &Range<usize>,
-    owner: &str,
-    positions: &[[f64; 3]],
-) -> Result<Force, SceneError> {
-    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
-    let body = || -> Result<BodyRef, SceneError> {
-        let n = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
-        names.body(ctx, n, span, owner)
-    };
-    let value = |what: &str| {
-        d.value
-            .ok_or_else(|| err(&format!("needs 'value = [{what}]' (global, constant)")))
-    };
-    Ok(match d.kind.as_str() {
-        "force" => {
-            let body = body()?;
-            let point = match (d.at, body) {
-                (Some(Points3::One(p)), _) => p,
-                (None, BodyRef::Body(i)) => positions[i],
-                (None, BodyRef::Ground) => [0.0; 3],
-                (Some(Points3::Two(_)), _) => return Err(err("'at' is one point [x, y, z] (global)")),
-            };
-            Force::PointForce {
-                name: d.name.clone(),
-                body,
-                point,
-                force: value("fx, fy, fz")?,
-            }
-        }
-        "torque" => Force::Torque {
-            name: d.name.clone(),
-            body: body()?,
-            torque: value("tx, ty, tz")?,
-        },
-        "spring-damper" => {
-            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
-            let (bi, bj) = (names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?);
-            let Some(Points3::Two([p, q])) = d.at else {
-                return Err(err(
-                    "needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (global attachment points)",
-                ));
-            };
-            let initial = (Vector3::from(q) - Vector3::from(p)).norm();
-            Force::SpringDamper {
-                name: d.name.clone(),
-                body_i: bi,
-                point_i: p,
-                body_j: bj,
-                point_j: q,
-                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'"))?,
-                damping: d.damping.unwrap_or(0.0),
-                free_length: d.free_length.unwrap_or(initial),
-            }
-        }
-        other => {
-            return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper)"
-            )))
-        }
     })
 }

@@ -120,22 +120,30 @@ impl<'de> Deserialize<'de> for Points {
     }
 }
 
-/// A number, a vector, or a time function.
+/// A number, a vector of `N` numbers (2 in planar scenes, 3 in spatial ones), or a time function.
 #[derive(Debug, Clone)]
-pub(crate) enum ValueDef {
+pub(crate) enum ValueDef<const N: usize = 2> {
     Number(f64),
-    Vector([f64; 2]),
+    Vector([f64; N]),
     Function(Box<FunctionDef>),
 }
 
-impl<'de> Deserialize<'de> for ValueDef {
+impl<'de, const N: usize> Deserialize<'de> for ValueDef<N> {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let v = Value::deserialize(d)?;
         if let Some(x) = number(&v) {
             return Ok(ValueDef::Number(x));
         }
+        let (vector, count) = if N == 3 {
+            ("[x, y, z]", "three")
+        } else {
+            ("[x, y]", "two")
+        };
         match v {
-            Value::Array(_) => pair(&v, "[x, y] (two numbers)")
+            Value::Array(_) if N == 3 => three(&v)
+                .map(|x| ValueDef::Vector(std::array::from_fn(|k| x[k])))
+                .map_err(D::Error::custom),
+            Value::Array(_) => numbers::<N>(&v, &format!("{vector} ({count} numbers)"))
                 .map(ValueDef::Vector)
                 .map_err(D::Error::custom),
             Value::Table(_) => v
@@ -143,7 +151,7 @@ impl<'de> Deserialize<'de> for ValueDef {
                 .map(|f| ValueDef::Function(Box::new(f)))
                 .map_err(|e| D::Error::custom(format!("function table: {}", e.message().trim()))),
             other => Err(D::Error::custom(format!(
-                "expected a number, [x, y] or a function table {{ kind = ... }}, got {}",
+                "expected a number, {vector} or a function table {{ kind = ... }}, got {}",
                 describe(&other)
             ))),
         }
@@ -169,13 +177,18 @@ fn numbers<const N: usize>(v: &Value, what: &str) -> Result<[f64; N], String> {
 /// Deserializes `[x, y, z]` (a spatial scene's vector: two numbers get a reminder of why three
 /// are expected).
 pub(crate) fn xyz<'de, D: Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
-    let v = Value::deserialize(d)?;
-    if matches!(&v, Value::Array(a) if a.len() == 2) {
-        return Err(D::Error::custom(
-            "expected [x, y, z] (three numbers): the scene is spatial because its gravity has three components, got 2 elements",
-        ));
+    three(&Value::deserialize(d)?).map_err(D::Error::custom)
+}
+
+/// `[x, y, z]`, with the reminder for two numbers.
+fn three(v: &Value) -> Result<[f64; 3], String> {
+    if matches!(v, Value::Array(a) if a.len() == 2) {
+        return Err(
+            "expected [x, y, z] (three numbers): the scene is spatial because its gravity has three components, got 2 elements"
+                .into(),
+        );
     }
-    numbers(&v, "[x, y, z] (three numbers)").map_err(D::Error::custom)
+    numbers(v, "[x, y, z] (three numbers)")
 }
 
 /// Deserializes an optional `[x, y, z]`.

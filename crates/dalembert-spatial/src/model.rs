@@ -115,7 +115,12 @@ impl ModelBuilder {
         let mut forces = Vec::with_capacity(self.forces.len());
         for f in &self.forces {
             let element = format!("force '{}'", f.name());
-            forces.push(ForceData::new(f, &|b| index(&element, b), &frame_of)?);
+            if let Force::User(u) = f {
+                for b in u.bodies() {
+                    index(&element, b)?;
+                }
+            }
+            forces.push(ForceData::new(f, &|b| index(&element, b), &frame_of, &joints)?);
         }
         let layout = Layout::new(
             self.bodies
@@ -139,6 +144,7 @@ impl ModelBuilder {
             joints,
             drivers,
             forces,
+            force_names: self.forces.iter().map(|f| f.name().to_string()).collect(),
             layout,
             pattern,
             equations,
@@ -155,6 +161,8 @@ pub struct Model {
     /// Drivers, as constraints after the joints (their rows follow the joints' rows).
     drivers: Vec<JointData>,
     forces: Vec<ForceData>,
+    /// The force elements' names (messages).
+    force_names: Vec<String>,
     layout: Layout,
     pattern: ConstraintPattern,
     /// `(joint or driver, equation within it)` of every row (drivers numbered after the joints).
@@ -333,7 +341,7 @@ impl MultibodySystem for Model {
         q
     }
 
-    fn applied_forces(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+    fn applied_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         for (i, b) in self.bodies.iter().enumerate() {
             let (_, w) = frame::velocity(i, v);
             let gyro = -w.cross(&(b.inertia * w));
@@ -345,11 +353,19 @@ impl MultibodySystem for Model {
         }
         let frame = |b: Option<usize>| self.frame(b, q, v);
         for f in &self.forces {
-            f.add(&frame, out);
+            f.add(t, &frame, out);
         }
     }
 
-    fn check_forces(&self, t: f64, _q: &[f64], _v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
+    fn check_forces(&self, t: f64, q: &[f64], v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
+        let frame = |b: Option<usize>| self.frame(b, q, v);
+        for (f, name) in self.forces.iter().zip(&self.force_names) {
+            f.check(&frame).map_err(|what| DynamicsError::ForceElement {
+                time: t,
+                element: format!("force '{name}'"),
+                what,
+            })?;
+        }
         match q_e.iter().position(|x| !x.is_finite()) {
             None => Ok(()),
             Some(i) => Err(DynamicsError::NonFinite {
@@ -400,7 +416,7 @@ impl MultibodySystem for Model {
             .sum()
     }
 
-    fn potential_energy(&self, _t: f64, q: &[f64]) -> f64 {
+    fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
         let gravity: f64 = self
             .bodies
             .iter()
@@ -408,7 +424,7 @@ impl MultibodySystem for Model {
             .map(|(i, b)| -b.mass * self.gravity.dot(&frame::position(i, q).0))
             .sum();
         let frame = |b: Option<usize>| self.frame(b, q, &[]);
-        gravity + self.forces.iter().map(|f| f.potential(&frame)).sum::<f64>()
+        gravity + self.forces.iter().map(|f| f.potential(t, &frame)).sum::<f64>()
     }
 
     /// Every force element is conservative and nothing is driven (a driver does work).

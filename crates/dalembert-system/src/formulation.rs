@@ -120,6 +120,17 @@ pub enum DynamicsError {
         /// What was not finite.
         what: String,
     },
+    /// A force element left the range where its law is defined (e.g. a rotational spring wound
+    /// past half a turn, whose deflection is measured within ±π).
+    #[error("t = {time}: {element}: {what}")]
+    ForceElement {
+        /// Time.
+        time: f64,
+        /// The element (`force 'name'`).
+        element: String,
+        /// What happened.
+        what: String,
+    },
     /// A kinematic analysis (projection, position recovery) failed.
     #[error(transparent)]
     Kinematics(#[from] crate::ConstraintError),

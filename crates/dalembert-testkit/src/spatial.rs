@@ -160,3 +160,75 @@ pub fn chain3d_toml(n: usize, end: f64) -> String {
     s += &format!("\n[simulation]\nend = {end:?}\nintegrator = \"rk4\"\nstep = 1e-3\noutput_every = 0.01\n");
     s
 }
+
+/// A double pendulum (revolute about y at the origin, then about x) carrying one of each spatial
+/// force element: a harmonic force in body axes, a polynomial global torque, a spring–damper with
+/// an actuator, a harmonic torque about the first joint, a rotational spring–damper about the
+/// second. Not an anchors scene: it exercises every force element (allocation test, agreement).
+pub fn forced_double_pendulum() -> Arc<Model> {
+    use dalembert_spatial::forces::ForceFrame;
+    use dalembert_spatial::Force;
+    use dalembert_system::TimeFunction;
+    let mut b = ModelBuilder::new([0.0, 0.0, -G]);
+    let upper = b.body(Body::new("upper", 1.0, [0.002, 0.09, 0.09]).at([0.5, 0.0, 0.0]));
+    let lower = b.body(Body::new("lower", 0.5, [0.01, 0.02, 0.02]).at([1.0, 0.0, -0.3]));
+    b.joint(Joint::revolute(
+        "shoulder",
+        BodyRef::Ground,
+        upper,
+        [0.0; 3],
+        [0.0, 1.0, 0.0],
+    ));
+    b.joint(Joint::revolute("elbow", upper, lower, [1.0, 0.0, 0.0], [1.0, 0.0, 0.0]));
+    let harmonic = |amplitude: f64, frequency: f64| TimeFunction::Harmonic {
+        offset: 0.0,
+        amplitude,
+        frequency,
+        phase: 0.0,
+    };
+    b.force(Force::PointForce {
+        name: "push".into(),
+        body: lower,
+        point: [1.0, 0.1, -0.6],
+        force: [
+            harmonic(2.0, 1.0),
+            TimeFunction::Constant(0.5),
+            TimeFunction::Constant(0.0),
+        ],
+        frame: ForceFrame::Body,
+    });
+    b.force(Force::Torque {
+        name: "twist".into(),
+        body: upper,
+        torque: [
+            TimeFunction::Polynomial(vec![0.1, 0.2, -0.05]),
+            TimeFunction::Constant(0.0),
+            TimeFunction::Constant(0.3),
+        ],
+        frame: ForceFrame::Global,
+    });
+    b.force(Force::SpringDamper {
+        name: "cable".into(),
+        body_i: BodyRef::Ground,
+        point_i: [0.0, 0.5, 1.0],
+        body_j: lower,
+        point_j: [1.0, 0.0, -0.6],
+        stiffness: 20.0,
+        damping: 0.5,
+        free_length: 1.5,
+        actuator: Some(harmonic(3.0, 0.5)),
+    });
+    b.force(Force::JointTorque {
+        name: "motor".into(),
+        joint: "shoulder".into(),
+        torque: harmonic(4.0, 0.7),
+    });
+    b.force(Force::RotationalSpringDamper {
+        name: "wrist-spring".into(),
+        joint: "elbow".into(),
+        stiffness: 5.0,
+        damping: 0.1,
+        free_angle: 0.2,
+    });
+    Arc::new(b.build().expect("the forced double pendulum is well formed"))
+}

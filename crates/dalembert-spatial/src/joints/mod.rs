@@ -1,4 +1,4 @@
-//! Spatial joints, each a fixed set of [`primitives`] between a marker on body `i` and one on body
+//! Spatial joints, each a fixed set of primitives (`joints/primitives.rs`) between a marker on body `i` and one on body
 //! `j` (either may be the ground).
 //!
 //! A joint is given where it is in the **initial configuration** (a global point and global axes,

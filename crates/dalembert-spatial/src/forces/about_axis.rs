@@ -1,0 +1,106 @@
+//! Torques about a revolute or cylindrical joint's axis: a joint torque `f(t)` and the rotational
+//! spring–damper `τ = −k (θ − θ₀) − c θ̇`, acting `+τ z` on the joint's second body and `−τ z` on its
+//! first.
+//!
+//! With the joint frame `(x_i, y_i, z)` on body `i` and `x_j` on body `j` (equal to `x_i` in the
+//! initial configuration), the joint angle is `θ = atan2(x_j · y_i, x_j · x_i)` (right-handed about
+//! `z`, 0 initially) and its rate `θ̇ = z · (ω_j − ω_i)`. The angle is known only within ±π: the
+//! spring's deflection `θ − θ₀` is taken in (−π, π], and the model stops a run whose
+//! spring winds past [`WIND_LIMIT`] rather than let the torque jump at half a turn.
+
+use super::add_torque;
+use crate::frame::Frame;
+use crate::joints::JointData;
+use dalembert_system::TimeFunction;
+use nalgebra::Vector3;
+use std::f64::consts::{PI, TAU};
+
+type V3 = Vector3<f64>;
+
+/// The largest deflection `|θ − θ₀|` (rad) a rotational spring may reach: 0.9 π. A step of an
+/// explicit method turns a joint by far less than the remaining 0.1 π (18°) in any run that
+/// resolves its motion, so the run stops before the measured angle can wrap.
+pub const WIND_LIMIT: f64 = 0.9 * PI;
+
+/// A torque law about a joint axis (see the module documentation).
+#[derive(Debug, Clone)]
+pub(crate) struct AxisForce {
+    body_i: Option<usize>,
+    body_j: Option<usize>,
+    /// The joint frame's `x, y, z` on body `i` (body components).
+    x_i: V3,
+    y_i: V3,
+    z_i: V3,
+    /// The joint frame's `x` on body `j` (body components).
+    x_j: V3,
+    stiffness: f64,
+    damping: f64,
+    free_angle: f64,
+    torque: Option<TimeFunction>,
+}
+
+impl AxisForce {
+    /// The law about `joint`'s axis.
+    pub fn new(joint: &JointData, stiffness: f64, damping: f64, free_angle: f64, torque: Option<TimeFunction>) -> Self {
+        let col = |k: usize| -> V3 { joint.axes_i.column(k).into() };
+        AxisForce {
+            body_i: joint.body_i,
+            body_j: joint.body_j,
+            x_i: col(0),
+            y_i: col(1),
+            z_i: col(2),
+            x_j: joint.axes_j.column(0).into(),
+            stiffness,
+            damping,
+            free_angle,
+            torque,
+        }
+    }
+
+    /// The axis (global), the deflection `θ − θ₀` in (−π, π] and the rate `θ̇`.
+    fn state(&self, fi: &Frame, fj: &Frame) -> (V3, f64, f64) {
+        let xj = fj.a * self.x_j;
+        let theta = xj.dot(&(fi.a * self.y_i)).atan2(xj.dot(&(fi.a * self.x_i)));
+        let z = fi.a * self.z_i;
+        let deflection = (theta - self.free_angle + PI).rem_euclid(TAU) - PI;
+        (z, deflection, z.dot(&(fj.w - fi.w)))
+    }
+
+    /// Adds `+τ z` on body `j` and `−τ z` on body `i` at time `t`.
+    pub fn add(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
+        let (fi, fj) = (frame(self.body_i), frame(self.body_j));
+        let (z, deflection, rate) = self.state(&fi, &fj);
+        let tau = -self.stiffness * deflection - self.damping * rate + self.torque.as_ref().map_or(0.0, |f| f.value(t));
+        if let Some(b) = self.body_j {
+            add_torque(out, b, &fj, &(tau * z));
+        }
+        if let Some(b) = self.body_i {
+            add_torque(out, b, &fi, &(-tau * z));
+        }
+    }
+
+    /// `½ k (θ − θ₀)²`.
+    pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
+        let (_, deflection, _) = self.state(&frame(self.body_i), &frame(self.body_j));
+        0.5 * self.stiffness * deflection * deflection
+    }
+
+    /// No damping, no applied torque.
+    pub fn is_conservative(&self) -> bool {
+        self.damping == 0.0 && self.torque.is_none()
+    }
+
+    /// A spring wound past [`WIND_LIMIT`] is an error (its angle would wrap).
+    pub fn check(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
+        if self.stiffness == 0.0 {
+            return Ok(());
+        }
+        let (_, deflection, _) = self.state(&frame(self.body_i), &frame(self.body_j));
+        if deflection.abs() > WIND_LIMIT {
+            return Err(format!(
+                "rotational spring wound {deflection:.4} rad from its free angle: its angle is measured within ±π, so it cannot follow past 0.9π"
+            ));
+        }
+        Ok(())
+    }
+}

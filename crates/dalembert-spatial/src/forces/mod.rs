@@ -1,0 +1,438 @@
+//! Applied forces on spatial bodies, as generalized forces on `(ṙ, ω')`: a force `F` at body
+//! point `s = A s'` contributes `F` and `Aᵀ(s × F)`, a torque `T` contributes `Aᵀ T` (Nikravesh
+//! §6.5). Gravity and the gyroscopic term `−ω' × J'ω'` are added by the model.
+//!
+//! | element | law | file |
+//! |---|---|---|
+//! | point force | `F(t)` at a body point, global or body components | here |
+//! | torque | `T(t)`, global or body components | here |
+//! | spring–damper–actuator | tension `k (ℓ − ℓ₀) + c ℓ̇ + f(t)` along the line of its points | here |
+//! | joint torque, rotational spring–damper | `τ = −k (θ − θ₀) − c θ̇ + f(t)` about a revolute or cylindrical joint's axis | [`about_axis`] |
+//! | user force | whatever [`UserForce::add`] writes | [`user`] |
+
+pub mod about_axis;
+pub mod user;
+
+use crate::frame::{Frame, NV};
+use crate::joints::{JointData, JointKind};
+use crate::BodyRef;
+use about_axis::AxisForce;
+use dalembert_system::{ModelError, TimeFunction};
+use nalgebra::Vector3;
+use std::sync::Arc;
+pub use user::{Frames, Loads, UserForce};
+
+type V3 = Vector3<f64>;
+
+/// The axes a force's or a torque's components are given in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum ForceFrame {
+    /// Global axes (the direction is fixed in space).
+    #[default]
+    Global,
+    /// The body's own axes (the direction turns with the body).
+    Body,
+}
+
+/// A force element, placed in the initial configuration (global components).
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub enum Force {
+    /// A force at a body point: components `force` (functions of time) in `frame`.
+    PointForce {
+        /// Name.
+        name: String,
+        /// The body.
+        body: BodyRef,
+        /// Point of application in the initial configuration (global).
+        point: [f64; 3],
+        /// Components (N) along the axes of `frame`.
+        force: [TimeFunction; 3],
+        /// Global or body axes.
+        frame: ForceFrame,
+    },
+    /// A torque on a body: components `torque` (functions of time) in `frame`.
+    Torque {
+        /// Name.
+        name: String,
+        /// The body.
+        body: BodyRef,
+        /// Components (N·m) along the axes of `frame`.
+        torque: [TimeFunction; 3],
+        /// Global or body axes.
+        frame: ForceFrame,
+    },
+    /// A translational spring–damper–actuator between two points: tension
+    /// `k (ℓ − ℓ₀) + c ℓ̇ + f(t)` (positive pulls the points together).
+    SpringDamper {
+        /// Name.
+        name: String,
+        /// First body and its point in the initial configuration (global).
+        body_i: BodyRef,
+        /// Point on the first body.
+        point_i: [f64; 3],
+        /// Second body.
+        body_j: BodyRef,
+        /// Point on the second body.
+        point_j: [f64; 3],
+        /// Stiffness `k`.
+        stiffness: f64,
+        /// Damping `c`.
+        damping: f64,
+        /// Free length `ℓ₀`.
+        free_length: f64,
+        /// Actuator tension `f(t)` (N), if any.
+        actuator: Option<TimeFunction>,
+    },
+    /// A torque `f(t)` about the axis of the named revolute or cylindrical joint: `+` on the
+    /// joint's second body, `−` on its first.
+    JointTorque {
+        /// Name.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// Torque (N·m) about the joint axis.
+        torque: TimeFunction,
+    },
+    /// A rotational spring–damper about the axis of the named revolute or cylindrical joint:
+    /// torque `−k (θ − θ₀) − c θ̇` on the second body (the opposite on the first), with `θ` the
+    /// joint angle (0 in the initial configuration, deflections measured within ±π).
+    RotationalSpringDamper {
+        /// Name.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// Stiffness `k` (N·m/rad).
+        stiffness: f64,
+        /// Damping `c` (N·m·s/rad).
+        damping: f64,
+        /// Free angle `θ₀` (rad).
+        free_angle: f64,
+    },
+    /// A force the user writes ([`UserForce`]).
+    User(Arc<dyn UserForce>),
+}
+
+impl Force {
+    /// The element's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Force::PointForce { name, .. }
+            | Force::Torque { name, .. }
+            | Force::SpringDamper { name, .. }
+            | Force::JointTorque { name, .. }
+            | Force::RotationalSpringDamper { name, .. } => name,
+            Force::User(u) => u.name(),
+        }
+    }
+
+    /// A constant global force at `point` (initial configuration, global) of `body`.
+    pub fn constant_force(name: &str, body: BodyRef, point: [f64; 3], force: [f64; 3]) -> Force {
+        Force::PointForce {
+            name: name.to_string(),
+            body,
+            point,
+            force: force.map(TimeFunction::Constant),
+            frame: ForceFrame::Global,
+        }
+    }
+
+    /// A constant global torque on `body`.
+    pub fn constant_torque(name: &str, body: BodyRef, torque: [f64; 3]) -> Force {
+        Force::Torque {
+            name: name.to_string(),
+            body,
+            torque: torque.map(TimeFunction::Constant),
+            frame: ForceFrame::Global,
+        }
+    }
+}
+
+/// A force element in body-frame terms.
+#[derive(Debug, Clone)]
+pub(crate) enum ForceData {
+    PointForce {
+        body: usize,
+        point: V3,
+        force: [TimeFunction; 3],
+        frame: ForceFrame,
+    },
+    Torque {
+        body: usize,
+        torque: [TimeFunction; 3],
+        frame: ForceFrame,
+    },
+    SpringDamper {
+        ends: [(Option<usize>, V3); 2],
+        stiffness: f64,
+        damping: f64,
+        free_length: f64,
+        actuator: Option<TimeFunction>,
+    },
+    AboutAxis(AxisForce),
+    User(Arc<dyn UserForce>),
+}
+
+/// Adds the generalized force of global force `f` at global arm `s` on body `b`.
+#[inline]
+pub(crate) fn add_point_force(out: &mut [f64], b: usize, frame: &Frame, s: &V3, f: &V3) {
+    let o = NV * b;
+    let n = frame.a.transpose() * s.cross(f);
+    for k in 0..3 {
+        out[o + k] += f[k];
+        out[o + 3 + k] += n[k];
+    }
+}
+
+/// Adds the generalized force of global torque `t` on body `b`.
+#[inline]
+pub(crate) fn add_torque(out: &mut [f64], b: usize, frame: &Frame, t: &V3) {
+    let n = frame.a.transpose() * t;
+    for k in 0..3 {
+        out[NV * b + 3 + k] += n[k];
+    }
+}
+
+/// The three components at `t`.
+fn components(f: &[TimeFunction; 3], t: f64) -> V3 {
+    V3::new(f[0].value(t), f[1].value(t), f[2].value(t))
+}
+
+/// The joint named `name`, which must be revolute or cylindrical (an axis-bound element).
+fn axis_joint<'a>(joints: &'a [JointData], name: &str) -> Result<&'a JointData, String> {
+    let j = joints
+        .iter()
+        .find(|j| j.name == name)
+        .ok_or_else(|| format!("no joint named '{name}'"))?;
+    match j.kind {
+        Some(JointKind::Revolute | JointKind::Cylindrical) => Ok(j),
+        Some(k) => Err(format!(
+            "joint '{name}' is {}: a torque about a joint axis needs a revolute or cylindrical joint",
+            k.name()
+        )),
+        None => Err(format!("'{name}' is a driver, not a joint")),
+    }
+}
+
+impl ForceData {
+    /// Converts `force` with the bodies' initial frames (`index` maps a body to its index,
+    /// `frame` to its initial frame) and the joints already built.
+    pub fn new(
+        force: &Force,
+        index: &dyn Fn(BodyRef) -> Result<Option<usize>, ModelError>,
+        frame: &dyn Fn(Option<usize>) -> Frame,
+        joints: &[JointData],
+    ) -> Result<Self, ModelError> {
+        let element = format!("force '{}'", force.name());
+        let bad = |what: &str| ModelError::InvalidParameter {
+            element: element.clone(),
+            what: what.to_string(),
+        };
+        let moving = |b: BodyRef| index(b)?.ok_or_else(|| bad("acts on the ground: give it a moving body"));
+        let local = |b: Option<usize>, p: &[f64; 3]| {
+            let f = frame(b);
+            f.a.transpose() * (V3::from(*p) - f.r)
+        };
+        let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
+        let functions =
+            |fs: &[TimeFunction]| -> Result<(), ModelError> { fs.iter().try_for_each(|f| f.validate(&element)) };
+        let non_negative = |pairs: &[(f64, &str)]| -> Result<(), ModelError> {
+            for (v, what) in pairs {
+                if !(v.is_finite() && *v >= 0.0) {
+                    return Err(bad(&format!("{what} must be finite and non-negative, got {v}")));
+                }
+            }
+            Ok(())
+        };
+        Ok(match force {
+            Force::PointForce {
+                body,
+                point,
+                force: f,
+                frame: axes,
+                ..
+            } => {
+                if !finite(point) {
+                    return Err(bad("point must be finite"));
+                }
+                functions(f)?;
+                let b = moving(*body)?;
+                ForceData::PointForce {
+                    body: b,
+                    point: local(Some(b), point),
+                    force: f.clone(),
+                    frame: *axes,
+                }
+            }
+            Force::Torque {
+                body,
+                torque,
+                frame: axes,
+                ..
+            } => {
+                functions(torque)?;
+                ForceData::Torque {
+                    body: moving(*body)?,
+                    torque: torque.clone(),
+                    frame: *axes,
+                }
+            }
+            Force::SpringDamper {
+                body_i,
+                point_i,
+                body_j,
+                point_j,
+                stiffness,
+                damping,
+                free_length,
+                actuator,
+                ..
+            } => {
+                if !finite(point_i) || !finite(point_j) {
+                    return Err(bad("points must be finite"));
+                }
+                non_negative(&[
+                    (*stiffness, "stiffness"),
+                    (*damping, "damping"),
+                    (*free_length, "free length"),
+                ])?;
+                functions(actuator.as_slice())?;
+                let (bi, bj) = (index(*body_i)?, index(*body_j)?);
+                if bi == bj {
+                    return Err(bad("must connect two different bodies"));
+                }
+                ForceData::SpringDamper {
+                    ends: [(bi, local(bi, point_i)), (bj, local(bj, point_j))],
+                    stiffness: *stiffness,
+                    damping: *damping,
+                    free_length: *free_length,
+                    actuator: actuator.clone(),
+                }
+            }
+            Force::JointTorque { joint, torque, .. } => {
+                functions(std::slice::from_ref(torque))?;
+                let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
+                ForceData::AboutAxis(AxisForce::new(j, 0.0, 0.0, 0.0, Some(torque.clone())))
+            }
+            Force::RotationalSpringDamper {
+                joint,
+                stiffness,
+                damping,
+                free_angle,
+                ..
+            } => {
+                non_negative(&[(*stiffness, "stiffness"), (*damping, "damping")])?;
+                if !free_angle.is_finite() {
+                    return Err(bad("free angle must be finite"));
+                }
+                let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
+                ForceData::AboutAxis(AxisForce::new(j, *stiffness, *damping, *free_angle, None))
+            }
+            Force::User(u) => ForceData::User(u.clone()),
+        })
+    }
+
+    /// Adds the element's generalized force at time `t` and the state behind `frame`.
+    pub fn add(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
+        match self {
+            ForceData::PointForce {
+                body,
+                point,
+                force,
+                frame: axes,
+            } => {
+                let f = frame(Some(*body));
+                let components = components(force, t);
+                let global = match axes {
+                    ForceFrame::Body => f.a * components,
+                    ForceFrame::Global => components,
+                };
+                add_point_force(out, *body, &f, &f.global(point), &global);
+            }
+            ForceData::Torque {
+                body,
+                torque,
+                frame: axes,
+            } => {
+                let components = components(torque, t);
+                match axes {
+                    // Body components are the generalized force on ω' itself.
+                    ForceFrame::Body => {
+                        for k in 0..3 {
+                            out[NV * body + 3 + k] += components[k];
+                        }
+                    }
+                    ForceFrame::Global => add_torque(out, *body, &frame(Some(*body)), &components),
+                }
+            }
+            ForceData::SpringDamper {
+                ends,
+                stiffness,
+                damping,
+                free_length,
+                actuator,
+            } => {
+                let (fi, fj) = (frame(ends[0].0), frame(ends[1].0));
+                let (si, sj) = (fi.global(&ends[0].1), fj.global(&ends[1].1));
+                let d = fj.r + sj - fi.r - si;
+                let length = d.norm();
+                if length == 0.0 {
+                    // Coincident ends: the line of action is undefined, and the element exerts
+                    // no force there (exact for a free length of zero).
+                    return;
+                }
+                let u = d / length;
+                let rate = u.dot(&(fj.point_velocity(&sj) - fi.point_velocity(&si)));
+                let tension =
+                    stiffness * (length - free_length) + damping * rate + actuator.as_ref().map_or(0.0, |f| f.value(t));
+                if let Some(b) = ends[0].0 {
+                    add_point_force(out, b, &fi, &si, &(tension * u));
+                }
+                if let Some(b) = ends[1].0 {
+                    add_point_force(out, b, &fj, &sj, &(-tension * u));
+                }
+            }
+            ForceData::AboutAxis(a) => a.add(t, frame, out),
+            ForceData::User(u) => u.add(t, &Frames::new(frame), &mut Loads::new(frame, out)),
+        }
+    }
+
+    /// Potential energy of a conservative element at `t` (zero for the others).
+    pub fn potential(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
+        match self {
+            ForceData::SpringDamper {
+                ends,
+                stiffness,
+                free_length,
+                ..
+            } => {
+                let (fi, fj) = (frame(ends[0].0), frame(ends[1].0));
+                let d = fj.point(&ends[1].1) - fi.point(&ends[0].1);
+                0.5 * stiffness * (d.norm() - free_length).powi(2)
+            }
+            ForceData::AboutAxis(a) => a.potential(frame),
+            ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
+            ForceData::PointForce { .. } | ForceData::Torque { .. } => 0.0,
+        }
+    }
+
+    /// True when the element is conservative with its potential counted by [`ForceData::potential`].
+    pub fn is_conservative(&self) -> bool {
+        match self {
+            ForceData::SpringDamper { damping, actuator, .. } => *damping == 0.0 && actuator.is_none(),
+            ForceData::AboutAxis(a) => a.is_conservative(),
+            ForceData::User(u) => u.is_conservative(),
+            ForceData::PointForce { .. } | ForceData::Torque { .. } => false,
+        }
+    }
+
+    /// Checks that the element's law holds at the state behind `frame`: `Err(what)` when it has
+    /// left its range.
+    pub fn check(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
+        match self {
+            ForceData::AboutAxis(a) => a.check(frame),
+            _ => Ok(()),
+        }
+    }
+}

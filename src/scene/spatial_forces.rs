@@ -1,0 +1,217 @@
+//! The `[[forces]]` of a spatial scene (`docs/scenes.md`, "Spatial scenes"): point forces and
+//! torques (constant or functions of time, global or body axes), torques about a joint's axis,
+//! spring–damper–actuators and rotational spring–dampers.
+
+use super::error::SceneError;
+use super::format::FunctionDef;
+use super::functions::time_function;
+use super::names::{Ctx, Names};
+use super::strict::{self, Points3, ValueDef};
+use dalembert_spatial::forces::ForceFrame;
+use dalembert_spatial::{BodyRef, Force};
+use dalembert_system::TimeFunction;
+use nalgebra::Vector3;
+use serde::Deserialize;
+use std::ops::Range;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ForceDef {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub body: Option<String>,
+    #[serde(default, deserialize_with = "strict::two_names_opt")]
+    pub bodies: Option<[String; 2]>,
+    pub joint: Option<String>,
+    pub at: Option<Points3>,
+    pub value: Option<ValueDef<3>>,
+    pub fx: Option<ValueDef<3>>,
+    pub fy: Option<ValueDef<3>>,
+    pub fz: Option<ValueDef<3>>,
+    pub tx: Option<ValueDef<3>>,
+    pub ty: Option<ValueDef<3>>,
+    pub tz: Option<ValueDef<3>>,
+    pub frame: Option<String>,
+    pub stiffness: Option<f64>,
+    pub damping: Option<f64>,
+    pub free_length: Option<f64>,
+    pub free_angle: Option<f64>,
+    pub actuator: Option<FunctionDef>,
+}
+
+/// A number or a function (a vector is refused).
+fn scalar(v: &ValueDef<3>, key: &str) -> Result<TimeFunction, String> {
+    match v {
+        ValueDef::Number(x) => Ok(TimeFunction::Constant(*x)),
+        ValueDef::Function(f) => time_function(f, None).map_err(|m| format!("'{key}': {m}")),
+        ValueDef::Vector(_) => Err(format!("'{key}' is one number or a function, got a vector")),
+    }
+}
+
+impl ForceDef {
+    /// The three components of a force (`f`) or a torque (`t`): `value = [x, y, z]` (constants) or
+    /// the component keys, each a number or a function (missing ones are 0).
+    fn components(&self, letter: &str) -> Result<[TimeFunction; 3], String> {
+        let keys = if letter == "f" {
+            [&self.fx, &self.fy, &self.fz]
+        } else {
+            [&self.tx, &self.ty, &self.tz]
+        };
+        let named = |axis: &str| format!("{letter}{axis}");
+        match (&self.value, keys.iter().any(|k| k.is_some())) {
+            (Some(ValueDef::Vector(v)), false) => Ok(v.map(TimeFunction::Constant)),
+            (None, true) => {
+                let mut out = [0, 1, 2].map(|_| TimeFunction::Constant(0.0));
+                for ((o, k), axis) in out.iter_mut().zip(keys).zip(["x", "y", "z"]) {
+                    if let Some(v) = k {
+                        *o = scalar(v, &named(axis))?;
+                    }
+                }
+                Ok(out)
+            }
+            _ => Err(format!(
+                "give 'value = [{0}x, {0}y, {0}z]' (constant) or components '{0}x', '{0}y', '{0}z' (numbers or functions)",
+                letter
+            )),
+        }
+    }
+
+    /// `frame = "global" | "body"`.
+    fn axes(&self) -> Result<ForceFrame, String> {
+        match self.frame.as_deref() {
+            None | Some("global") => Ok(ForceFrame::Global),
+            Some("body") => Ok(ForceFrame::Body),
+            Some(other) => Err(format!("unknown frame '{other}' (expected global or body)")),
+        }
+    }
+
+    /// Refuses keys that belong to other types of force.
+    fn only(&self, allowed: &[&str]) -> Result<(), String> {
+        let present = [
+            ("body", self.body.is_some()),
+            ("bodies", self.bodies.is_some()),
+            ("joint", self.joint.is_some()),
+            ("at", self.at.is_some()),
+            ("value", self.value.is_some()),
+            ("fx", self.fx.is_some()),
+            ("fy", self.fy.is_some()),
+            ("fz", self.fz.is_some()),
+            ("tx", self.tx.is_some()),
+            ("ty", self.ty.is_some()),
+            ("tz", self.tz.is_some()),
+            ("frame", self.frame.is_some()),
+            ("stiffness", self.stiffness.is_some()),
+            ("damping", self.damping.is_some()),
+            ("free_length", self.free_length.is_some()),
+            ("free_angle", self.free_angle.is_some()),
+            ("actuator", self.actuator.is_some()),
+        ];
+        match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
+            Some((k, _)) => Err(format!("'{k}' does not belong to a {} element", self.kind)),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The force element a `[[forces]]` table describes.
+pub(crate) fn force(
+    d: &ForceDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+    positions: &[[f64; 3]],
+) -> Result<Force, SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let body = || -> Result<BodyRef, SceneError> {
+        let n = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+        names.body(ctx, n, span, owner)
+    };
+    let check = |r: Result<(), String>| r.map_err(|m| err(&m));
+    let name = d.name.clone();
+    Ok(match d.kind.as_str() {
+        "force" => {
+            check(d.only(&["body", "at", "value", "fx", "fy", "fz", "frame"]))?;
+            let body = body()?;
+            let point = match (d.at, body) {
+                (Some(Points3::One(p)), _) => p,
+                (None, BodyRef::Body(i)) => positions[i],
+                (None, BodyRef::Ground) => [0.0; 3],
+                (Some(Points3::Two(_)), _) => return Err(err("'at' is one point [x, y, z] (global)")),
+            };
+            Force::PointForce {
+                name,
+                body,
+                point,
+                force: d.components("f").map_err(|m| err(&m))?,
+                frame: d.axes().map_err(|m| err(&m))?,
+            }
+        }
+        "torque" if d.joint.is_some() => {
+            check(d.only(&["joint", "value"]))?;
+            let value = d
+                .value
+                .as_ref()
+                .ok_or_else(|| err("needs 'value' (N·m about the joint axis)"))?;
+            Force::JointTorque {
+                name,
+                joint: d.joint.clone().unwrap_or_default(),
+                torque: scalar(value, "value").map_err(|m| err(&m))?,
+            }
+        }
+        "torque" => {
+            check(d.only(&["body", "value", "tx", "ty", "tz", "frame"]))?;
+            Force::Torque {
+                name,
+                body: body()?,
+                torque: d.components("t").map_err(|m| err(&m))?,
+                frame: d.axes().map_err(|m| err(&m))?,
+            }
+        }
+        "spring-damper" => {
+            check(d.only(&["bodies", "at", "stiffness", "damping", "free_length", "actuator"]))?;
+            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
+            let (bi, bj) = (names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?);
+            let Some(Points3::Two([p, q])) = d.at else {
+                return Err(err(
+                    "needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (global attachment points)",
+                ));
+            };
+            let initial = (Vector3::from(q) - Vector3::from(p)).norm();
+            Force::SpringDamper {
+                name,
+                body_i: bi,
+                point_i: p,
+                body_j: bj,
+                point_j: q,
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'"))?,
+                damping: d.damping.unwrap_or(0.0),
+                free_length: d.free_length.unwrap_or(initial),
+                actuator: d
+                    .actuator
+                    .as_ref()
+                    .map(|f| time_function(f, None))
+                    .transpose()
+                    .map_err(|m| err(&format!("'actuator': {m}")))?,
+            }
+        }
+        "rotational-spring-damper" => {
+            check(d.only(&["joint", "stiffness", "damping", "free_angle"]))?;
+            Force::RotationalSpringDamper {
+                name,
+                joint: d.joint.clone().ok_or_else(|| {
+                    err("needs 'joint' (a revolute or cylindrical joint: the spring acts about its axis)")
+                })?,
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness'"))?,
+                damping: d.damping.unwrap_or(0.0),
+                free_angle: d.free_angle.unwrap_or(0.0),
+            }
+        }
+        other => {
+            return Err(err(&format!(
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper)"
+            )))
+        }
+    })
+}
