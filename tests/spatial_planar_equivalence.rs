@@ -115,3 +115,108 @@ fn planar_chain_built_in_3d_matches_the_planar_model() {
         );
     }
 }
+
+fn minimum_norm(sys: &Arc<dyn MultibodySystem>) -> Vec<Box<dyn Formulation>> {
+    use dalembert::augmented::AugmentedOptions;
+    use dalembert::embedding::EmbeddingOptions;
+    use dalembert::system::RedundancyTreatment::MinimumNorm;
+    vec![
+        Box::new(
+            Augmented::new(
+                sys.clone(),
+                AugmentedOptions {
+                    redundancy: MinimumNorm,
+                    ..Default::default()
+                },
+            )
+            .unwrap(),
+        ),
+        Box::new(Embedding::new(
+            sys.clone(),
+            EmbeddingOptions {
+                redundancy: MinimumNorm,
+                ..Default::default()
+            },
+        )),
+        Box::new(Amalgamated::new(sys.clone(), MinimumNorm)),
+    ]
+}
+
+#[test]
+fn planar_four_bar_built_in_3d_matches_the_planar_model_with_minimum_norm_reactions() {
+    // The anchors' four-bar (crank 1, coupler 2.5, rocker 1.5, ground 2; rods of 1 kg/m) with its
+    // four hinges along z in space: 3 × 6 − 4 × 5 = −2 by Grübler, one degree of freedom in fact,
+    // so three equations are redundant. They are all out of the plane: in the plane the spatial
+    // Jacobian is the planar one (full rank), so the in-plane accelerations and reaction forces are
+    // unique and must equal the planar model's; the out-of-plane reactions (fz, mx, my) are
+    // statically indeterminate, and with nothing loading the bodies out of the plane their
+    // minimum-norm values are zero.
+    let planar = mechanisms::four_bar(1.1, 2.0, 0.0, false);
+    let k = dalembert_testkit::closed_form::FourBar::ANCHOR;
+    let lengths = [k.a, k.b, k.c];
+    let mut b = ModelBuilder::new([0.0, -mechanisms::G, 0.0]);
+    let mut bodies = Vec::new();
+    let mut ends = Vec::new();
+    for (i, l) in lengths.iter().enumerate() {
+        let (x, y, th) = (planar.q[3 * i], planar.q[3 * i + 1], planar.q[3 * i + 2]);
+        let (vx, vy, w) = (planar.qd[3 * i], planar.qd[3 * i + 1], planar.qd[3 * i + 2]);
+        bodies.push(
+            b.body(
+                Body::new(&format!("rod{i}"), *l, [1e-4 * l, l * l * l / 12.0, l * l * l / 12.0])
+                    .at([x, y, 0.0])
+                    .oriented(from_axis_angle(&Vector3::z(), th))
+                    .moving([vx, vy, 0.0], [0.0, 0.0, w]),
+            ),
+        );
+        let half = [0.5 * l * th.cos(), 0.5 * l * th.sin()];
+        ends.push(([x - half[0], y - half[1], 0.0], [x + half[0], y + half[1], 0.0]));
+    }
+    let z = [0.0, 0.0, 1.0];
+    b.joint(Joint::revolute("A", BodyRef::Ground, bodies[0], ends[0].0, z));
+    b.joint(Joint::revolute("B", bodies[0], bodies[1], ends[0].1, z));
+    b.joint(Joint::revolute("C", bodies[1], bodies[2], ends[1].1, z));
+    b.joint(Joint::revolute("D", BodyRef::Ground, bodies[2], ends[2].0, z));
+    let spatial = Arc::new(b.build().unwrap());
+    let (q3, v3) = spatial.initial_state();
+
+    let planar_sys: Arc<dyn MultibodySystem> = planar.model.clone();
+    let (a_ref, lambda_ref) = solve(
+        &mut Augmented::with_defaults(planar_sys).unwrap(),
+        &planar.q,
+        &planar.qd,
+    );
+    let reactions_ref = planar.model.constraints().reactions_at(0.0, &planar.q, &lambda_ref);
+    let a_scale = a_ref.iter().fold(1.0f64, |s, x| s.max(x.abs()));
+    let f_scale = reactions_ref.iter().fold(1.0f64, |s, r| s.max(r.force.norm()));
+
+    let spatial_sys: Arc<dyn MultibodySystem> = spatial.clone();
+    for mut f in minimum_norm(&spatial_sys) {
+        let (a, lambda) = solve(f.as_mut(), &q3, &v3);
+        let mut da = 0.0f64;
+        for i in 0..3 {
+            for (c, p) in [(0, 0), (1, 1), (5, 2)] {
+                da = da.max((a[6 * i + c] - a_ref[3 * i + p]).abs());
+            }
+            for c in [2, 3, 4] {
+                da = da.max(a[6 * i + c].abs());
+            }
+        }
+        let (mut df, mut out_of_plane) = (0.0f64, 0.0f64);
+        for (r, r_ref) in spatial.reactions(0.0, &q3, &lambda).iter().zip(&reactions_ref) {
+            df = df
+                .max((r.force.x - r_ref.force.x).abs())
+                .max((r.force.y - r_ref.force.y).abs());
+            out_of_plane = out_of_plane
+                .max(r.force.z.abs())
+                .max(r.moment.x.abs())
+                .max(r.moment.y.abs());
+            // A hinge about z transmits no moment about z.
+            out_of_plane = out_of_plane.max(r.moment.z.abs());
+        }
+        assert!(
+            da < 1e-12 * a_scale && df < 1e-12 * f_scale && out_of_plane < 1e-12 * f_scale,
+            "{}: accelerations off by {da:e}, in-plane reactions by {df:e}, out-of-plane reactions {out_of_plane:e}",
+            f.name()
+        );
+    }
+}
