@@ -372,3 +372,59 @@ fn rssr_rocker_follows_the_closed_form_and_the_motor_supplies_the_power() {
     }
     assert!(largest > 1.0, "the motor does work: largest power {largest} W");
 }
+
+#[test]
+fn a_body_placed_by_a_reference_point_is_the_same_body_placed_by_its_centre_of_mass() {
+    // A rod (m = 2 kg, L = 1 m) hinged at the origin about y, turned 90° about x (its length along
+    // body y, hanging along −z), swinging at 2 rad/s: once written at its centre of mass with the
+    // inertia about it (m L²/12), once at the pivot with `center_of_mass` = (0, −L/2, 0) in body
+    // axes and the inertia about the pivot (m L²/3, `inertia_about = "reference"`). The parallel
+    // axis theorem and A c must turn the second into the first: the runs agree to round-off.
+    let (m, l) = (2.0f64, 1.0f64);
+    let body = |placement: &str, inertia: [f64; 3]| {
+        format!(
+            "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+             [[bodies]]\nname = \"rod\"\nmass = {m}\ninertia = {inertia:?}\n{placement}\n\
+             orientation = {{ axis = [1.0, 0.0, 0.0], degrees = 90.0 }}\nangular_velocity = [0.0, 2.0, 0.0]\n\
+             [[joints]]\nname = \"pivot\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n"
+        )
+    };
+    let (across_c, across_o, along) = (m * l * l / 12.0, m * l * l / 3.0, 1e-3);
+    let at_centre = body("position = [0.0, 0.0, -0.5]", [across_c, along, across_c]);
+    let at_pivot = body(
+        "position = [0.0, 0.0, 0.0]\ncenter_of_mass = [0.0, -0.5, 0.0]\ninertia_about = \"reference\"",
+        [across_o, along, across_o],
+    );
+    let tables: Vec<Table> = [at_centre, at_pivot]
+        .iter()
+        .map(|text| {
+            let s = Scene::from_toml(text, "rod")
+                .unwrap()
+                .with_values(&[("simulation.end", 2.0.into()), ("simulation.output_every", 0.1.into())])
+                .unwrap();
+            let rec = s.record(&AtomicBool::new(false));
+            rec.outcome.unwrap();
+            rec.table
+        })
+        .collect();
+    assert_eq!(tables[0].columns, tables[1].columns);
+    let mut worst = 0.0f64;
+    for c in &tables[0].columns {
+        let (a, b) = (tables[0].column(c).unwrap(), tables[1].column(c).unwrap());
+        worst = a.iter().zip(&b).fold(worst, |w, (x, y)| w.max((x - y).abs()));
+    }
+    assert!(worst < 1e-12, "the two descriptions differ by {worst:e}");
+    let z = tables[0].column("rod.z").unwrap();
+    assert!(
+        (z[0] + 0.5).abs() < 1e-12,
+        "the centre of mass starts at z = −L/2: {}",
+        z[0]
+    );
+    // The theorem itself: a rod's m L²/3 about its end is m L²/12 about its centre.
+    let j = dalembert::spatial::body::inertia_about_center(
+        m,
+        &Matrix3::from_diagonal(&Vector3::new(across_o, along, across_o)),
+        [0.0, -0.5, 0.0],
+    );
+    assert!((j - Matrix3::from_diagonal(&Vector3::new(across_c, along, across_c))).amax() < 1e-15);
+}

@@ -16,6 +16,7 @@ use super::spatial_forces::{self, ForceDef};
 use super::strict::{self, Inertia3, Points3};
 use super::{build, Scene};
 use crate::animation::Drawing;
+use dalembert_spatial::body;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
 use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
 use nalgebra::{Matrix3, Vector3};
@@ -61,6 +62,9 @@ pub(crate) struct BodyDef {
     pub velocity: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "strict::xyz_opt")]
     pub angular_velocity: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub center_of_mass: Option<[f64; 3]>,
+    pub inertia_about: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -339,23 +343,49 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let d = sb.get_ref();
         names.unique(&ctx, &d.name, &span, "body")?;
         let at = |m: String| ctx.err(Some(span.clone()), format!("body '{}': {m}", d.name));
-        let j = inertia(d).map_err(at)?;
         let p = d
             .orientation
             .as_ref()
             .map_or(Ok(euler_parameters::IDENTITY), orientation)
             .map_err(at)?;
         let (v, w) = (d.velocity.unwrap_or_default(), d.angular_velocity.unwrap_or_default());
+        // With `center_of_mass`, `position` (and `velocity`) are a reference point's; the model's
+        // coordinates stay the centre of mass.
+        let c = d.center_of_mass.unwrap_or_default();
+        let j = match d.inertia_about.as_deref() {
+            None | Some("center-of-mass") => inertia(d).map_err(at)?,
+            Some("reference") if d.inertia.is_some() => {
+                let j = body::inertia_about_center(d.mass, &inertia(d).map_err(at)?, c);
+                let smallest = j.symmetric_eigenvalues().min();
+                if smallest < -1e-12 * j.amax() {
+                    return Err(at(format!(
+                        "the inertia about the reference point is less than the centre of mass's share m (|c|² I − c cᵀ): about the centre of mass it would have the eigenvalue {smallest:.3e}"
+                    )));
+                }
+                j
+            }
+            Some("reference") => {
+                return Err(at(
+                    "inertia_about = \"reference\" applies to 'inertia' (a shape is about its centre)".into(),
+                ))
+            }
+            Some(other) => {
+                return Err(at(format!(
+                    "unknown inertia_about '{other}' (expected center-of-mass or reference)"
+                )))
+            }
+        };
         let body = Body::new(&d.name, d.mass, [0.0; 3])
             .with_inertia(j)
-            .at(d.position)
             .oriented(p)
-            .moving(v, w);
+            .moving(v, w)
+            .with_reference_point(d.position, c);
+        let com: [f64; 3] = body.position.into();
         // Velocities given in the file are kept as far as the constraints allow.
         let weight = |given: bool| if given { build::GIVEN_VELOCITY_WEIGHT } else { 1.0 };
         weights.extend([weight(d.velocity.is_some()); 3]);
         weights.extend([weight(d.angular_velocity.is_some()); 3]);
-        positions.push(d.position);
+        positions.push(com);
         let r = model.body(body);
         names.add_body(&d.name, r);
     }

@@ -65,6 +65,19 @@ impl Body {
         self
     }
 
+    /// Places the body by a reference point other than its centre of mass: `reference` (global) is
+    /// a body point and `center_of_mass` the centre of mass from it in body axes, so the centre of
+    /// mass is `reference + A c` and, with the velocity set by [`Body::moving`] read as the
+    /// reference point's, moves at `v + ω × A c`. Call after [`Body::oriented`] and
+    /// [`Body::moving`]. The model's coordinates stay the centre of mass (`docs/spatial.md`).
+    pub fn with_reference_point(mut self, reference: [f64; 3], center_of_mass: [f64; 3]) -> Self {
+        let arm = euler_parameters::rotation(&euler_parameters::normalized(&self.orientation))
+            * Vector3::from(center_of_mass);
+        self.position = Vector3::from(reference) + arm;
+        self.velocity += self.angular_velocity.cross(&arm);
+        self
+    }
+
     /// `Ok` when the data describe a physical body; otherwise an error naming it.
     pub(crate) fn validate(&self) -> Result<(), ModelError> {
         let bad = |what: String| ModelError::InvalidParameter {
@@ -115,4 +128,12 @@ impl Body {
     pub(crate) fn lacks_inertia(&self) -> bool {
         self.mass <= 0.0 || self.inertia.determinant() <= 1e-300
     }
+}
+
+/// The inertia tensor about the centre of mass from the tensor `at_point` about a body point from
+/// which the centre of mass lies at `center_of_mass` (body axes): the parallel-axis theorem
+/// `J_c = J_o − m (|c|² I − c cᵀ)`.
+pub fn inertia_about_center(mass: f64, at_point: &Matrix3<f64>, center_of_mass: [f64; 3]) -> Matrix3<f64> {
+    let c = Vector3::from(center_of_mass);
+    at_point - mass * (Matrix3::identity() * c.norm_squared() - c * c.transpose())
 }
