@@ -30,6 +30,27 @@ fn solve(f: &mut dyn Formulation, q: &[f64], v: &[f64]) -> (Vec<f64>, Vec<f64>) 
     (a, lambda)
 }
 
+/// The planar model's accelerations and reactions at its state (augmented formulation), with the
+/// scales the comparisons are relative to.
+struct PlanarReference {
+    a: Vec<f64>,
+    reactions: Vec<dalembert::constraints::Reaction>,
+    a_scale: f64,
+    f_scale: f64,
+}
+
+fn planar_reference(planar: &mechanisms::Mechanism) -> PlanarReference {
+    let sys: Arc<dyn MultibodySystem> = planar.model.clone();
+    let (a, lambda) = solve(&mut Augmented::with_defaults(sys).unwrap(), &planar.q, &planar.qd);
+    let reactions = planar.model.constraints().reactions_at(0.0, &planar.q, &lambda);
+    PlanarReference {
+        a_scale: a.iter().fold(1.0f64, |s, x| s.max(x.abs())),
+        f_scale: reactions.iter().fold(1.0f64, |s, r| s.max(r.force.norm())),
+        a,
+        reactions,
+    }
+}
+
 #[test]
 fn planar_chain_built_in_3d_matches_the_planar_model() {
     let (m, l) = (1.5, 0.8);
@@ -55,14 +76,12 @@ fn planar_chain_built_in_3d_matches_the_planar_model() {
     let (q3, v3) = spatial.initial_state();
 
     let planar_sys: Arc<dyn MultibodySystem> = planar.model.clone();
-    let (a_ref, lambda_ref) = solve(
-        &mut Augmented::with_defaults(planar_sys.clone()).unwrap(),
-        &planar.q,
-        &planar.qd,
-    );
-    let reactions_ref = planar.model.constraints().reactions_at(0.0, &planar.q, &lambda_ref);
-    let a_scale = a_ref.iter().fold(1.0f64, |s, x| s.max(x.abs()));
-    let f_scale = reactions_ref.iter().fold(1.0f64, |s, r| s.max(r.force.norm()));
+    let PlanarReference {
+        a: a_ref,
+        reactions: reactions_ref,
+        a_scale,
+        f_scale,
+    } = planar_reference(&planar);
 
     let spatial_sys: Arc<dyn MultibodySystem> = spatial.clone();
     for mut f in formulations(&planar_sys).into_iter().chain(formulations(&spatial_sys)) {
@@ -179,15 +198,12 @@ fn planar_four_bar_built_in_3d_matches_the_planar_model_with_minimum_norm_reacti
     let spatial = Arc::new(b.build().unwrap());
     let (q3, v3) = spatial.initial_state();
 
-    let planar_sys: Arc<dyn MultibodySystem> = planar.model.clone();
-    let (a_ref, lambda_ref) = solve(
-        &mut Augmented::with_defaults(planar_sys).unwrap(),
-        &planar.q,
-        &planar.qd,
-    );
-    let reactions_ref = planar.model.constraints().reactions_at(0.0, &planar.q, &lambda_ref);
-    let a_scale = a_ref.iter().fold(1.0f64, |s, x| s.max(x.abs()));
-    let f_scale = reactions_ref.iter().fold(1.0f64, |s, r| s.max(r.force.norm()));
+    let PlanarReference {
+        a: a_ref,
+        reactions: reactions_ref,
+        a_scale,
+        f_scale,
+    } = planar_reference(&planar);
 
     let spatial_sys: Arc<dyn MultibodySystem> = spatial.clone();
     for mut f in minimum_norm(&spatial_sys) {
