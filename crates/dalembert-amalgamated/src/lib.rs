@@ -11,27 +11,29 @@
 //! admissible motions). The multipliers consistent with the other formulations follow from
 //! `Q_c = −C_qᵀ λ` on the dependent columns: `C_qdᵀ λ_R = −Q_c,d`.
 //!
-//! The velocity transformation and its partition are shared with the embedding formulation
-//! (`dalembert_system::partition`). The system (size `3n − r`) is solved with dense LU for
-//! small models and with faer's sparse LU above 150 unknowns (measured: chain of 16, 112 unknowns,
-//! dense 70 µs vs sparse 86 µs; chain of 64, dense 2.56 ms vs sparse 0.76 ms); the sparse pattern
-//! (with `B_i` full in its dependent rows) depends only on the partition, so its symbolic analysis
-//! is redone only at a re-partition. (A symmetric indefinite sparse factorization would halve the work; faer's needs
-//! regularisation on this matrix, see `shared/LINALG-NOTES.md`.)
+//! **Factorization.** The matrix is symmetric indefinite; it is factored as `L D Lᵀ` with static
+//! 2 × 2 pivots on the pairs `(q̈_k, Q_c,k)` followed by the independent accelerations. Writing
+//! `K = [A E; Eᵀ 0]` with `A = [M −I; −I 0]` (always invertible, `A⁻¹ = [0 −I; −I −M]`, even where
+//! `M` is singular) and `E = [0; B_i]`, the Schur complement of the pivots is
+//!
+//! ```text
+//! S = −Eᵀ A⁻¹ E = B_iᵀ M B_i       (symmetric positive definite: Cholesky)
+//! ```
+//!
+//! and a right-hand side `(b₁, b₂, b₃)` is solved by `x₃ = S⁻¹ (b₃ + B_iᵀ (b₁ + M b₂))`,
+//! `x₁ = B_i x₃ − b₂`, `x₂ = M x₁ − b₁`. No fill-in beyond `S` occurs, and `B_i` is used through
+//! the sparse velocity transformation shared with the embedding formulation
+//! (`dalembert_system::partition`): factored this way the amalgamated system costs the embedding's
+//! reduced mass matrix plus `O(n)` (measured in `docs/formulations.md`). Every solve is checked by
+//! its residual on the full system.
 
-use dalembert_system::linalg::DenseLu;
+use dalembert_system::linalg::DenseCholesky;
 use dalembert_system::partition::VelocityTransform;
 use dalembert_system::{
     BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
     RedundancyTreatment, Stabilization,
 };
 use std::sync::Arc;
-
-mod sparse;
-use sparse::SparseSystem;
-
-/// Above this many unknowns the sparse factorization is used.
-const DENSE_LIMIT: usize = 150;
 
 /// The amalgamated formulation of a model.
 pub struct Amalgamated {
@@ -44,22 +46,37 @@ pub struct Amalgamated {
     cdot: Vec<f64>,
     rhs: Vec<f64>,
     stats: FormulationStats,
-    sparse: Option<SparseSystem>,
     work: Work,
 }
 
 /// Storage of one evaluation for a system of `dim = 2n + ni` unknowns (rebuilt only when a
 /// re-partition changes `ni`).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct Work {
+    /// The Schur complement `S = B_iᵀ M B_i` of the 2 × 2 pivots, then its Cholesky factor.
+    schur: DenseCholesky,
     /// Right-hand side, solution, and `K x` for the residual check (each `dim`).
     rhs: Vec<f64>,
     sol: Vec<f64>,
     kx: Vec<f64>,
+    /// Scratch of length `n`.
+    tmp: Vec<f64>,
     /// Multipliers on the independent rows (`r`).
     y: Vec<f64>,
-    /// The dense factorization (systems up to `DENSE_LIMIT` unknowns).
-    dense: Option<DenseLu>,
+}
+
+impl Work {
+    fn new(n: usize, ni: usize, r: usize) -> Self {
+        let dim = 2 * n + ni;
+        Work {
+            schur: DenseCholesky::new(ni),
+            rhs: vec![0.0; dim],
+            sol: vec![0.0; dim],
+            kx: vec![0.0; dim],
+            tmp: vec![0.0; n],
+            y: vec![0.0; r],
+        }
+    }
 }
 
 impl std::fmt::Debug for Amalgamated {
@@ -85,8 +102,7 @@ impl Amalgamated {
             redundancy,
             model,
             stats: FormulationStats::default(),
-            sparse: None,
-            work: Work::default(),
+            work: Work::new(0, 0, 0),
         }
     }
 
@@ -97,8 +113,8 @@ impl Amalgamated {
 }
 
 /// `y = K x` for `K = [M −I 0; −I 0 B_i; 0 B_iᵀ 0]`, from the blocks.
-fn amalgamated_mul(mass: &BlockDiagonal, b: &faer::Mat<f64>, x: &[f64], y: &mut [f64]) {
-    let (n, ni) = (b.nrows(), b.ncols());
+fn amalgamated_mul(mass: &BlockDiagonal, vt: &VelocityTransform, x: &[f64], y: &mut [f64]) {
+    let n = mass.dim();
     let (x1, rest) = x.split_at(n);
     let (x2, x3) = rest.split_at(n);
     let (y1, rest) = y.split_at_mut(n);
@@ -108,32 +124,40 @@ fn amalgamated_mul(mass: &BlockDiagonal, b: &faer::Mat<f64>, x: &[f64], y: &mut 
         y2[i] = -x1[i];
     }
     mass.mul_add(1.0, x1, y1);
-    for j in 0..ni {
-        let col = b.col_as_slice(j);
-        let mut dot = 0.0;
-        for i in 0..n {
-            y2[i] += col[i] * x3[j];
-            dot += col[i] * x2[i];
-        }
-        y3[j] = dot;
-    }
+    vt.mul_add(x3, y2);
+    vt.mul_transpose(x2, y3);
 }
 
-/// Writes the dense amalgamated matrix `[M −I 0; −I 0 B_i; 0 B_iᵀ 0]` into `k`.
-fn fill_dense(mass: &BlockDiagonal, vt: &VelocityTransform, mut k: faer::MatMut<'_, f64>) {
-    let (n, ni) = (vt.b.nrows(), vt.b.ncols());
-    k.fill(0.0);
-    for (r, c, v) in mass.entries() {
-        k[(r, c)] = v;
+/// Solves `K x = b` with the `L D Lᵀ` factors of the module doc (`S` already factored in `schur`):
+/// `x₃ = S⁻¹ (b₃ + B_iᵀ (b₁ + M b₂))`, `x₁ = B_i x₃ − b₂`, `x₂ = M x₁ − b₁`. `tmp` has length `n`.
+fn amalgamated_solve(
+    mass: &BlockDiagonal,
+    vt: &VelocityTransform,
+    schur: &mut DenseCholesky,
+    b: &[f64],
+    x: &mut [f64],
+    tmp: &mut [f64],
+) {
+    let n = mass.dim();
+    let (b1, rest) = b.split_at(n);
+    let (b2, b3) = rest.split_at(n);
+    let (x1, rest) = x.split_at_mut(n);
+    let (x2, x3) = rest.split_at_mut(n);
+    tmp.copy_from_slice(b1);
+    mass.mul_add(1.0, b2, tmp);
+    vt.mul_transpose(tmp, x3);
+    for (x, b) in x3.iter_mut().zip(b3) {
+        *x += b;
     }
-    for i in 0..n {
-        k[(i, n + i)] = -1.0;
-        k[(n + i, i)] = -1.0;
-        for j in 0..ni {
-            k[(n + i, 2 * n + j)] = vt.b[(i, j)];
-            k[(2 * n + j, n + i)] = vt.b[(i, j)];
-        }
+    schur.solve_vec(x3);
+    for (x, b) in x1.iter_mut().zip(b2) {
+        *x = -b;
     }
+    vt.mul_add(x3, x1);
+    for (x, b) in x2.iter_mut().zip(b1) {
+        *x = -b;
+    }
+    mass.mul_add(1.0, x1, x2);
 }
 
 impl Formulation for Amalgamated {
@@ -181,7 +205,6 @@ impl Formulation for Amalgamated {
             redundancy,
             stats,
             rhs,
-            sparse,
             ..
         } = self;
         let transformed = tracker.transform(t, sys, values, rhs).is_some();
@@ -196,13 +219,7 @@ impl Formulation for Amalgamated {
         let ni = partition.independent.len();
         let dim = 2 * n + ni;
         if work.rhs.len() != dim || work.y.len() != partition.rows.len() {
-            *work = Work {
-                rhs: vec![0.0; dim],
-                sol: vec![0.0; dim],
-                kx: vec![0.0; dim],
-                y: vec![0.0; partition.rows.len()],
-                dense: (dim <= DENSE_LIMIT).then(|| DenseLu::new(dim, 1)),
-            };
+            *work = Work::new(n, ni, partition.rows.len());
         }
         for i in 0..n {
             work.rhs[i] = q_e[i];
@@ -210,27 +227,14 @@ impl Formulation for Amalgamated {
         }
         work.rhs[2 * n..].iter_mut().for_each(|v| *v = 0.0);
         stats.factorizations += 1;
-        work.sol.copy_from_slice(&work.rhs);
-        let solved = match &mut work.dense {
-            Some(lu) => {
-                fill_dense(mass, vt, lu.matrix_mut());
-                lu.factor();
-                lu.solve_vec(&mut work.sol);
-                true
-            }
-            None => {
-                // The sparse pattern depends on the partition: a new symbolic analysis per partition.
-                if sparse.as_ref().is_none_or(|s| s.independent != partition.independent) {
-                    *sparse = SparseSystem::new(mass, partition);
-                }
-                sparse
-                    .as_mut()
-                    .is_some_and(|sp| sp.solve(mass, &vt.b, &mut work.sol).is_some())
-            }
-        };
+        vt.reduced_mass(mass, work.schur.storage_mut());
+        let factored = work.schur.factor().is_ok();
+        if factored {
+            amalgamated_solve(mass, vt, &mut work.schur, &work.rhs, &mut work.sol, &mut work.tmp);
+        }
         // Accept the solve when its residual is at round-off: ‖K x − b‖∞ ≤ 1e-9 (‖b‖∞ + s ‖x‖∞),
         // s the largest entry of K.
-        amalgamated_mul(mass, &vt.b, &work.sol, &mut work.kx);
+        amalgamated_mul(mass, vt, &work.sol, &mut work.kx);
         let norm = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         let res = work
             .kx
@@ -238,8 +242,8 @@ impl Formulation for Amalgamated {
             .zip(&work.rhs)
             .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
         let scale = mass.max_abs().max(1.0);
-        let s_b = (0..ni).map(|j| norm(vt.b.col_as_slice(j))).fold(scale, f64::max);
-        let accurate = solved && res <= 1e-9 * (norm(&work.rhs) + s_b * norm(&work.sol));
+        let s_b = vt.max_abs().max(scale);
+        let accurate = factored && res <= 1e-9 * (norm(&work.rhs) + s_b * norm(&work.sol));
         if !accurate || work.sol.iter().any(|v| !v.is_finite()) {
             return Err(model.singular_mass_error(t, "amalgamated system singular"));
         }

@@ -24,7 +24,6 @@ use dalembert_system::{
     BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
     RedundancyTreatment, Stabilization,
 };
-use faer::{Accum, Mat, Par};
 use std::sync::Arc;
 
 /// How the embedding formulation computes the multipliers.
@@ -81,15 +80,13 @@ pub struct Embedding {
 /// when a re-partition changes the sizes).
 struct Work {
     ni: usize,
-    /// `M B_i` (`n × ni`).
-    mb: Mat<f64>,
     /// `M_i = B_iᵀ M B_i` and its Cholesky factor.
     mi: DenseCholesky,
     /// `Q_e − M γ_i`, `n`.
     rhs_full: Vec<f64>,
     /// `q̈_i` (or `[q̈_i; λ_R]` with elimination), `n`.
     sol: Vec<f64>,
-    /// `Q_e − M q̈`, `n`.
+    /// `Q_e − M q̈`, `n` (also a column of `B_i` while the elimination matrix is filled).
     f: Vec<f64>,
     /// Multipliers on the independent rows, `r`.
     lam_r: Vec<f64>,
@@ -108,7 +105,6 @@ impl Work {
         }
         Work {
             ni,
-            mb: Mat::zeros(n, ni),
             mi: DenseCholesky::new(ni),
             rhs_full: vec![0.0; n],
             sol: vec![0.0; n],
@@ -242,33 +238,15 @@ impl Formulation for Embedding {
                 work.row_slot[row] = Some(i);
             }
         }
-        // M B_i column by column (M block diagonal), and Q_e − M γ_i.
-        for j in 0..ni {
-            let out = work.mb.col_as_slice_mut(j);
-            out.iter_mut().for_each(|v| *v = 0.0);
-            mass.mul_add(1.0, vt.b.col_as_slice(j), out);
-        }
+        // Q_e − M γ_i.
         work.rhs_full.copy_from_slice(q_e);
         mass.mul_add(-1.0, &vt.gamma, &mut work.rhs_full);
         match &mut work.elimination {
             None => {
-                // M_i q̈_i = B_iᵀ (Q_e − M γ_i),   M_i = B_iᵀ M B_i (Cholesky).
-                faer::linalg::matmul::matmul(
-                    work.mi.matrix_mut(),
-                    Accum::Replace,
-                    vt.b.transpose(),
-                    work.mb.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                for j in 0..ni {
-                    work.sol[j] =
-                        vt.b.col_as_slice(j)
-                            .iter()
-                            .zip(&work.rhs_full)
-                            .map(|(a, b)| a * b)
-                            .sum();
-                }
+                // M_i q̈_i = B_iᵀ (Q_e − M γ_i),   M_i = B_iᵀ M B_i (Cholesky), both over the
+                // column ranges of B_i's rows.
+                vt.mul_transpose(&work.rhs_full, &mut work.sol[..ni]);
+                vt.reduced_mass(mass, work.mi.storage_mut());
                 if work.mi.factor().is_err() {
                     return Err(model.singular_mass_error(t, "reduced mass matrix B_iᵀ M B_i not positive definite"));
                 }
@@ -280,8 +258,16 @@ impl Formulation for Embedding {
                     let mut k = lu.matrix_mut();
                     k.fill(0.0);
                     for j in 0..ni {
+                        // Column j of M B_i from column j of B_i.
+                        work.f.iter_mut().for_each(|v| *v = 0.0);
+                        let mut b_col = std::mem::take(&mut work.sol);
+                        for (i, b) in b_col.iter_mut().enumerate() {
+                            *b = vt.b_row(i)[j];
+                        }
+                        mass.mul_add(1.0, &b_col, &mut work.f);
+                        work.sol = b_col;
                         for i in 0..n {
-                            k[(i, j)] = work.mb[(i, j)];
+                            k[(i, j)] = work.f[i];
                         }
                     }
                     for (&(row, col), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
@@ -301,12 +287,7 @@ impl Formulation for Embedding {
         }
         // q̈ = B_i q̈_i + γ_i
         qdd.copy_from_slice(&vt.gamma);
-        for j in 0..ni {
-            let a = work.sol[j];
-            for (o, b) in qdd.iter_mut().zip(vt.b.col_as_slice(j)) {
-                *o += b * a;
-            }
-        }
+        vt.mul_add(&work.sol[..ni], qdd);
         if work.elimination.is_none() {
             // Multipliers on the independent rows from the dependent columns of C_qᵀ λ = Q_e − M q̈.
             work.f.copy_from_slice(q_e);

@@ -149,6 +149,12 @@ impl DenseCholesky {
         self.a.as_mut()
     }
 
+    /// The matrix as owned storage (column-major; its lower triangle is read), for kernels that
+    /// write whole columns.
+    pub fn storage_mut(&mut self) -> &mut Mat<f64> {
+        &mut self.a
+    }
+
     /// Factors in place; `Err` when the matrix is not positive definite, with faer's error.
     pub fn factor(&mut self) -> Result<(), llt::factor::LltError> {
         llt::factor::cholesky_in_place(

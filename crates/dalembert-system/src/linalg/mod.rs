@@ -15,6 +15,7 @@
 //! `shared/LINALG-NOTES.md` records what was verified about it.
 
 pub mod dense;
+mod rows;
 pub mod saddle_point;
 pub mod small_lu;
 pub mod sparse_lu;

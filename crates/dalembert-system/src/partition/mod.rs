@@ -9,11 +9,15 @@
 //! B_i = P[−C_qd⁻¹ C_qi ; I]               γ_i = P[C_qd⁻¹ Q_d ; 0]
 //! ```
 //!
-//! `C_qd⁻¹` is never formed: `C_qd` is factored (LU with partial pivoting) and solved against.
-//! The conditioning of `C_qd` is estimated from the ratio of the factor's pivots; the embedding and
-//! amalgamated formulations re-partition when it exceeds a threshold.
+//! `C_qd⁻¹` is never formed: `C_qd` is factored (LU with partial pivoting, dense or sparse) and
+//! solved against ([`VelocityTransform`], which also keeps `B_i` sparse by rows). The conditioning
+//! of `C_qd` is estimated from the ratio of the factor's pivots; the embedding and amalgamated
+//! formulations re-partition when it exceeds a threshold.
 
-use crate::linalg::DenseLu;
+mod reduced_mass;
+mod transform;
+pub use transform::{VelocityTransform, DENSE_LIMIT};
+
 use crate::structure::column_rank;
 use crate::{ConstraintSet, ConstraintValues};
 use faer::Mat;
@@ -58,115 +62,6 @@ impl Partition {
     }
 }
 
-/// `B_i`, `γ_i` and the factorization of `C_qd` at one state: a workspace allocated when the
-/// partition's sizes change and refilled in place at every state.
-#[derive(Debug)]
-pub struct VelocityTransform {
-    /// `B_i`, `n × (n − r)`.
-    pub b: Mat<f64>,
-    /// `γ_i`, length `n`.
-    pub gamma: Vec<f64>,
-    /// LU of `C_qd` (`r × r`, rows = `partition.rows`, columns = `partition.dependent`).
-    lu: DenseLu,
-    /// `C_qi` (`r × (n − r)`), then `C_qd⁻¹ C_qi`.
-    cqi: Mat<f64>,
-    /// For each system row: its index among `partition.rows`, if selected.
-    row_slot: Vec<Option<usize>>,
-    /// For each coordinate: dependent (`Ok(k)`) or independent (`Err(j)`) with its index.
-    col_slot: Vec<Result<usize, usize>>,
-    /// Scratch of length `r`.
-    g: Vec<f64>,
-    /// Ratio largest / smallest pivot of `C_qd`'s LU: a cheap condition estimate.
-    pub condition: f64,
-}
-
-impl VelocityTransform {
-    /// A workspace for `partition` of `n` coordinates and `m` equations.
-    pub fn new(partition: &Partition, n: usize, m: usize) -> Self {
-        let (r, ni) = (partition.rows.len(), partition.independent.len());
-        let mut row_slot = vec![None; m];
-        for (i, &row) in partition.rows.iter().enumerate() {
-            row_slot[row] = Some(i);
-        }
-        let mut col_slot = vec![Err(0); n];
-        for (k, &d) in partition.dependent.iter().enumerate() {
-            col_slot[d] = Ok(k);
-        }
-        for (j, &c) in partition.independent.iter().enumerate() {
-            col_slot[c] = Err(j);
-        }
-        VelocityTransform {
-            b: Mat::zeros(n, ni),
-            gamma: vec![0.0; n],
-            lu: DenseLu::new(r, ni.max(1)),
-            cqi: Mat::zeros(r, ni),
-            row_slot,
-            col_slot,
-            g: vec![0.0; r],
-            condition: f64::INFINITY,
-        }
-    }
-
-    /// Computes `B_i` and `γ_i` for the acceleration right-hand side `rhs` (length `m`: `Q_d`, or
-    /// its Baumgarte-modified form). Returns `false` if `C_qd` is singular. Allocates nothing.
-    pub fn update(
-        &mut self,
-        partition: &Partition,
-        sys: &(impl ConstraintSet + ?Sized),
-        values: &ConstraintValues,
-        rhs: &[f64],
-    ) -> bool {
-        let r = partition.rows.len();
-        {
-            let mut cqd = self.lu.matrix_mut();
-            cqd.fill(0.0);
-            self.cqi.fill(0.0);
-            for (&(row, col), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
-                if let Some(i) = self.row_slot[row] {
-                    match self.col_slot[col] {
-                        Ok(k) => cqd[(i, k)] += v,
-                        Err(j) => self.cqi[(i, j)] += v,
-                    }
-                }
-            }
-        }
-        let (small, big) = self.lu.factor();
-        self.condition = if r == 0 { 1.0 } else { big / small };
-        if !self.condition.is_finite() {
-            return false;
-        }
-        self.lu.solve_in_place(self.cqi.as_mut());
-        self.b.fill(0.0);
-        for (k, &dep) in partition.dependent.iter().enumerate() {
-            for j in 0..self.b.ncols() {
-                self.b[(dep, j)] = -self.cqi[(k, j)];
-            }
-        }
-        for (j, &ind) in partition.independent.iter().enumerate() {
-            self.b[(ind, j)] = 1.0;
-        }
-        for (g, &row) in self.g.iter_mut().zip(&partition.rows) {
-            *g = rhs[row];
-        }
-        self.lu.solve_vec(&mut self.g);
-        self.gamma.iter_mut().for_each(|v| *v = 0.0);
-        for (k, &dep) in partition.dependent.iter().enumerate() {
-            self.gamma[dep] = self.g[k];
-        }
-        true
-    }
-
-    /// Solves `C_qd x = y` (length `r`) in place.
-    pub fn solve_dependent(&mut self, y: &mut [f64]) {
-        self.lu.solve_vec(y);
-    }
-
-    /// Solves `C_qdᵀ x = y` (length `r`) in place.
-    pub fn solve_dependent_transpose(&mut self, y: &mut [f64]) {
-        self.lu.solve_transpose_vec(y);
-    }
-}
-
 /// One change of partition.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Repartition {
@@ -193,8 +88,7 @@ pub struct PartitionTracker {
     pub rank_tolerance: f64,
     /// If given, the user's choice of independent coordinates (used while `C_qd` stays regular).
     preferred: Option<Vec<usize>>,
-    /// Scratch of the projection: zeros (m), Ċ (m), a row-sized vector, a coordinate-sized one.
-    zeros: Vec<f64>,
+    /// Scratch of the projection: Ċ (m), a row-sized vector, a coordinate-sized one.
     cdot: Vec<f64>,
     y: Vec<f64>,
     delta: Vec<f64>,
@@ -210,7 +104,6 @@ impl PartitionTracker {
             threshold,
             rank_tolerance: 1e-9,
             preferred: None,
-            zeros: Vec::new(),
             cdot: Vec::new(),
             y: Vec::new(),
             delta: Vec::new(),
@@ -249,16 +142,29 @@ impl PartitionTracker {
         values: &ConstraintValues,
         rhs: &[f64],
     ) -> Option<(&Partition, &mut VelocityTransform)> {
-        let (n, m) = (sys.num_coordinates(), sys.num_equations());
+        self.factor(t, sys, values)?;
+        let (p, vt) = self.last()?;
+        vt.compute(rhs);
+        Some((p, vt))
+    }
+
+    /// The factorization of `C_qd` at the current state (without `B_i` and `γ_i`), re-partitioning
+    /// as [`PartitionTracker::transform`] does. `None` if even a fresh partition is singular.
+    pub fn factor(
+        &mut self,
+        t: f64,
+        sys: &(impl ConstraintSet + ?Sized),
+        values: &ConstraintValues,
+    ) -> Option<(&Partition, &mut VelocityTransform)> {
         let mut kept = false;
         if let Some(p) = &self.current {
-            let vt = self.vt.get_or_insert_with(|| VelocityTransform::new(p, n, m));
-            kept = vt.update(p, sys, values, rhs) && vt.condition <= self.threshold;
+            let vt = self.vt.get_or_insert_with(|| VelocityTransform::new(p, sys));
+            kept = vt.refactor(values) && vt.condition <= self.threshold;
         }
         if !kept {
             let fresh = Partition::choose(sys, values, self.rank_tolerance);
-            let mut vt = VelocityTransform::new(&fresh, n, m);
-            if !vt.update(&fresh, sys, values, rhs) {
+            let mut vt = VelocityTransform::new(&fresh, sys);
+            if !vt.refactor(values) {
                 return None;
             }
             if let Some(old) = &self.current {
@@ -320,10 +226,8 @@ impl PartitionTracker {
     ) -> Result<usize, crate::DynamicsError> {
         const MAX_ITERATIONS: usize = 25;
         let (n, m) = (sys.num_coordinates(), sys.num_equations());
-        self.zeros.resize(m, 0.0);
         self.cdot.resize(m, 0.0);
         self.delta.resize(n, 0.0);
-        let mut zeros = std::mem::take(&mut self.zeros);
         let mut y = std::mem::take(&mut self.y);
         let mut delta = std::mem::take(&mut self.delta);
         let mut cdot = std::mem::take(&mut self.cdot);
@@ -347,7 +251,7 @@ impl PartitionTracker {
                     }
                     .into());
                 }
-                let Some((p, vt)) = self.transform(t, sys, values, &zeros) else {
+                let Some((p, vt)) = self.factor(t, sys, values) else {
                     return Err(sys.redundancy_error(t, values));
                 };
                 y.clear();
@@ -360,7 +264,7 @@ impl PartitionTracker {
                 sys.correct_positions(q, &delta);
                 iterations += 1;
             }
-            let Some((p, vt)) = self.transform(t, sys, values, &zeros) else {
+            let Some((p, vt)) = self.factor(t, sys, values) else {
                 return Err(sys.redundancy_error(t, values));
             };
             for &d in &p.dependent {
@@ -375,8 +279,6 @@ impl PartitionTracker {
             }
             Ok(iterations)
         })();
-        zeros.iter_mut().for_each(|z| *z = 0.0);
-        self.zeros = zeros;
         self.y = y;
         self.delta = delta;
         self.cdot = cdot;
