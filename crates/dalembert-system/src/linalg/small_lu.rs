@@ -95,6 +95,14 @@ impl SmallLu {
     /// return `ranges` bounds the rows of the solution (as [`crate::linalg::SparseLu::solve_rows`]).
     pub fn solve_rows(&self, x: &mut [f64], width: usize, ranges: &mut [(usize, usize)]) {
         let n = self.n;
+        if width == 1 {
+            // One right-hand side: the plain solve, then the ranges from the values.
+            self.solve(x);
+            for (range, v) in ranges.iter_mut().zip(x.iter()) {
+                *range = if *v != 0.0 { (0, 1) } else { (0, 0) };
+            }
+            return;
+        }
         let a = &self.a;
         for k in 0..n {
             let p = self.piv[k];
