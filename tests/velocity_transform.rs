@@ -15,7 +15,7 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
-use dalembert::constraints::{ConstraintSet as _, Formulation, MultibodySystem, PartitionTracker, Stabilization};
+use dalembert::constraints::{Formulation, MultibodySystem, PartitionTracker, Stabilization};
 use dalembert::embedding::Embedding;
 use dalembert_system::partition::DENSE_LIMIT;
 use dalembert_testkit::mechanisms;
