@@ -117,13 +117,14 @@ impl Simulation {
     /// Builds the chosen formulation.
     pub fn formulation(&self) -> Result<Box<dyn Formulation>, SimulationError> {
         // The embedding and amalgamated formulations still partition the coordinates on a dense
-        // C_q (m × n) and the embedding keeps a dense B_i (n × dof): refuse models whose dense
-        // matrices would not fit, naming the size, instead of failing in the allocator.
+        // C_q (m × n) and both store B_i by rows (n × dof) and the reduced mass matrix (dof ×
+        // dof): refuse models whose dense matrices would not fit, naming the size, instead of
+        // failing in the allocator.
         let (n, m) = (self.model.num_velocities(), self.model.num_equations());
         let too_large = match self.formulation {
             FormulationKind::Augmented => None,
             _ if !dense_fits(m, n) => Some((m, n)),
-            FormulationKind::Embedding if !dense_fits(n, n.saturating_sub(m)) => Some((n, n - m)),
+            _ if !dense_fits(n, n.saturating_sub(m)) => Some((n, n - m)),
             _ => None,
         };
         if let Some((rows, cols)) = too_large {
