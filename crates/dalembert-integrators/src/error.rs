@@ -58,10 +58,7 @@ pub enum IntegrationError {
     },
 }
 
-fn list(eqs: &[dalembert_system::EquationRef]) -> String {
-    let names: Vec<String> = eqs.iter().map(|e| e.to_string()).collect();
-    names.join(", ")
-}
+use dalembert_system::error::list;
 
 /// An error together with the statistics of the run up to it.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -71,4 +68,33 @@ pub struct IntegrationFailure {
     pub error: IntegrationError,
     /// Statistics up to the failure.
     pub statistics: Box<Statistics>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dalembert_system::EquationRef;
+
+    /// A singular pass of a large mechanism names twelve equations and counts the rest, so the
+    /// message stays one readable line (the N-four-bar with N = 40 involves 121).
+    #[test]
+    fn singular_pass_lists_twelve_equations_and_counts_the_rest() {
+        let involved: Vec<EquationRef> = (0..121)
+            .map(|k| EquationRef {
+                constraint: k,
+                name: format!("O{k}"),
+                equation: 0,
+                label: "x",
+            })
+            .collect();
+        let msg = IntegrationError::SingularPass {
+            time: 0.72,
+            method: "dopri5",
+            step: 8.4e-6,
+            involved,
+        }
+        .to_string();
+        assert!(msg.contains("'O11' (x) and 109 more)"), "{msg}");
+        assert!(!msg.contains("'O12'"), "{msg}");
+    }
 }

@@ -36,7 +36,9 @@ fn truncated(mut items: Vec<String>) -> String {
     s
 }
 
-pub(crate) fn list(eqs: &[EquationRef]) -> String {
+/// The equations for a one-line message: the first twelve by name, the rest counted
+/// (`'J1' (x), 'J1' (y), … and 109 more`).
+pub fn list(eqs: &[EquationRef]) -> String {
     truncated(eqs.iter().map(|e| e.to_string()).collect())
 }
 
