@@ -125,6 +125,7 @@ impl Run<'_> {
         };
         let t0 = Instant::now();
         (self.observer)(&sample);
+        crate::vector_state::clear_upper_state();
         self.observer_time += t0.elapsed();
         Ok(())
     }
@@ -221,6 +222,7 @@ pub fn integrate_cancellable<F: Formulation + ?Sized>(
         extra: FormulationStats::default(),
         cancel,
     };
+    crate::vector_state::clear_upper_state();
     let result = run_loop(f, t0, t_end, &mut y, opts, &mut run);
     run.finish(f, wall);
     match result {

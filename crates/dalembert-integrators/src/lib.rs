@@ -29,6 +29,7 @@ mod explicit;
 mod generalized_alpha;
 mod options;
 mod statistics;
+mod vector_state;
 
 pub use driver::{integrate, integrate_cancellable, Sample};
 pub use error::{IntegrationError, IntegrationFailure};
