@@ -30,7 +30,8 @@ impl From<SingularKkt> for LinalgError {
 pub enum Backend {
     /// Up to the dense limit (`n + m` unknowns): the Schur complement when the mass blocks allow it
     /// (positive definite or diagonal), dense LU otherwise; above it the sparse Schur complement
-    /// when every mass block is positive definite, sparse LU otherwise.
+    /// when every mass block is positive definite; with singular mass blocks the dense back ends
+    /// up to twice the limit and the sparse LU above.
     #[default]
     Auto,
     /// Dense LU with partial pivoting of the whole saddle-point matrix.
@@ -69,7 +70,7 @@ pub fn resolve(backend: Backend, mass: &BlockDiagonal, m: usize, dense_limit: us
     let spd = mass.clone().invert_blocks(&mut mass.clone()).is_ok();
     match backend {
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
-        Backend::Auto if n + m > dense_limit => Backend::Sparse,
+        Backend::Auto if n + m > 2 * dense_limit => Backend::Sparse,
         Backend::Auto if schur::applicable(mass, m) => Backend::Schur,
         Backend::Auto => Backend::Dense,
         other => other,
