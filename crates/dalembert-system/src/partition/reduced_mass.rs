@@ -38,35 +38,56 @@ impl BRows<'_> {
     }
 }
 
-/// Writes the lower triangle of `B_iᵀ M B_i` into `out`; `bb`, `wb` are scratch of
-/// `MAX_BLOCK × ni` each.
-pub(crate) fn reduced_mass(rows: &BRows<'_>, mass: &BlockDiagonal, bb: &mut [f64], wb: &mut [f64], out: &mut Mat<f64>) {
+/// Writes the lower triangle of `B_iᵀ M B_i` into `out`; `bb`, `wb` are scratch of (largest block
+/// size) × `ni` each, `long` scratch for the indices of one block's rows.
+pub(crate) fn reduced_mass(
+    rows: &BRows<'_>,
+    mass: &BlockDiagonal,
+    bb: &mut [f64],
+    wb: &mut [f64],
+    long: &mut Vec<usize>,
+    out: &mut Mat<f64>,
+) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma") {
             // SAFETY: the CPU has the features the function is compiled for (checked just above).
-            unsafe { kernel_avx512(rows, mass, bb, wb, out) };
+            unsafe { kernel_avx512(rows, mass, bb, wb, long, out) };
             return;
         }
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
             // SAFETY: as above.
-            unsafe { kernel_avx2(rows, mass, bb, wb, out) };
+            unsafe { kernel_avx2(rows, mass, bb, wb, long, out) };
             return;
         }
     }
-    kernel::<false>(rows, mass, bb, wb, out);
+    kernel::<false>(rows, mass, bb, wb, long, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx2,fma")]
-fn kernel_avx512(rows: &BRows<'_>, mass: &BlockDiagonal, bb: &mut [f64], wb: &mut [f64], out: &mut Mat<f64>) {
-    kernel::<true>(rows, mass, bb, wb, out);
+fn kernel_avx512(
+    rows: &BRows<'_>,
+    mass: &BlockDiagonal,
+    bb: &mut [f64],
+    wb: &mut [f64],
+    long: &mut Vec<usize>,
+    out: &mut Mat<f64>,
+) {
+    kernel::<true>(rows, mass, bb, wb, long, out);
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn kernel_avx2(rows: &BRows<'_>, mass: &BlockDiagonal, bb: &mut [f64], wb: &mut [f64], out: &mut Mat<f64>) {
-    kernel::<true>(rows, mass, bb, wb, out);
+fn kernel_avx2(
+    rows: &BRows<'_>,
+    mass: &BlockDiagonal,
+    bb: &mut [f64],
+    wb: &mut [f64],
+    long: &mut Vec<usize>,
+    out: &mut Mat<f64>,
+) {
+    kernel::<true>(rows, mass, bb, wb, long, out);
 }
 
 /// `a b + c`, fused (one rounding) where the CPU has the instruction, else plain.
@@ -80,12 +101,18 @@ fn madd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
 }
 
 #[inline(always)]
-fn kernel<const FMA: bool>(rows: &BRows<'_>, mass: &BlockDiagonal, bb: &mut [f64], wb: &mut [f64], out: &mut Mat<f64>) {
+fn kernel<const FMA: bool>(
+    rows: &BRows<'_>,
+    mass: &BlockDiagonal,
+    bb: &mut [f64],
+    wb: &mut [f64],
+    long: &mut Vec<usize>,
+    out: &mut Mat<f64>,
+) {
     let ni = rows.ni;
     for q in 0..ni {
         out.col_as_slice_mut(q)[q..].iter_mut().for_each(|v| *v = 0.0);
     }
-    let mut long = [0usize; crate::blocks::MAX_BLOCK];
     for blk in 0..mass.num_blocks() {
         let (o, s) = (mass.offset(blk), mass.size(blk));
         let block = mass.block(blk);
@@ -104,15 +131,15 @@ fn kernel<const FMA: bool>(rows: &BRows<'_>, mass: &BlockDiagonal, bb: &mut [f64
         let (bb, wb) = (&mut bb[..s * len], &mut wb[..s * len]);
         bb.iter_mut().for_each(|v| *v = 0.0);
         wb.iter_mut().for_each(|v| *v = 0.0);
-        let mut n_long = 0;
+        long.clear();
         for a in 0..s {
             let (l, h) = rows.range(o + a);
             if l < h {
                 bb[a * len + l - lo..a * len + h - lo].copy_from_slice(&rows.row(o + a)[l..h]);
             }
             if h > l + 1 {
-                long[n_long] = a;
-                n_long += 1;
+                // Allocates only for a block with more long rows than any before.
+                long.push(a);
             }
         }
         for a in 0..s {
@@ -143,6 +170,7 @@ fn kernel<const FMA: bool>(rows: &BRows<'_>, mass: &BlockDiagonal, bb: &mut [f64
             let k = col.len();
             let row = |a: usize| &bb[a * len + q..a * len + q + k];
             let w = |a: usize| wb[a * len + q];
+            let n_long = long.len();
             let mut i = 0;
             while i < n_long {
                 match n_long - i {

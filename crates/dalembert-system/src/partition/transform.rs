@@ -63,10 +63,12 @@ pub struct VelocityTransform {
     dependent: Vec<usize>,
     rows: Vec<usize>,
     /// Scratch of length `r`; one mass block's rows of `B_i` and of `M_b B_b`, compacted to their
-    /// common column range (`MAX_BLOCK × (n − r)` each).
+    /// common column range (`s × (n − r)` each for the largest block size `s` met), and the
+    /// block's rows that span more than one column.
     g: Vec<f64>,
     bb: Vec<f64>,
     wb: Vec<f64>,
+    long: Vec<usize>,
     /// Ratio largest / smallest pivot of `C_qd`'s LU: a cheap condition estimate.
     pub condition: f64,
 }
@@ -138,6 +140,7 @@ impl VelocityTransform {
             g: vec![0.0; r],
             bb: vec![0.0; MAX_BLOCK * ni],
             wb: vec![0.0; MAX_BLOCK * ni],
+            long: Vec::with_capacity(MAX_BLOCK),
             condition: f64::INFINITY,
         }
     }
@@ -288,15 +291,22 @@ impl VelocityTransform {
     /// one pass over each column of `M_i` per block.
     pub fn reduced_mass(&mut self, mass: &BlockDiagonal, out: &mut Mat<f64>) {
         let ni = self.ni;
+        // Blocks larger than MAX_BLOCK (any size is allowed): scratch grown once, on first use.
+        let largest = (0..mass.num_blocks()).map(|b| mass.size(b)).max().unwrap_or(0);
+        if self.bb.len() < largest * ni {
+            self.bb.resize(largest * ni, 0.0);
+            self.wb.resize(largest * ni, 0.0);
+        }
         let VelocityTransform {
             b,
             col_of,
             support,
             bb,
             wb,
+            long,
             ..
         } = self;
         let rows = BRows { b, ni, col_of, support };
-        reduced_mass::reduced_mass(&rows, mass, bb, wb, out);
+        reduced_mass::reduced_mass(&rows, mass, bb, wb, long, out);
     }
 }
