@@ -84,9 +84,10 @@ struct Work {
     mi: DenseCholesky,
     /// `Q_e − M γ_i`, `n`.
     rhs_full: Vec<f64>,
-    /// `q̈_i` (or `[q̈_i; λ_R]` with elimination), `n`.
+    /// `q̈_i` (or `[q̈_i; λ_R]` with elimination), `n`; a column of `B_i` while the elimination
+    /// matrix is filled.
     sol: Vec<f64>,
-    /// `Q_e − M q̈`, `n` (also a column of `B_i` while the elimination matrix is filled).
+    /// `Q_e − M q̈`, `n`; a column of `M B_i` while the elimination matrix is filled.
     f: Vec<f64>,
     /// Multipliers on the independent rows, `r`.
     lam_r: Vec<f64>,
@@ -258,14 +259,12 @@ impl Formulation for Embedding {
                     let mut k = lu.matrix_mut();
                     k.fill(0.0);
                     for j in 0..ni {
-                        // Column j of M B_i from column j of B_i.
+                        // Column j of M B_i (in f) from column j of B_i (in sol, overwritten below).
                         work.f.iter_mut().for_each(|v| *v = 0.0);
-                        let mut b_col = std::mem::take(&mut work.sol);
-                        for (i, b) in b_col.iter_mut().enumerate() {
+                        for (i, b) in work.sol.iter_mut().enumerate() {
                             *b = vt.b_row(i)[j];
                         }
-                        mass.mul_add(1.0, &b_col, &mut work.f);
-                        work.sol = b_col;
+                        mass.mul_add(1.0, &work.sol, &mut work.f);
                         for i in 0..n {
                             k[(i, j)] = work.f[i];
                         }
