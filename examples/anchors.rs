@@ -210,11 +210,6 @@ fn main() {
         let key = format!("{scene}/{n}");
         let fd = fd_us(mech);
         for v in variants() {
-            // The implicit method forms its Jacobian by finite differences (O(n) residuals each):
-            // long chains are out of its range for now.
-            if v.integrator == "GeneralizedAlpha" && *n > 8 {
-                continue;
-            }
             let repeats = if quick { 1 } else { 3 };
             let runs: Vec<RunResult> = (0..repeats).map(|_| simulate(mech, &v.options)).collect();
             let sim_s = median(runs.iter().map(|r| r.sim_s).collect());

@@ -177,8 +177,12 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
     assert!(sim.formulation().is_ok(), "the sparse augmented formulation takes it");
 }
 
+/// Generalized-α's iteration matrix is sparse on the system's couplings: a chain of 40 000 links
+/// (120 000 coordinates, 80 000 equations) takes a step, and its positions satisfy `C = 0` to the
+/// Newton tolerance (1e-10, the method's definition: the index-3 form keeps the positions on the
+/// manifold).
 #[test]
-fn generalized_alpha_refuses_models_its_dense_matrix_cannot_hold() {
+fn generalized_alpha_steps_a_chain_of_forty_thousand_links() {
     use dalembert::integrators::{IntegratorOptions, Method};
     use dalembert::{FormulationKind, Simulation};
     let (model, q) = chain(40_000);
@@ -188,15 +192,17 @@ fn generalized_alpha_refuses_models_its_dense_matrix_cannot_hold() {
         q,
         qd: vec![0.0; n],
         start: 0.0,
-        end: 1e-3,
+        end: 2e-3,
         formulation: FormulationKind::Augmented,
         redundancy: Default::default(),
         integrator: IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 1e-3),
         velocity_weights: None,
     };
-    let err = sim.run(&mut |_| {}).unwrap_err().to_string();
+    let stats = sim.run(&mut |_| {}).unwrap();
+    assert_eq!(stats.steps, 2);
     assert!(
-        err.contains("generalized-alpha keeps a dense 200000 × 200000 iteration matrix (298.0 GiB)"),
-        "{err}"
+        stats.max_constraint_violation <= 1e-10,
+        "{}",
+        stats.max_constraint_violation
     );
 }

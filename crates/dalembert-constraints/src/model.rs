@@ -92,6 +92,15 @@ impl MultibodySystem for Model {
         self.mass_is_constant
     }
 
+    /// The moving bodies of each force element ([`ForceElement::bodies`]); `None` when an element
+    /// does not declare them.
+    fn force_coupling(&self) -> Option<Vec<Vec<usize>>> {
+        self.forces
+            .iter()
+            .map(|f| Some(f.bodies()?.iter().filter_map(|b| b.id().map(|id| id.0)).collect()))
+            .collect()
+    }
+
     /// `Q_e`: all applied generalized forces plus the quadratic-velocity force of offset centres of
     /// mass, written (not added) into `q_e`. Allocates nothing.
     fn applied_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &mut [f64]) {

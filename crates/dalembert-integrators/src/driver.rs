@@ -311,12 +311,13 @@ fn run_loop<F: Formulation + ?Sized>(
                 )));
             }
             let n = run.n;
-            // Its iteration matrix is dense (n + m)²: refuse sizes it cannot hold, by name,
-            // instead of failing in the allocator.
-            let k = n + run.lambda.len();
-            if !dalembert_system::structure::dense_fits(k, k) {
+            // Its iteration matrix is sparse on the couplings the system declares; a force element
+            // that does not declare its bodies couples all of them (a dense matrix): refuse sizes
+            // that cannot hold it, by name, instead of failing in the allocator.
+            let k = run.qdd.len() + run.lambda.len();
+            if f.system().force_coupling().is_none() && !dalembert_system::structure::dense_fits(k, k) {
                 return Err(IntegrationError::Options(format!(
-                    "generalized-alpha keeps a dense {k} × {k} iteration matrix ({:.1} GiB); use rk4 or dopri5 for models this large",
+                    "generalized-alpha: a force element does not declare the bodies it acts on (ForceElement::bodies), so its iteration matrix couples every body: {k} × {k} dense ({:.1} GiB) is too large; declare the bodies, or use rk4 or dopri5",
                     (k as f64) * (k as f64) * 8.0 / 1073741824.0
                 )));
             }
@@ -329,7 +330,12 @@ fn run_loop<F: Formulation + ?Sized>(
                 &mut run.qdd,
                 &mut run.lambda,
             )?;
-            let mut ga = GeneralizedAlpha::new(f.system(), rho_inf, &run.qdd, &run.lambda, q0);
+            let mut ga = GeneralizedAlpha::new(f.system(), rho_inf, &run.qdd, &run.lambda, q0).map_err(|e| {
+                DynamicsError::Singular {
+                    time: t0,
+                    what: format!("generalized-alpha's iteration matrix: {e}"),
+                }
+            })?;
             let result = generalized_alpha_loop(f, &mut ga, t0, y, opts, run, n_out, &out_time);
             run.extra.newton_iterations += ga.iterations;
             run.extra.factorizations += ga.factorizations;

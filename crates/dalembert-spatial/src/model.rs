@@ -316,6 +316,10 @@ impl MultibodySystem for Model {
         self
     }
 
+    fn force_coupling(&self) -> Option<Vec<Vec<usize>>> {
+        Some(self.forces.iter().map(ForceData::bodies).collect())
+    }
+
     fn mass(&self, _q: &[f64], out: &mut BlockDiagonal) {
         for (i, b) in self.bodies.iter().enumerate() {
             let blk = out.block_mut(i);

@@ -27,6 +27,7 @@ pub mod partition;
 pub mod sparse_pattern;
 pub mod structure;
 pub mod system;
+pub mod tangent;
 pub mod time_function;
 
 pub use blocks::BlockDiagonal;
@@ -39,4 +40,5 @@ pub use model_error::ModelError;
 pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use structure::StructureReport;
 pub use system::MultibodySystem;
+pub use tangent::TangentPattern;
 pub use time_function::TimeFunction;

@@ -65,6 +65,16 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// Euler parameters). Default: nothing to do.
     fn normalize(&self, _q: &mut [f64]) {}
 
+    /// The bodies (layout indices) whose coordinates each applied-force element reads and whose
+    /// generalized forces it writes, one group per element; the quadratic-velocity terms and the
+    /// mass of a body couple it only with itself and need no group. `None` when some element does
+    /// not say (a user-written force): every body may then depend on every other. Implicit
+    /// integrators take the sparsity of their iteration matrix from it
+    /// ([`crate::TangentPattern`]). Default `None`.
+    fn force_coupling(&self) -> Option<Vec<Vec<usize>>> {
+        None
+    }
+
     /// Kinetic energy at `(q, v)`.
     fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64;
 

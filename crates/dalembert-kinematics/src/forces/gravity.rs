@@ -1,5 +1,6 @@
 use super::ForceElement;
 use crate::rotation::rotation;
+use crate::BodyRef;
 use crate::{Body, Vec2};
 
 /// Uniform gravity: the force `m g` at every body's centre of mass, potential `−m g·r_cm`.
@@ -17,6 +18,10 @@ impl Gravity {
 }
 
 impl ForceElement for Gravity {
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        Some(Vec::new())
+    }
+
     fn name(&self) -> &str {
         "gravity"
     }

@@ -46,6 +46,14 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
     fn validate(&self, _bodies: usize) -> Result<(), crate::ModelError> {
         Ok(())
     }
+
+    /// The bodies whose coordinates the element reads or whose generalized forces it writes.
+    /// Implicit integrators take the sparsity of their iteration matrix from it; `None` (the
+    /// default, for elements that do not say) couples every body with every other, which is right
+    /// but makes the iteration matrix dense.
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        None
+    }
 }
 
 /// Adds the generalized force of global force `f` applied at point `p` of `body` to `q_e`.

@@ -31,6 +31,10 @@ impl PointForce {
 }
 
 impl ForceElement for PointForce {
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        Some(vec![self.body])
+    }
+
     fn name(&self) -> &str {
         &self.name
     }

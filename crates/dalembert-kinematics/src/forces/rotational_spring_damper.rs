@@ -26,6 +26,10 @@ impl RotationalSpringDamper {
 }
 
 impl ForceElement for RotationalSpringDamper {
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        Some(vec![self.bodies.0, self.bodies.1])
+    }
+
     fn name(&self) -> &str {
         &self.name
     }

@@ -46,6 +46,10 @@ impl SpringDamper {
 }
 
 impl ForceElement for SpringDamper {
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        Some(vec![self.bodies.0, self.bodies.1])
+    }
+
     fn name(&self) -> &str {
         &self.name
     }

@@ -28,6 +28,10 @@ impl Torque {
 }
 
 impl ForceElement for Torque {
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        Some(vec![self.body, self.reaction_body])
+    }
+
     fn name(&self) -> &str {
         &self.name
     }

@@ -40,6 +40,11 @@ pub(crate) struct AxisForce {
 }
 
 impl AxisForce {
+    /// The moving bodies the torque acts between.
+    pub fn bodies(&self) -> Vec<usize> {
+        self.body_i.into_iter().chain(self.body_j).collect()
+    }
+
     /// The law about `joint`'s axis.
     pub fn new(joint: &JointData, stiffness: f64, damping: f64, free_angle: f64, torque: Option<TimeFunction>) -> Self {
         let col = |k: usize| -> V3 { joint.axes_i.column(k).into() };

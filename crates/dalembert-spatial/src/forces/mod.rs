@@ -333,6 +333,24 @@ impl ForceData {
         })
     }
 
+    /// The moving bodies the element reads or loads (the sparsity of the implicit integrator's
+    /// iteration matrix).
+    pub fn bodies(&self) -> Vec<usize> {
+        match self {
+            ForceData::PointForce { body, .. } | ForceData::Torque { body, .. } => vec![*body],
+            ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
+            ForceData::AboutAxis(a) => a.bodies(),
+            ForceData::User(u) => u
+                .bodies()
+                .into_iter()
+                .filter_map(|b| match b {
+                    BodyRef::Body(i) => Some(i),
+                    BodyRef::Ground => None,
+                })
+                .collect(),
+        }
+    }
+
     /// Adds the element's generalized force at time `t` and the state behind `frame`.
     pub fn add(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
         match self {

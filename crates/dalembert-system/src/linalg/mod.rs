@@ -5,6 +5,8 @@
 //! * [`small_lu`]: unblocked dense LU for matrices up to a few dozen rows;
 //! * [`dense`]: dense LU and Cholesky (faer's in-place kernels) in storage allocated once;
 //! * [`sparse_lu`]: faer's sparse LU behind a fixed pattern (scatter positions computed once);
+//! * [`pattern_lu`]: a matrix given by an entry list, dense LU when small and sparse LU above (the
+//!   implicit integrator's iteration matrix);
 //! * [`saddle_point`]: the saddle-point matrix `[M C_qᵀ; C_q 0]` by dense LU, dense Schur
 //!   complement (Cholesky of `C_q M⁻¹ C_qᵀ`), sparse LU, or sparse Schur complement
 //!   ([`crate::gram`]'s sparse Cholesky);
@@ -15,12 +17,14 @@
 //! `shared/LINALG-NOTES.md` records what was verified about it.
 
 pub mod dense;
+pub mod pattern_lu;
 mod rows;
 pub mod saddle_point;
 pub mod small_lu;
 pub mod sparse_lu;
 
 pub use dense::{DenseCholesky, DenseLu};
+pub use pattern_lu::PatternLu;
 pub use saddle_point::{Backend, SaddlePoint};
 pub use small_lu::SmallLu;
 pub use sparse_lu::SparseLu;

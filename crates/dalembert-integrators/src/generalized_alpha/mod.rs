@@ -20,21 +20,28 @@
 //! ```
 //!
 //! `β' = h² β (1 − α_f)/(1 − α_m)`, `γ' = h γ (1 − α_f)/(1 − α_m)`, `K = ∂(M q̈ + C_qᵀ λ − Q_e)/∂q`,
-//! `D = −∂Q_e/∂v` (`∂/∂q` along the velocity coordinates: `q ⊕ ε e_j`). `K` and `D` are formed by finite differences of the residual (the documented
-//! fallback; analytic force and constraint Jacobians are future work), and the factored matrix is
-//! reused across steps of the same size (modified Newton) until it has served 20 steps or Newton
-//! contracts slowly. Newton stops when the position update and `‖C‖∞` are below the tolerance
-//! **and** the acceleration update is below 1e-10 of the acceleration scale (or has stalled at the
-//! round-off floor of `C/β'`, below 1e-6 of it): a test on the positions alone (`β' ∝ h²`) accepts
-//! one inexact iteration at small steps, and the velocity error then grows as `1/h`
-//! (`tests/ga_order_small_steps.rs`: second order from h = 3.2e-4 down to 1e-5). The positions satisfy `C = 0` to the Newton tolerance at every step: no drift. On Newton failure the step is halved
-//! (down to the minimum step) and grows back after successful steps.
+//! `D = −∂Q_e/∂v` (`∂/∂q` along the velocity coordinates: `q ⊕ ε e_j`). The matrix is sparse, on
+//! the pattern the system declares, and `K`, `D` are formed by finite differences of the residual
+//! with structurally independent columns perturbed together ([`iteration_matrix`]; analytic force
+//! and constraint Jacobians are future work). Newton is modified: the factors are reused across
+//! iterations and steps while they contract fast; a slow contraction first refreshes the matrix
+//! (mass and `C_q` at the current state, kept `K`, `D`), then differentiates again. Newton stops
+//! when the position update and `‖C‖∞` are below the tolerance **and** the acceleration update is
+//! below 1e-10 of the acceleration scale (or has stalled at the round-off floor of `C/β'`, below
+//! 1e-6 of it): a test on the positions alone (`β' ∝ h²`) accepts one inexact iteration at small
+//! steps, and the velocity error then grows as `1/h` (`tests/ga_order_small_steps.rs`: second order
+//! from h = 3.2e-4 down to 1e-5). The positions satisfy `C = 0` to the Newton tolerance at every
+//! step: no drift. On Newton failure the step is halved (down to the minimum step) and grows back
+//! after successful steps.
 //!
 //! This method always solves the index-3 system of the model; the formulation supplies the initial
 //! accelerations and the accelerations and multipliers reported at the output times.
 
-use dalembert_system::linalg::DenseLu;
+mod iteration_matrix;
+
+use dalembert_system::linalg::LinalgError;
 use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem};
+use iteration_matrix::{IterationMatrix, Trial};
 
 /// Coefficients of the method for a spectral radius `ρ∞`.
 #[derive(Debug, Clone, Copy)]
@@ -67,12 +74,17 @@ pub(crate) struct GeneralizedAlpha {
     a: Vec<f64>,
     qdd: Vec<f64>,
     lambda: Vec<f64>,
+    /// `q̈`, `λ` of the step before and that step's size (NaN: no history): Newton starts from
+    /// their linear extrapolation.
+    qdd_prev: Vec<f64>,
+    lambda_prev: Vec<f64>,
+    h_prev: f64,
     mass: BlockDiagonal,
     values: ConstraintValues,
     work: Work,
-    /// Step size the current iteration matrix was built for (NaN: none), and how many steps it
-    /// has served: the matrix is kept across steps (modified Newton) and rebuilt when the step
-    /// changes, after `MATRIX_LIFETIME` steps, or when Newton has not converged in 3 iterations.
+    matrix: IterationMatrix,
+    /// Step size the current factors were built for (NaN: none), and how many steps they have
+    /// served (modified Newton: kept across steps while Newton contracts fast).
     matrix_h: f64,
     matrix_age: u32,
     /// Newton tolerance on the position update and on `‖C‖∞`.
@@ -85,23 +97,16 @@ pub(crate) struct GeneralizedAlpha {
     pub evaluations: u64,
 }
 
-/// Storage allocated once: trial state, residuals, the iteration matrix and its LU.
+/// Storage allocated once: trial state, residual and Newton update.
 struct Work {
     qdd: Vec<f64>,
     lam: Vec<f64>,
     q1: Vec<f64>,
     qd1: Vec<f64>,
-    /// `Δq_n` of the position update, and a unit velocity for the position perturbations.
+    /// `Δq_n` of the position update.
     delta: Vec<f64>,
-    unit: Vec<f64>,
     res: Vec<f64>,
-    rp: Vec<f64>,
-    rm: Vec<f64>,
-    qp: Vec<f64>,
-    qdp: Vec<f64>,
     dx: Vec<f64>,
-    /// The iteration matrix and its LU (the seam's dense LU, storage held).
-    lu: DenseLu,
 }
 
 impl Work {
@@ -113,15 +118,34 @@ impl Work {
             q1: vec![0.0; n_q],
             qd1: vec![0.0; n],
             delta: vec![0.0; n],
-            unit: vec![0.0; n],
             res: vec![0.0; k],
-            rp: vec![0.0; k],
-            rm: vec![0.0; k],
-            qp: vec![0.0; n_q],
-            qdp: vec![0.0; n],
             dx: vec![0.0; k],
-            lu: DenseLu::new(k, 1),
         }
+    }
+}
+
+/// `r = M q̈ + C_qᵀ λ − Q_e` and `C / β'` at `(t, q, q̇)` into `out`; refreshes `mass` and `values`.
+#[allow(clippy::too_many_arguments)]
+fn residual(
+    mass: &mut BlockDiagonal,
+    values: &mut ConstraintValues,
+    model: &dyn MultibodySystem,
+    t: f64,
+    (q, qd): (&[f64], &[f64]),
+    (qdd, lambda): (&[f64], &[f64]),
+    bp: f64,
+    out: &mut [f64],
+) {
+    let (r, c) = out.split_at_mut(qd.len());
+    model.applied_forces(t, q, qd, r);
+    r.iter_mut().for_each(|v| *v = -*v);
+    model.mass(q, mass);
+    mass.mul_add(1.0, qdd, r);
+    let sys = model.constraints();
+    sys.evaluate(t, q, qd, values);
+    sys.jacobian_transpose_mul_add(values, 1.0, lambda, r);
+    for (ci, v) in c.iter_mut().zip(&values.c) {
+        *ci = v / bp;
     }
 }
 
@@ -129,15 +153,26 @@ impl Work {
 pub(crate) struct NotConverged;
 
 impl GeneralizedAlpha {
-    /// Starts from consistent `q̈₀`, `λ₀` (from the formulation).
-    pub fn new(model: &dyn MultibodySystem, rho_inf: f64, qdd0: &[f64], lambda0: &[f64], q0: &[f64]) -> Self {
+    /// Starts from consistent `q̈₀`, `λ₀` (from the formulation). `Err` when the sparse analysis of
+    /// the iteration matrix fails.
+    pub fn new(
+        model: &dyn MultibodySystem,
+        rho_inf: f64,
+        qdd0: &[f64],
+        lambda0: &[f64],
+        q0: &[f64],
+    ) -> Result<Self, LinalgError> {
         let mut mass = model.mass_storage();
         model.mass(q0, &mut mass);
-        GeneralizedAlpha {
+        Ok(GeneralizedAlpha {
             coef: Coefficients::new(rho_inf),
             a: qdd0.to_vec(),
             qdd: qdd0.to_vec(),
             lambda: lambda0.to_vec(),
+            qdd_prev: qdd0.to_vec(),
+            lambda_prev: lambda0.to_vec(),
+            h_prev: f64::NAN,
+            matrix: IterationMatrix::new(model, &mass)?,
             mass,
             values: model.constraints().values(),
             work: Work::new(q0.len(), qdd0.len(), lambda0.len()),
@@ -147,7 +182,7 @@ impl GeneralizedAlpha {
             matrix_h: f64::NAN,
             matrix_age: 0,
             evaluations: 0,
-        }
+        })
     }
 
     /// Positions and velocities for the trial `q̈_{n+1}` in `work.qdd` (into `work.q1`, `work.qd1`).
@@ -164,31 +199,6 @@ impl GeneralizedAlpha {
         model.integrate_positions(&mut w.q1, &w.delta, h);
     }
 
-    /// `r = M q̈ + C_qᵀ λ − Q_e` and `C / β'` at `(t, q, q̇)`; refreshes `mass` and `values`.
-    #[allow(clippy::too_many_arguments)]
-    fn residual(
-        mass: &mut BlockDiagonal,
-        values: &mut ConstraintValues,
-        model: &dyn MultibodySystem,
-        t: f64,
-        (q, qd): (&[f64], &[f64]),
-        (qdd, lambda): (&[f64], &[f64]),
-        bp: f64,
-        out: &mut [f64],
-    ) {
-        let (r, c) = out.split_at_mut(qd.len());
-        model.applied_forces(t, q, qd, r);
-        r.iter_mut().for_each(|v| *v = -*v);
-        model.mass(q, mass);
-        mass.mul_add(1.0, qdd, r);
-        let sys = model.constraints();
-        sys.evaluate(t, q, qd, values);
-        sys.jacobian_transpose_mul_add(values, 1.0, lambda, r);
-        for (ci, v) in c.iter_mut().zip(&values.c) {
-            *ci = v / bp;
-        }
-    }
-
     /// One step from `(t, q, q̇)` to `t + h`; on success `q`, `qd` hold the new state.
     pub fn step(
         &mut self,
@@ -203,6 +213,14 @@ impl GeneralizedAlpha {
         // no longer halves counts as converged to round-off.
         const ACCELERATION_TOLERANCE: f64 = 1e-10;
         const STALL_FLOOR: f64 = 1e-6;
+        const ROUND_OFF_ULPS: f64 = 8.0;
+        // Contraction rate above which the matrix is rebuilt (measured on chains of 16 and 64
+        // links: 0.3 lets Newton fail and halve the step a few times in 10 s, 0.05 rebuilds a third
+        // more often than 0.1 for no fewer iterations).
+        const SLOW_RATE: f64 = 0.1;
+        // Steps the factors with the tangent terms serve at most (the saddle-point factors without
+        // them are rebuilt every step: they cost about what one Newton iteration does).
+        const MATRIX_LIFETIME: u32 = 20;
         let mut last_rel = f64::INFINITY;
         let mut last_contraction = 0.0f64;
         let n = qd.len();
@@ -211,18 +229,29 @@ impl GeneralizedAlpha {
         let bp = h * h * c.beta * (1.0 - c.alpha_f) / (1.0 - c.alpha_m);
         let gp = h * c.gamma * (1.0 - c.alpha_f) / (1.0 - c.alpha_m);
         let t1 = t + h;
-        self.work.qdd.copy_from_slice(&self.qdd);
-        self.work.lam.copy_from_slice(&self.lambda);
-        const MATRIX_LIFETIME: u32 = 20;
-        // Reuse the last iteration matrix when it was built for this step size (modified Newton).
-        let mut fresh = false;
-        if self.matrix_h != h || self.matrix_age >= MATRIX_LIFETIME {
+        // Start from the linear extrapolation of the last two steps' q̈ and λ: its error is O(h²)
+        // against O(h) for the last values (measured on a chain of 16 links at h = 1e-3: the first
+        // update falls from 1.7e-2 to ~1e-4 of the acceleration scale).
+        let ratio = if self.h_prev.is_nan() { 0.0 } else { h / self.h_prev };
+        for (p, (now, before)) in self.work.qdd.iter_mut().zip(self.qdd.iter().zip(&self.qdd_prev)) {
+            *p = now + ratio * (now - before);
+        }
+        for (p, (now, before)) in self.work.lam.iter_mut().zip(self.lambda.iter().zip(&self.lambda_prev)) {
+            *p = now + ratio * (now - before);
+        }
+        // Factors built for this step size are reused (modified Newton) until they have served
+        // `MATRIX_LIFETIME` steps.
+        if self.matrix_h != h || self.matrix_age >= MATRIX_LIFETIME || self.matrix.uses_kkt() {
             self.matrix_h = f64::NAN;
         }
+        // Escalation on a slow contraction (the update shrank by less than `SLOW_RATE` in the
+        // last iteration), once each per step: 1 rebuilds the matrix at the current state with
+        // the kept tangent, 2 differentiates again, 3 keeps the tangent terms whatever their size.
+        let mut escalation = 0u8;
         for it in 0..MAX_ITERATIONS {
             self.predict(model, h, q, qd);
             let w = &mut self.work;
-            Self::residual(
+            residual(
                 &mut self.mass,
                 &mut self.values,
                 model,
@@ -234,23 +263,48 @@ impl GeneralizedAlpha {
             );
             self.evaluations += 1;
             if w.res.iter().any(|v| !v.is_finite()) {
-                self.matrix_h = f64::NAN;
-                return Err(NotConverged);
+                return Err(self.fail());
             }
-            // An old matrix that contracts slowly (the update shrank by less than half in the last
-            // iteration) is rebuilt after three iterations, any old matrix after six.
-            if self.matrix_h.is_nan() || (!fresh && ((it >= 3 && last_contraction > 0.5) || it == 6)) {
-                self.factor_iteration_matrix(model, t1, bp, gp);
+            let slow = it >= 2 && last_contraction > SLOW_RATE;
+            if self.matrix_h.is_nan() || (slow && escalation < 3) {
+                if slow {
+                    escalation += 1;
+                }
+                let trial = Trial {
+                    t: t1,
+                    q: &w.q1,
+                    v: &w.qd1,
+                    qdd: &w.qdd,
+                    lambda: &w.lam,
+                };
+                if !self.matrix.is_differentiated() || escalation == 2 {
+                    self.matrix
+                        .differentiate(model, &mut self.mass, &mut self.values, &trial);
+                    self.evaluations += self.matrix.differentiation_cost();
+                }
+                if self
+                    .matrix
+                    .refresh(
+                        model,
+                        &mut self.mass,
+                        &mut self.values,
+                        &trial,
+                        (bp, gp),
+                        escalation == 3,
+                    )
+                    .is_err()
+                {
+                    return Err(self.fail());
+                }
                 self.factorizations += 1;
                 self.matrix_h = h;
                 self.matrix_age = 0;
-                fresh = true;
             }
             let w = &mut self.work;
             for (d, r) in w.dx.iter_mut().zip(&w.res) {
                 *d = -r;
             }
-            w.lu.solve_vec(&mut w.dx);
+            self.matrix.solve(model, &mut w.dx);
             self.iterations += 1;
             let mut dq = 0.0f64;
             let mut da = 0.0f64;
@@ -264,19 +318,29 @@ impl GeneralizedAlpha {
             // after one inexact iteration at small steps, and the error then grows as 1/h.
             let ascale = 1.0 + w.qdd.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             let rel = da / ascale;
-            // Converged, or stalled at the round-off floor of the index-3 residual (C/β' carries
-            // the round-off of C amplified by 1/h²): no further progress is possible there.
-            let accurate = rel <= ACCELERATION_TOLERANCE || (it > 0 && rel <= STALL_FLOOR && rel >= 0.5 * last_rel);
+            // Converged, at the round-off floor of the index-3 residual, or stalled above it. `C/β'`
+            // carries the round-off of `C` (`ε` times the position scale) amplified by `1/β' ∝ 1/h²`:
+            // an acceleration update below `ROUND_OFF_ULPS` of those units moves the positions by
+            // less than that many units in the last place and cannot be resolved (measured on a
+            // chain of 16 links at h = 1e-3: the updates stall at 1–4 of them).
+            let qscale = 1.0 + w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let floor = ROUND_OFF_ULPS * f64::EPSILON * qscale / (bp * ascale);
+            // The error left after this update is about `θ/(1 − θ)` times it for a contraction
+            // rate `θ` (Hairer & Wanner, *Solving ODEs II*, IV.8): a fast contraction accepts
+            // without one more iteration that would only confirm it.
+            let tol = ACCELERATION_TOLERANCE.max(floor);
+            let theta = rel / last_rel;
+            let accurate = rel <= tol
+                || (it > 0 && theta < 0.5 && theta / (1.0 - theta) * rel <= tol)
+                || (it > 0 && rel <= STALL_FLOOR && rel >= 0.5 * last_rel);
             last_contraction = rel / last_rel;
             last_rel = rel;
             for j in 0..m {
                 w.lam[j] += w.dx[n + j];
             }
             if !dq.is_finite() {
-                self.matrix_h = f64::NAN;
-                return Err(NotConverged);
+                return Err(self.fail());
             }
-            let qscale = 1.0 + w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             if dq <= self.tolerance * qscale && accurate {
                 self.predict(model, h, q, qd);
                 let w = &self.work;
@@ -288,8 +352,11 @@ impl GeneralizedAlpha {
                         self.a[i] = ((1.0 - c.alpha_f) * w.qdd[i] + c.alpha_f * self.qdd[i] - c.alpha_m * self.a[i])
                             / (1.0 - c.alpha_m);
                     }
+                    std::mem::swap(&mut self.qdd_prev, &mut self.qdd);
+                    std::mem::swap(&mut self.lambda_prev, &mut self.lambda);
                     self.qdd.copy_from_slice(&w.qdd);
                     self.lambda.copy_from_slice(&w.lam);
+                    self.h_prev = h;
                     q.copy_from_slice(&w.q1);
                     model.normalize(q);
                     qd.copy_from_slice(&w.qd1);
@@ -298,75 +365,14 @@ impl GeneralizedAlpha {
                 }
             }
         }
-        self.matrix_h = f64::NAN;
-        Err(NotConverged)
+        Err(self.fail())
     }
 
-    /// Builds `[M + β'K + γ'D, C_qᵀ; C_q, 0]` at the trial state in `work` (with `K` and `D` by
-    /// central finite differences of the residual) and factors it in place.
-    fn factor_iteration_matrix(&mut self, model: &dyn MultibodySystem, t: f64, bp: f64, gp: f64) {
-        let w = &mut self.work;
-        let n = w.qd1.len();
-        let mut k = w.lu.matrix_mut();
-        k.fill(0.0);
-        model.mass(&w.q1, &mut self.mass);
-        for (r, cc, v) in self.mass.entries() {
-            k[(r, cc)] = v;
-        }
-        w.qp.copy_from_slice(&w.q1);
-        w.qdp.copy_from_slice(&w.qd1);
-        w.unit.fill(0.0);
-        let largest_position = w.q1.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        for j in 0..n {
-            // K column j (perturbing the position along velocity coordinate j: q ⊕ ε e_j), scaled
-            // by β'; D column j (the velocity), by γ'.
-            w.unit[j] = 1.0;
-            for (velocity, scale) in [(false, bp), (true, gp)] {
-                let x = w.qd1[j];
-                // Relative steps: to the velocity, or to the position coordinate when `v = q̇`
-                // (otherwise to the largest position: the direction mixes coordinates).
-                let size = match (velocity, w.q1.len() == n) {
-                    (true, _) => x.abs(),
-                    (false, true) => w.q1[j].abs(),
-                    (false, false) => largest_position,
-                };
-                let h = 1e-7 * (1.0 + size);
-                for (sign, out) in [(1.0, &mut w.rp), (-1.0, &mut w.rm)] {
-                    let (qs, qds) = if velocity {
-                        w.qdp[j] = x + sign * h;
-                        (&w.q1, &w.qdp)
-                    } else {
-                        w.qp.copy_from_slice(&w.q1);
-                        model.integrate_positions(&mut w.qp, &w.unit, sign * h);
-                        (&w.qp, &w.qd1)
-                    };
-                    Self::residual(
-                        &mut self.mass,
-                        &mut self.values,
-                        model,
-                        t,
-                        (qs, qds),
-                        (&w.qdd, &w.lam),
-                        1.0,
-                        out,
-                    );
-                }
-                if velocity {
-                    w.qdp[j] = x;
-                }
-                for i in 0..n {
-                    k[(i, j)] += scale * (w.rp[i] - w.rm[i]) / (2.0 * h);
-                }
-            }
-            w.unit[j] = 0.0;
-        }
-        self.evaluations += 4 * n as u64;
-        let sys = model.constraints();
-        sys.evaluate(t, &w.q1, &w.qd1, &mut self.values);
-        for (&(r, c), &v) in sys.pattern().entries().iter().zip(&self.values.jacobian) {
-            k[(n + r, c)] += v;
-            k[(c, n + r)] += v;
-        }
-        w.lu.factor();
+    /// Forgets the factors and the tangent after a failed step.
+    fn fail(&mut self) -> NotConverged {
+        self.matrix_h = f64::NAN;
+        self.h_prev = f64::NAN;
+        self.matrix.invalidate();
+        NotConverged
     }
 }

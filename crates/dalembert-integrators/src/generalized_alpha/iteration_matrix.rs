@@ -1,0 +1,407 @@
+//! The iteration matrix of generalized-α's Newton method,
+//!
+//! ```text
+//! [ M + β' ∂r/∂q + γ' ∂r/∂v   C_qᵀ ]        r = M(q) q̈ + C_qᵀ λ − Q(t, q, v),
+//! [ C_q                       0    ]
+//! ```
+//!
+//! on the sparsity the system declares ([`TangentPattern`]: mass blocks, bodies sharing a
+//! constraint equation or a force element) and factored by [`PatternLu`] (dense LU up to
+//! [`PatternLu::DENSE_LIMIT`] unknowns, sparse LU with its symbolic analysis done once above).
+//!
+//! The tangent `∂r/∂q` (along the velocity coordinates, `q ⊕ ε e_j`) and `∂r/∂v` is formed by
+//! central differences of the residual, with the columns that share no row perturbed together
+//! (the pattern's passes: `4 × passes` residuals, 36 for any planar chain instead of `4 n`). It is
+//! kept between refactorizations: [`IterationMatrix::refresh`] rebuilds the matrix from the mass
+//! and constraint Jacobian at the current state and the kept tangent, which is what changes
+//! fastest (`β' ∂r/∂q` and `γ' ∂r/∂v` are `O(h²)` and `O(h)` against `M`); a slow Newton
+//! contraction makes the caller differentiate again ([`IterationMatrix::differentiate`]).
+
+use super::residual;
+use dalembert_system::linalg::{Backend, LinalgError, PatternLu, SaddlePoint};
+use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem, TangentPattern};
+
+/// Largest `(β' ‖∂r/∂q‖ + γ' ‖∂r/∂v‖) / ‖M‖` (row-sum norms) for which the tangent terms are
+/// dropped from the matrix: Newton then contracts by about that ratio per iteration.
+const KKT_LIMIT: f64 = 1e-2;
+/// The augmented formulation's defaults for the saddle-point back end
+/// (`dalembert_augmented::AugmentedOptions`).
+const KKT_DENSE_LIMIT: usize = 60;
+const KKT_PIVOT_TOLERANCE: f64 = 1e-13;
+
+/// The tangent, the matrix's storage and its factors.
+pub(crate) struct IterationMatrix {
+    tangent: TangentPattern,
+    /// `∂r/∂q` and `∂r/∂v` over the tangent's entries, from the last differentiation.
+    dr_dq: Vec<f64>,
+    dr_dv: Vec<f64>,
+    /// Whether `dr_dq`, `dr_dv` hold a differentiation.
+    differentiated: bool,
+    /// Row-sum norms of `dr_dq` and `dr_dv` (the size of the tangent terms against `M`).
+    norms: (f64, f64),
+    /// Entries: the tangent's, then the mass blocks', then `C_q` and `C_qᵀ`.
+    lu: PatternLu,
+    /// The saddle-point matrix `[M C_qᵀ; C_q 0]` without the tangent terms, factored as the
+    /// augmented formulation factors it (`None` when it cannot be set up for this system).
+    kkt: Option<SaddlePoint>,
+    /// Whether the last factorization is `kkt`'s.
+    uses_kkt: bool,
+    /// Work vectors for the differences.
+    step: Vec<f64>,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    plus: Vec<f64>,
+    minus: Vec<f64>,
+}
+
+/// The trial state a matrix is built at.
+pub(crate) struct Trial<'a> {
+    pub t: f64,
+    pub q: &'a [f64],
+    pub v: &'a [f64],
+    pub qdd: &'a [f64],
+    pub lambda: &'a [f64],
+}
+
+impl IterationMatrix {
+    /// Storage for `system`'s iteration matrix; `Err` when the sparse symbolic analysis fails.
+    pub fn new(system: &dyn MultibodySystem, mass: &BlockDiagonal) -> Result<Self, LinalgError> {
+        let tangent = TangentPattern::new(system);
+        let n = tangent.dim();
+        let pattern = system.constraints().pattern();
+        let mut entries: Vec<(usize, usize)> = tangent.entries().collect();
+        entries.extend(mass.entries().map(|(r, c, _)| (r, c)));
+        entries.extend(pattern.entries().iter().map(|&(r, c)| (n + r, c)));
+        entries.extend(pattern.entries().iter().map(|&(r, c)| (c, n + r)));
+        let k = n + pattern.rows();
+        let lu = PatternLu::new(k, entries, PatternLu::DENSE_LIMIT)?;
+        let kkt = SaddlePoint::new(
+            Backend::Auto,
+            mass,
+            system.mass_is_constant(),
+            system.constraints(),
+            KKT_DENSE_LIMIT,
+            KKT_PIVOT_TOLERANCE,
+        )
+        .ok();
+        let n_q = system.layout().n_q();
+        Ok(IterationMatrix {
+            dr_dq: vec![0.0; tangent.len()],
+            dr_dv: vec![0.0; tangent.len()],
+            differentiated: false,
+            norms: (0.0, 0.0),
+            tangent,
+            lu,
+            kkt,
+            uses_kkt: false,
+            step: vec![0.0; n],
+            q: vec![0.0; n_q],
+            v: vec![0.0; n],
+            plus: vec![0.0; k],
+            minus: vec![0.0; k],
+        })
+    }
+
+    /// Number of residual evaluations one [`IterationMatrix::differentiate`] costs.
+    pub fn differentiation_cost(&self) -> u64 {
+        4 * self.tangent.passes().len() as u64
+    }
+
+    /// Whether a tangent is held.
+    pub fn is_differentiated(&self) -> bool {
+        self.differentiated
+    }
+
+    /// Whether the last factorization dropped the tangent terms (the saddle-point matrix).
+    pub fn uses_kkt(&self) -> bool {
+        self.uses_kkt
+    }
+
+    /// Forgets the tangent (after a failed step: the next matrix is differentiated afresh).
+    pub fn invalidate(&mut self) {
+        self.differentiated = false;
+    }
+
+    /// `∂r/∂q` and `∂r/∂v` at the trial state by central differences, column passes at a time.
+    pub fn differentiate(
+        &mut self,
+        system: &dyn MultibodySystem,
+        mass: &mut BlockDiagonal,
+        values: &mut ConstraintValues,
+        at: &Trial<'_>,
+    ) {
+        let largest_position = at.q.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let rates = at.q.len() == at.v.len();
+        for pass in self.tangent.passes() {
+            for velocity in [false, true] {
+                // Relative steps: to the velocity, or to the position coordinate when `v = q̇`
+                // (otherwise to the largest position: the direction mixes coordinates).
+                for &j in pass {
+                    let size = match (velocity, rates) {
+                        (true, _) => at.v[j].abs(),
+                        (false, true) => at.q[j].abs(),
+                        (false, false) => largest_position,
+                    };
+                    self.step[j] = 1e-7 * (1.0 + size);
+                }
+                for (sign, out) in [(1.0, &mut self.plus), (-1.0, &mut self.minus)] {
+                    self.q.copy_from_slice(at.q);
+                    self.v.copy_from_slice(at.v);
+                    if velocity {
+                        for &j in pass {
+                            self.v[j] += sign * self.step[j];
+                        }
+                    } else {
+                        system.integrate_positions(&mut self.q, &self.step, sign);
+                    }
+                    residual(
+                        mass,
+                        values,
+                        system,
+                        at.t,
+                        (&self.q, &self.v),
+                        (at.qdd, at.lambda),
+                        1.0,
+                        out,
+                    );
+                }
+                let target = if velocity { &mut self.dr_dv } else { &mut self.dr_dq };
+                for &j in pass {
+                    let h = self.step[j];
+                    for (e, &i) in self.tangent.column(j).zip(self.tangent.rows(j)) {
+                        target[e] = (self.plus[i] - self.minus[i]) / (2.0 * h);
+                    }
+                    self.step[j] = 0.0;
+                }
+            }
+        }
+        self.norms = (
+            Self::row_sum_norm(&self.tangent, &self.dr_dq, &mut self.v),
+            Self::row_sum_norm(&self.tangent, &self.dr_dv, &mut self.v),
+        );
+        self.differentiated = true;
+    }
+
+    /// `max_i Σ_j |values_ij|` over the tangent pattern (`sums`: scratch of `n_v`).
+    fn row_sum_norm(tangent: &TangentPattern, values: &[f64], sums: &mut [f64]) -> f64 {
+        sums.fill(0.0);
+        for (e, (i, _)) in tangent.entries().enumerate() {
+            sums[i] += values[e].abs();
+        }
+        sums.iter().fold(0.0, |a, &v| a.max(v))
+    }
+
+    /// Builds `[M + β' ∂r/∂q + γ' ∂r/∂v, C_qᵀ; C_q, 0]` from the mass and constraint Jacobian at
+    /// the trial state (evaluated here into `mass` and `values`) and the kept tangent, and factors
+    /// it.
+    pub fn refresh(
+        &mut self,
+        system: &dyn MultibodySystem,
+        mass: &mut BlockDiagonal,
+        values: &mut ConstraintValues,
+        at: &Trial<'_>,
+        (beta, gamma): (f64, f64),
+        full: bool,
+    ) -> Result<(), LinalgError> {
+        system.mass(at.q, mass);
+        let sys = system.constraints();
+        sys.evaluate(at.t, at.q, at.v, values);
+        // Drop the tangent terms when they are below `KKT_LIMIT` of the mass matrix (the Newton
+        // contraction is then about that ratio) and the saddle-point factorization succeeds.
+        let mut mass_norm = 0.0f64;
+        for b in 0..mass.num_blocks() {
+            let size = mass.size(b);
+            for row in mass.block(b).chunks(size.max(1)) {
+                mass_norm = mass_norm.max(row.iter().map(|v| v.abs()).sum());
+            }
+        }
+        let ratio = (beta * self.norms.0 + gamma * self.norms.1) / mass_norm;
+        if !full && ratio <= KKT_LIMIT {
+            if let Some(kkt) = &mut self.kkt {
+                if kkt.factor(mass, sys.pattern(), values).is_ok() {
+                    self.uses_kkt = true;
+                    return Ok(());
+                }
+            }
+        }
+        self.uses_kkt = false;
+        let nt = self.dr_dq.len();
+        let out = self.lu.values_mut();
+        let (tangent, rest) = out.split_at_mut(nt);
+        for ((o, dq), dv) in tangent.iter_mut().zip(&self.dr_dq).zip(&self.dr_dv) {
+            *o = beta * dq + gamma * dv;
+        }
+        let (m, rest) = rest.split_at_mut(rest.len() - 2 * values.jacobian.len());
+        for (o, (_, _, v)) in m.iter_mut().zip(mass.entries()) {
+            *o = v;
+        }
+        let (cq, cqt) = rest.split_at_mut(values.jacobian.len());
+        cq.copy_from_slice(&values.jacobian);
+        cqt.copy_from_slice(&values.jacobian);
+        self.lu.factor()
+    }
+
+    /// `x ← A⁻¹ x` with the last factors.
+    pub fn solve(&mut self, system: &dyn MultibodySystem, x: &mut [f64]) {
+        match &mut self.kkt {
+            Some(kkt) if self.uses_kkt => kkt.solve(system.constraints().pattern(), x),
+            _ => self.lu.solve_in_place(x),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dalembert_testkit::generator::{build, BodySpec, LoopSpec, Spec, SpringSpec};
+    use std::sync::Arc;
+
+    /// Column-by-column central differences of the residual over all `n_v` rows (the plain method
+    /// the passes replace), at the same step sizes.
+    fn plain_tangent(system: &dyn MultibodySystem, at: &Trial<'_>, velocity: bool) -> Vec<Vec<f64>> {
+        let n = at.v.len();
+        let m = system.num_equations();
+        let mut mass = system.mass_storage();
+        let mut values = system.constraints().values();
+        let largest = at.q.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let (mut plus, mut minus) = (vec![0.0; n + m], vec![0.0; n + m]);
+        (0..n)
+            .map(|j| {
+                let size = match (velocity, at.q.len() == n) {
+                    (true, _) => at.v[j].abs(),
+                    (false, true) => at.q[j].abs(),
+                    (false, false) => largest,
+                };
+                let h = 1e-7 * (1.0 + size);
+                for (sign, out) in [(1.0, &mut plus), (-1.0, &mut minus)] {
+                    let (mut q, mut v) = (at.q.to_vec(), at.v.to_vec());
+                    if velocity {
+                        v[j] += sign * h;
+                    } else {
+                        let mut e = vec![0.0; n];
+                        e[j] = h;
+                        system.integrate_positions(&mut q, &e, sign);
+                    }
+                    residual(
+                        &mut mass,
+                        &mut values,
+                        system,
+                        at.t,
+                        (&q, &v),
+                        (at.qdd, at.lambda),
+                        1.0,
+                        out,
+                    );
+                }
+                (0..n).map(|i| (plus[i] - minus[i]) / (2.0 * h)).collect()
+            })
+            .collect()
+    }
+
+    /// The tangent from the passes equals the plain column-by-column one, and the plain one has
+    /// nothing outside the declared pattern: on a planar tree with a loop and springs between
+    /// bodies no joint connects (force coupling), and on spatial models (positions advanced on the
+    /// rotation group, gyroscopic velocity terms). The passes change only which columns are
+    /// perturbed together, and rows of one pass's columns are disjoint, so the two agree to
+    /// round-off (bound 1e-10 of the largest entry).
+    #[test]
+    fn passes_reproduce_the_plain_tangent_on_the_declared_pattern() {
+        let tree = |parent, angle: f64| BodySpec {
+            parent,
+            joint: 0,
+            length: 1.0,
+            angle,
+            mass: 1.0 + angle.abs(),
+            inertia_factor: 1.0,
+            slide: 0.0,
+        };
+        let spec = Spec {
+            bodies: vec![
+                tree(0, -0.5),
+                tree(1, -1.0),
+                tree(2, 0.3),
+                tree(3, -0.2),
+                tree(0, -2.0),
+                tree(5, 0.7),
+            ],
+            loops: vec![LoopSpec {
+                a: 4,
+                b: 6,
+                kind: 1,
+                at: 0.5,
+            }],
+            springs: vec![
+                SpringSpec {
+                    a: 1,
+                    b: 4,
+                    stiffness: 300.0,
+                    damping: 7.0,
+                },
+                SpringSpec {
+                    a: 0,
+                    b: 3,
+                    stiffness: 50.0,
+                    damping: 2.0,
+                },
+            ],
+            drivers: vec![],
+            velocities: vec![0.4, -1.1, 0.9, 2.0, -0.3],
+        };
+        let planar = build(&spec).expect("mechanism");
+        let spatial_chain = dalembert_testkit::spatial::chain3d(5);
+        let top = dalembert_testkit::spatial::heavy_top();
+        type Case = (&'static str, Arc<dyn MultibodySystem>, Vec<f64>, Vec<f64>);
+        let mut cases: Vec<Case> = vec![("planar tree", planar.model.clone(), planar.q.clone(), planar.qd.clone())];
+        for (name, model) in [("spatial chain", spatial_chain), ("heavy top", top)] {
+            let (q, mut v) = model.initial_state();
+            v.iter_mut()
+                .enumerate()
+                .for_each(|(i, x)| *x += 0.3 * ((i * 7) % 5) as f64 - 0.6);
+            cases.push((name, model, q, v));
+        }
+        for (name, system, q, v) in cases {
+            let (n, m) = (v.len(), system.num_equations());
+            let qdd: Vec<f64> = (0..n).map(|i| ((i * 5) % 7) as f64 - 3.0).collect();
+            let lambda: Vec<f64> = (0..m).map(|i| ((i * 3) % 11) as f64 - 4.0).collect();
+            let at = Trial {
+                t: 0.2,
+                q: &q,
+                v: &v,
+                qdd: &qdd,
+                lambda: &lambda,
+            };
+            let mut mass = system.mass_storage();
+            system.mass(&q, &mut mass);
+            let mut values = system.constraints().values();
+            let mut matrix = IterationMatrix::new(&*system, &mass).unwrap();
+            // More than one body: some columns share a pass.
+            let passes = matrix.tangent.passes().len();
+            assert!(
+                passes <= n && (n <= 6 || passes < n),
+                "{name}: {passes} passes for {n} columns"
+            );
+            matrix.differentiate(&*system, &mut mass, &mut values, &at);
+            for (velocity, got) in [(false, &matrix.dr_dq), (true, &matrix.dr_dv)] {
+                let plain = plain_tangent(&*system, &at, velocity);
+                let scale = plain.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+                assert!(scale > 0.0, "{name}");
+                let mut dense = vec![vec![0.0; n]; n];
+                for (e, (i, j)) in matrix.tangent.entries().enumerate() {
+                    dense[j][i] = got[e];
+                }
+                for j in 0..n {
+                    for i in 0..n {
+                        let d = (dense[j][i] - plain[j][i]).abs();
+                        assert!(
+                            d <= 1e-10 * scale,
+                            "{name}, {}: entry ({i}, {j}) {} from the passes, {} plain",
+                            if velocity { "∂r/∂v" } else { "∂r/∂q" },
+                            dense[j][i],
+                            plain[j][i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
