@@ -180,6 +180,9 @@ impl IterationMatrix {
             Self::row_sum_norm(&self.tangent, &self.dr_dv, &mut self.v),
         );
         self.differentiated = true;
+        // Leave `mass` and `values` at the trial state, as the residual there left them.
+        system.mass(at.q, mass);
+        system.constraints().evaluate(at.t, at.q, at.v, values);
     }
 
     /// `max_i Σ_j |values_ij|` over the tangent pattern (`sums`: scratch of `n_v`).
@@ -191,21 +194,18 @@ impl IterationMatrix {
         sums.iter().fold(0.0, |a, &v| a.max(v))
     }
 
-    /// Builds `[M + β' ∂r/∂q + γ' ∂r/∂v, C_qᵀ; C_q, 0]` from the mass and constraint Jacobian at
-    /// the trial state (evaluated here into `mass` and `values`) and the kept tangent, and factors
-    /// it.
+    /// Builds `[M + β' ∂r/∂q + γ' ∂r/∂v, C_qᵀ; C_q, 0]` from `mass` and `values` (which must hold
+    /// the trial state: the residual there, or [`IterationMatrix::differentiate`], leaves them so)
+    /// and the kept tangent, and factors it; `full` keeps the tangent terms whatever their size.
     pub fn refresh(
         &mut self,
         system: &dyn MultibodySystem,
-        mass: &mut BlockDiagonal,
-        values: &mut ConstraintValues,
-        at: &Trial<'_>,
+        mass: &BlockDiagonal,
+        values: &ConstraintValues,
         (beta, gamma): (f64, f64),
         full: bool,
     ) -> Result<(), LinalgError> {
-        system.mass(at.q, mass);
         let sys = system.constraints();
-        sys.evaluate(at.t, at.q, at.v, values);
         // Drop the tangent terms when they are below `KKT_LIMIT` of the mass matrix (the Newton
         // contraction is then about that ratio) and the saddle-point factorization succeeds.
         let mut mass_norm = 0.0f64;

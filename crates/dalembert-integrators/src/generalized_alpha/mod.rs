@@ -284,14 +284,7 @@ impl GeneralizedAlpha {
                 }
                 if self
                     .matrix
-                    .refresh(
-                        model,
-                        &mut self.mass,
-                        &mut self.values,
-                        &trial,
-                        (bp, gp),
-                        escalation == 3,
-                    )
+                    .refresh(model, &self.mass, &self.values, (bp, gp), escalation == 3)
                     .is_err()
                 {
                     return Err(self.fail());
