@@ -7,8 +7,8 @@
 use criterion::{BenchmarkId, Criterion};
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
+use dalembert::constraints::Formulation;
 use dalembert::constraints::MultibodySystem as _;
-use dalembert::constraints::{Formulation, Stabilization};
 use dalembert::embedding::Embedding;
 use dalembert_testkit::closed_form::DoublePendulum;
 use dalembert_testkit::mechanisms::{self, Mechanism};
@@ -70,15 +70,8 @@ fn evaluations(c: &mut Criterion) {
             let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
             group.bench_with_input(BenchmarkId::new(kind, &name), &mech, |b, mech| {
                 b.iter(|| {
-                    f.accelerations(
-                        0.0,
-                        black_box(&mech.q),
-                        black_box(&mech.qd),
-                        Stabilization::None,
-                        &mut qdd,
-                        &mut lam,
-                    )
-                    .expect("evaluation");
+                    f.accelerations(0.0, black_box(&mech.q), black_box(&mech.qd), None, &mut qdd, &mut lam)
+                        .expect("evaluation");
                 })
             });
         }
@@ -96,7 +89,7 @@ fn time_per_evaluation(n: usize) -> f64 {
         .map(|_| {
             let t0 = Instant::now();
             for _ in 0..reps {
-                f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+                f.accelerations(0.0, &mech.q, &mech.qd, None, &mut qdd, &mut lam)
                     .expect("evaluation");
             }
             t0.elapsed().as_secs_f64() / reps as f64

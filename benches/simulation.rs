@@ -3,7 +3,7 @@
 
 use criterion::{BenchmarkId, Criterion};
 use dalembert::augmented::Augmented;
-use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::integrators::{integrate, IntegratorOptions, Method, Stabilization};
 use dalembert_testkit::mechanisms;
 
 fn main() {
@@ -16,32 +16,24 @@ fn main() {
             mechanisms::slider_crank(std::f64::consts::FRAC_PI_3, 0.0),
         ),
     ];
-    let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
+    let proj = Stabilization::Projection { tolerance: 1e-10 };
     let methods = [
         (
             "symplectic-euler+projection",
-            IntegratorOptions::fixed(Method::SymplecticEuler, 1e-3, 0.01).with_treatment(proj),
+            IntegratorOptions::fixed(Method::symplectic_euler(), 1e-3, 0.01).with_stabilization(proj),
         ),
-        ("rk4", IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.01)),
+        ("rk4", IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.01)),
         (
             "rk4+projection",
-            IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.01).with_treatment(proj),
+            IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.01).with_stabilization(proj),
         ),
         (
             "dopri5",
-            IntegratorOptions::fixed(
-                Method::DormandPrince {
-                    rtol: 1e-8,
-                    atol: 1e-10,
-                },
-                1e-3,
-                0.01,
-            )
-            .with_treatment(proj),
+            IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-10), 1e-3, 0.01).with_stabilization(proj),
         ),
         (
             "generalized-alpha",
-            IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 0.01),
+            IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 0.01),
         ),
     ];
     for (scene, mech) in &scenes {

@@ -12,8 +12,8 @@
 //! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once.
 
 use dalembert::augmented::Augmented;
-use dalembert::constraints::{Formulation, Stabilization};
-use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::constraints::Formulation;
+use dalembert::integrators::{integrate, IntegratorOptions, Method, Stabilization};
 use dalembert::system::MultibodySystem;
 use dalembert_testkit::anchors::state_errors;
 use dalembert_testkit::{mechanisms, spatial};
@@ -61,27 +61,27 @@ struct Variant {
 
 fn variants() -> Vec<Variant> {
     let h = 1e-3;
-    let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
+    let proj = Stabilization::Projection { tolerance: 1e-10 };
     vec![
         Variant {
             name: "augmented RK4",
             integrator: "RK4",
-            options: IntegratorOptions::fixed(Method::Rk4, h, 0.01),
+            options: IntegratorOptions::fixed(Method::rk4(), h, 0.01),
         },
         Variant {
             name: "augmented RK4+proj",
             integrator: "RK4",
-            options: IntegratorOptions::fixed(Method::Rk4, h, 0.01).with_treatment(proj),
+            options: IntegratorOptions::fixed(Method::rk4(), h, 0.01).with_stabilization(proj),
         },
         Variant {
             name: "augmented Euler+proj",
             integrator: "Euler",
-            options: IntegratorOptions::fixed(Method::SymplecticEuler, h, 0.01).with_treatment(proj),
+            options: IntegratorOptions::fixed(Method::symplectic_euler(), h, 0.01).with_stabilization(proj),
         },
         Variant {
             name: "augmented GenAlpha",
             integrator: "GeneralizedAlpha",
-            options: IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.9 }, h, 0.01),
+            options: IntegratorOptions::fixed(Method::generalized_alpha(0.9), h, 0.01),
         },
     ]
 }
@@ -101,7 +101,7 @@ fn fd_us(mech: &Mechanism) -> f64 {
         .map(|_| {
             let t0 = Instant::now();
             for _ in 0..reps {
-                f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+                f.accelerations(0.0, &mech.q, &mech.qd, None, &mut qdd, &mut lam)
                     .expect("evaluation");
             }
             t0.elapsed().as_secs_f64() * 1e6 / reps as f64

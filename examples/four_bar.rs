@@ -7,7 +7,7 @@
 
 use dalembert::constraints::ConstraintSet as _;
 use dalembert::constraints::{Constraint, Model, Reaction, Revolute};
-use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};
 use dalembert::{FormulationKind, Simulation};
 use dalembert_testkit::anchors::{state_errors, FOURBAR_1S};
@@ -54,7 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         end: 10.0,
         formulation: FormulationKind::Augmented,
         redundancy: Default::default(),
-        integrator: IntegratorOptions::fixed(Method::Rk4, h, 0.5).with_treatment(ConstraintTreatment::None),
+        integrator: IntegratorOptions::fixed(Method::rk4(), h, 0.5).with_stabilization(Stabilization::None),
         velocity_weights: None,
     };
     sim.assemble()?;

@@ -5,7 +5,7 @@
 //!
 //! Run: `cargo run --release --example n_four_bar -- [N] [END]` (defaults 40 and 20 s).
 
-use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert::scene::Scene;
 use dalembert::simulation::FormulationKind;
 use dalembert_testkit::n_four_bar::NFourBar;
@@ -20,40 +20,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let every = end / 400.0;
     let reference = bar.reference(every, end);
     let scene = Scene::from_toml(&bar.toml(end), "n-four-bar")?;
-    let projection = ConstraintTreatment::Projection { tolerance: 1e-12 };
+    let projection = Stabilization::Projection { tolerance: 1e-12 };
     let mut settings: Vec<(String, IntegratorOptions)> = [2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4]
         .iter()
         .map(|&h| {
             (
                 format!("rk4 + projection, h = {h:e}"),
-                IntegratorOptions::fixed(Method::Rk4, h, every).with_treatment(projection),
+                IntegratorOptions::fixed(Method::rk4(), h, every).with_stabilization(projection),
             )
         })
         .collect();
     settings.extend([
         (
             "symplectic-euler + projection, h = 1e-4".into(),
-            IntegratorOptions::fixed(Method::SymplecticEuler, 1e-4, every).with_treatment(projection),
+            IntegratorOptions::fixed(Method::symplectic_euler(), 1e-4, every).with_stabilization(projection),
         ),
         (
             "dopri5 1e-10 + projection".into(),
-            IntegratorOptions::fixed(
-                Method::DormandPrince {
-                    rtol: 1e-10,
-                    atol: 1e-12,
-                },
-                1e-3,
-                every,
-            )
-            .with_treatment(projection),
+            IntegratorOptions::fixed(Method::dopri5(1e-10, 1e-12), 1e-3, every).with_stabilization(projection),
         ),
         (
             "generalized-alpha 0.8, h = 1e-3".into(),
-            IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, every),
+            IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, every),
         ),
         (
             "generalized-alpha 0.8, h = 1e-4".into(),
-            IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-4, every),
+            IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-4, every),
         ),
     ]);
     println!("N-four-bar, N = {n}, {end} s; error = largest |B0 - exact| over 400 output steps");

@@ -63,11 +63,11 @@ impl MultibodySystem for Unnormalized {
 fn measure(name: &str, model: &Arc<Model>, t_end: f64) {
     let (q0, v0) = model.initial_state();
     let methods = [
-        ("RK4 h = 1e-3", IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.01)),
-        ("RK4 h = 1e-4", IntegratorOptions::fixed(Method::Rk4, 1e-4, 0.01)),
+        ("RK4 h = 1e-3", IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.01)),
+        ("RK4 h = 1e-4", IntegratorOptions::fixed(Method::rk4(), 1e-4, 0.01)),
         (
             "dopri5 1e-8",
-            IntegratorOptions::fixed(Method::DormandPrince { rtol: 1e-8, atol: 1e-8 }, 1e-3, 0.01),
+            IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-8), 1e-3, 0.01),
         ),
     ];
     for (label, opts) in methods {

@@ -7,7 +7,7 @@ use crate::output::{Recorder, Rows, Table};
 use crate::simulation::SimulationError;
 use crate::{Mechanism, Scene};
 use dalembert_augmented::InverseDynamics;
-use dalembert_constraints::{ConstraintRole, DynamicsError, KinematicOptions, RedundancyTreatment, Stabilization};
+use dalembert_constraints::{ConstraintRole, DynamicsError, KinematicOptions, RedundancyTreatment};
 use dalembert_integrators::{Sample, Statistics};
 use std::sync::atomic::AtomicBool;
 
@@ -94,7 +94,7 @@ impl Scene {
             .formulation()
             .map_err(|e| e.to_string())
             .and_then(|mut f| {
-                f.accelerations(0.0, &self.q, &self.qd, Stabilization::None, &mut qdd, &mut lam)
+                f.accelerations(0.0, &self.q, &self.qd, None, &mut qdd, &mut lam)
                     .map_err(|e| e.to_string())
             });
         let reactions = match accelerations {

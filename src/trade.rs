@@ -1,21 +1,24 @@
-//! The speed–accuracy trade of `dalembert trade`: every formulation × integrator × constraint
-//! treatment × step (or tolerance) on one scene, measured against a tight reference run
+//! The speed–accuracy trade of `dalembert trade`: every formulation × integrator × stabilization
+//! × step (or tolerance) on one scene, measured against a tight reference run
 //! (Dormand–Prince at rtol = atol = 1e-12 with projection, augmented). The command line writes and
 //! plots it; the Python package returns it.
 
-use crate::scene::{unknown_name, IntegratorKind, StabilizationKind};
+use crate::scene::unknown_name;
 use crate::{FormulationKind, Scene, SimulationError};
-use dalembert_integrators::{ConstraintTreatment, IntegrationError, IntegratorOptions, Method};
+use dalembert_integrators::{
+    method_names, Applies, IntegrationError, IntegratorOptions, Method, Stabilization, TradeAxis,
+};
 
 /// The grid of settings to try. [`TradeGrid::default`] is the command line's default grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TradeGrid {
     /// Formulation names.
     pub formulations: Vec<String>,
-    /// Integrator names.
+    /// Integrator names (of [`dalembert_integrators::METHODS`]).
     pub integrators: Vec<String>,
-    /// Constraint treatments of the fixed-step explicit methods.
-    pub treatments: Vec<String>,
+    /// Stabilizations of the fixed-step methods that do not keep the constraints themselves
+    /// (adaptive methods run with projection).
+    pub stabilizations: Vec<String>,
     /// Steps of the fixed-step methods (s).
     pub steps: Vec<f64>,
     /// Tolerances of the adaptive method (rtol = atol).
@@ -32,8 +35,8 @@ impl Default for TradeGrid {
         let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
         TradeGrid {
             formulations: names(FormulationKind::NAMES),
-            integrators: names(IntegratorKind::NAMES),
-            treatments: names(StabilizationKind::NAMES),
+            integrators: names(&method_names()),
+            stabilizations: names(Stabilization::NAMES),
             steps: vec![1e-2, 3e-3, 1e-3, 3e-4],
             tolerances: vec![1e-4, 1e-6, 1e-8, 1e-10],
             end: None,
@@ -117,55 +120,59 @@ fn samples(
     (out, r)
 }
 
-/// The runs of `g`: formulation, label, options and parameter. Unknown names are one-line errors.
+/// The runs of `g`: formulation, label, options and parameter, from each method's
+/// [`TradeAxis`] in the registry. Unknown names are one-line errors.
 fn runs_of(g: &TradeGrid) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64)>, String> {
     for (values, what) in [(&g.steps, "steps"), (&g.tolerances, "tolerances")] {
         if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(format!("{what}: every value must be positive and finite, got {v}"));
         }
     }
+    let stabilizations = g
+        .stabilizations
+        .iter()
+        .map(|t| {
+            Stabilization::parse(t)
+                .map(|s| (t.as_str(), s))
+                .ok_or_else(|| unknown_name("stabilization", t, Stabilization::NAMES))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let mut out = Vec::new();
     for f in &g.formulations {
         let kind = FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, FormulationKind::NAMES))?;
         for i in &g.integrators {
-            let integ = IntegratorKind::parse(i).ok_or_else(|| unknown_name("integrator", i, IntegratorKind::NAMES))?;
-            match integ {
-                IntegratorKind::Dopri5 => {
+            let method = Method::named(i).ok_or_else(|| unknown_name("integrator", i, &method_names()))?;
+            let entry = method.entry();
+            // A method for the augmented index-3 equations only would, with another formulation,
+            // measure the augmented method under another name.
+            if entry.applies == Applies::AugmentedIndex3 && kind != FormulationKind::Augmented {
+                continue;
+            }
+            match entry.trade {
+                TradeAxis::Tolerances(keys) => {
                     for &tol in &g.tolerances {
-                        let m = Method::DormandPrince { rtol: tol, atol: tol };
-                        let mut o = IntegratorOptions::fixed(m, 1e-3, 1.0)
-                            .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-10 });
+                        let mut m = method;
+                        for key in keys {
+                            m = m.with(key, tol)?;
+                        }
+                        let mut o =
+                            IntegratorOptions::fixed(m, 1e-3, 1.0).with_stabilization(Stabilization::projection());
                         // Steps limited only by the tolerance (dense output gives the samples).
                         o.max_step = f64::INFINITY;
-                        out.push((kind, format!("{f}/dopri5/projection"), o, tol));
+                        out.push((kind, format!("{f}/{}/projection", entry.name), o, tol));
                     }
                 }
-                // Generalized-α integrates the augmented index-3 equations: with another
-                // formulation it would measure the augmented method under another name.
-                IntegratorKind::GeneralizedAlpha if kind != FormulationKind::Augmented => {}
-                IntegratorKind::GeneralizedAlpha => {
+                TradeAxis::Steps if entry.keeps_constraints => {
                     for &h in &g.steps {
-                        let o = IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, h, 1.0);
-                        out.push((kind, format!("{f}/generalized-alpha"), o, h));
+                        let o = IntegratorOptions::fixed(method, h, 1.0);
+                        out.push((kind, format!("{f}/{}", entry.name), o, h));
                     }
                 }
-                IntegratorKind::Rk4 | IntegratorKind::SymplecticEuler => {
-                    let m = if integ == IntegratorKind::Rk4 {
-                        Method::Rk4
-                    } else {
-                        Method::SymplecticEuler
-                    };
-                    for t in &g.treatments {
-                        let st = StabilizationKind::parse(t)
-                            .ok_or_else(|| unknown_name("treatment", t, StabilizationKind::NAMES))?;
+                _ => {
+                    for &(t, st) in &stabilizations {
                         for &h in &g.steps {
-                            let treatment = match st {
-                                StabilizationKind::None => ConstraintTreatment::None,
-                                StabilizationKind::Baumgarte => ConstraintTreatment::baumgarte_for_step(h),
-                                StabilizationKind::Projection => ConstraintTreatment::Projection { tolerance: 1e-10 },
-                            };
-                            let o = IntegratorOptions::fixed(m, h, 1.0).with_treatment(treatment);
-                            out.push((kind, format!("{f}/{}/{t}", m.name()), o, h));
+                            let o = IntegratorOptions::fixed(method, h, 1.0).with_stabilization(st);
+                            out.push((kind, format!("{f}/{}/{t}", entry.name), o, h));
                         }
                     }
                 }
@@ -194,15 +201,8 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
         o
     };
     let ref_opts = with_every(
-        IntegratorOptions::fixed(
-            Method::DormandPrince {
-                rtol: 1e-12,
-                atol: 1e-12,
-            },
-            1e-4,
-            1.0,
-        )
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-12 }),
+        IntegratorOptions::fixed(Method::dopri5(1e-12, 1e-12), 1e-4, 1.0)
+            .with_stabilization(Stabilization::Projection { tolerance: 1e-12 }),
     );
     let (mut reference, status) = samples(scene, FormulationKind::Augmented, ref_opts, end);
     let mut reference_name = "dopri5 at rtol = atol = 1e-12".to_string();
@@ -220,8 +220,8 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
         let smallest = g.steps.iter().cloned().fold(f64::INFINITY, f64::min);
         let h = (smallest / 50.0).min(1e-4);
         let opts = with_every(
-            IntegratorOptions::fixed(Method::Rk4, h, 1.0)
-                .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-12 }),
+            IntegratorOptions::fixed(Method::rk4(), h, 1.0)
+                .with_stabilization(Stabilization::Projection { tolerance: 1e-12 }),
         );
         let (r, status) = samples(scene, FormulationKind::Augmented, opts, end);
         status.map_err(|e2| format!("reference run failed: {e}; and the fixed-step fallback: {e2}"))?;

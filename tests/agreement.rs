@@ -13,7 +13,7 @@
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
 use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
-use dalembert::constraints::{Formulation, Reaction, Stabilization};
+use dalembert::constraints::{Formulation, Reaction};
 use dalembert::embedding::{Embedding, EmbeddingOptions, Multipliers};
 use dalembert_testkit::generator::{build, BodySpec, LoopSpec, Spec, SpringSpec};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
@@ -114,7 +114,7 @@ fn disagreement(mech: &Mechanism, t: f64) -> Result<(f64, f64), String> {
     let mut results = Vec::new();
     for (k, mut f) in formulations(mech).into_iter().enumerate() {
         let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
-        f.accelerations(t, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+        f.accelerations(t, &mech.q, &mech.qd, None, &mut qdd, &mut lam)
             .map_err(|e| format!("{}: {e}", NAMES[k]))?;
         let mut r = vec![Reaction::default(); sys.constraints().len()];
         sys.reactions(&mech.q, &vals, &lam, &mut r);

@@ -15,7 +15,7 @@ use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
 use dalembert::constraints::Formulation;
 use dalembert::embedding::Embedding;
-use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::integrators::{integrate, IntegratorOptions, Method, Stabilization};
 use dalembert::system::MultibodySystem;
 use dalembert_testkit::mechanisms;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -117,32 +117,25 @@ fn stepping_allocates_nothing_after_setup() {
     let chain_3d = spatial(dalembert_testkit::spatial::chain3d(64));
     let forced_3d = spatial(dalembert_testkit::spatial::forced_double_pendulum());
     // Every integrator, including the implicit one, with the augmented formulation.
-    let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
-    let baum = ConstraintTreatment::baumgarte_for_step(1e-3);
+    let proj = Stabilization::Projection { tolerance: 1e-10 };
+    let baum = Stabilization::Baumgarte;
     let cases = [
         (
             "symplectic Euler + Baumgarte",
-            IntegratorOptions::fixed(Method::SymplecticEuler, 1e-3, 0.1).with_treatment(baum),
+            IntegratorOptions::fixed(Method::symplectic_euler(), 1e-3, 0.1).with_stabilization(baum),
         ),
-        ("RK4", IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1)),
+        ("RK4", IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1)),
         (
             "RK4 + projection",
-            IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1).with_treatment(proj),
+            IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1).with_stabilization(proj),
         ),
         (
             "Dormand-Prince",
-            IntegratorOptions::fixed(
-                Method::DormandPrince {
-                    rtol: 1e-8,
-                    atol: 1e-10,
-                },
-                1e-3,
-                0.1,
-            ),
+            IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-10), 1e-3, 0.1),
         ),
         (
             "generalized-alpha",
-            IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 0.1),
+            IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 0.1),
         ),
     ];
     let mut failures = Vec::new();
@@ -243,7 +236,7 @@ fn stepping_allocates_nothing_after_setup() {
         1e-3,
         &big.q,
         &big.qd,
-        &IntegratorOptions::fixed(Method::Rk4, 1e-3, 1e-3),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-3, 1e-3),
         &mut |s| {
             finite &= s.q.iter().all(|v| v.is_finite());
         },

@@ -21,7 +21,7 @@ fn state_error(mech: &dalembert_testkit::Mechanism, reference: &[[f64; 6]; 3], h
         1.0,
         &mech.q,
         &mech.qd,
-        &IntegratorOptions::fixed(Method::Rk4, h, 1.0),
+        &IntegratorOptions::fixed(Method::rk4(), h, 1.0),
         &mut |s| {
             if s.t == 1.0 {
                 at_one = Some((s.q.to_vec(), s.qd.to_vec()));

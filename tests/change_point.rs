@@ -14,7 +14,7 @@
 //! 7.7e-12, generalized-α 1.5e-14): 1e-8 rad. A branch switch is an error of order 1 (the two
 //! branches differ by 2 × 0.52 rad at t = π).
 
-use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert::scene::Scene;
 use dalembert::simulation::{FormulationKind, SimulationError};
 use std::f64::consts::PI;
@@ -48,17 +48,12 @@ fn angle_error(a: f64, b: f64) -> f64 {
 }
 
 /// Largest angle error against the closed form over a run, or the run's failure.
-fn run(
-    kind: FormulationKind,
-    method: Method,
-    treatment: ConstraintTreatment,
-    end: f64,
-) -> Result<f64, SimulationError> {
+fn run(kind: FormulationKind, method: Method, treatment: Stabilization, end: f64) -> Result<f64, SimulationError> {
     let scene = scene();
     let mut sim = scene.simulation();
     sim.formulation = kind;
     sim.end = end;
-    sim.integrator = IntegratorOptions::fixed(method, 1e-3, 0.05).with_treatment(treatment);
+    sim.integrator = IntegratorOptions::fixed(method, 1e-3, 0.05).with_stabilization(treatment);
     let mut worst = 0.0f64;
     sim.run(&mut |s| {
         let (c, r) = closed_form(s.t);
@@ -69,7 +64,7 @@ fn run(
     Ok(worst)
 }
 
-const PROJECTION: ConstraintTreatment = ConstraintTreatment::Projection { tolerance: 1e-12 };
+const PROJECTION: Stabilization = Stabilization::Projection { tolerance: 1e-12 };
 
 #[test]
 fn closed_form_is_the_scene() {
@@ -88,7 +83,7 @@ fn fixed_step_methods_keep_the_smooth_branch_through_five_turns() {
         FormulationKind::Embedding,
         FormulationKind::Amalgamated,
     ] {
-        for (method, treatment) in [(Method::Rk4, PROJECTION), (Method::SymplecticEuler, PROJECTION)] {
+        for (method, treatment) in [(Method::rk4(), PROJECTION), (Method::symplectic_euler(), PROJECTION)] {
             let err = run(kind, method, treatment, end).unwrap_or_else(|e| panic!("{kind:?} {method:?}: {e}"));
             println!("{kind:?} {method:?}: largest angle error {err:.2e}");
             assert!(err < 1e-8, "{kind:?} {method:?}: angle error {err:.2e}");
@@ -99,8 +94,8 @@ fn fixed_step_methods_keep_the_smooth_branch_through_five_turns() {
     // only brings the next attempt closer (stopped at 7.8535 s with a step of 1e-12 s): still open.
     let err = run(
         FormulationKind::Augmented,
-        Method::GeneralizedAlpha { rho_inf: 0.8 },
-        ConstraintTreatment::None,
+        Method::generalized_alpha(0.8),
+        Stabilization::None,
         2.0 * PI,
     )
     .unwrap();
@@ -120,15 +115,8 @@ fn dopri5_stops_at_the_change_point_instead_of_switching_branch() {
         let scene = scene();
         let mut sim = scene.simulation();
         sim.formulation = kind;
-        sim.integrator = IntegratorOptions::fixed(
-            Method::DormandPrince {
-                rtol: 1e-8,
-                atol: 1e-10,
-            },
-            1e-3,
-            0.05,
-        )
-        .with_treatment(PROJECTION);
+        sim.integrator =
+            IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-10), 1e-3, 0.05).with_stabilization(PROJECTION);
         let mut worst = 0.0f64;
         let res = sim.run(&mut |s| {
             let (c, _) = closed_form(s.t);

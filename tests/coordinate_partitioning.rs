@@ -5,7 +5,7 @@
 use dalembert::augmented::Augmented;
 use dalembert::constraints::Formulation;
 use dalembert::embedding::{Embedding, EmbeddingOptions};
-use dalembert::integrators::{integrate, ConstraintTreatment, IntegratorOptions, Method, Statistics};
+use dalembert::integrators::{integrate, IntegratorOptions, Method, Stabilization, Statistics};
 use dalembert_testkit::mechanisms::{self, Mechanism};
 
 fn run(f: &mut dyn Formulation, mech: &Mechanism, t_end: f64, opts: &IntegratorOptions) -> (Vec<f64>, Statistics) {
@@ -20,8 +20,8 @@ fn run(f: &mut dyn Formulation, mech: &Mechanism, t_end: f64, opts: &IntegratorO
 #[test]
 fn four_bar_coordinate_partitioning_holds_constraints_and_motion() {
     let mech = mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false);
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-10 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-10 });
     let (q_cp, s_cp) = run(&mut Embedding::with_defaults(mech.model.clone()), &mech, 5.0, &opts);
     let (q_aug, _) = run(
         &mut Augmented::with_defaults(mech.model.clone()).unwrap(),
@@ -45,8 +45,8 @@ fn four_bar_coordinate_partitioning_holds_constraints_and_motion() {
 #[test]
 fn whirling_pendulum_forces_repartitioning() {
     let mech = mechanisms::chain(1.0, 1.0, &[-0.5], &[8.0], &[]);
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.05)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     let mut emb = Embedding::new(
         mech.model.clone(),
         EmbeddingOptions {

@@ -159,7 +159,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
         end: 1.0,
         formulation: FormulationKind::Embedding,
         redundancy: Default::default(),
-        integrator: IntegratorOptions::fixed(Method::Rk4, 1e-3, 1e-2),
+        integrator: IntegratorOptions::fixed(Method::rk4(), 1e-3, 1e-2),
         velocity_weights: None,
     };
     for kind in [FormulationKind::Embedding, FormulationKind::Amalgamated] {
@@ -195,7 +195,7 @@ fn generalized_alpha_steps_a_chain_of_forty_thousand_links() {
         end: 2e-3,
         formulation: FormulationKind::Augmented,
         redundancy: Default::default(),
-        integrator: IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 1e-3),
+        integrator: IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 1e-3),
         velocity_weights: None,
     };
     let stats = sim.run(&mut |_| {}).unwrap();

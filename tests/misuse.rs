@@ -3,9 +3,7 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
-use dalembert::constraints::{
-    Constraint, DynamicsError, Formulation, Gear, Model, Prismatic, Revolute, Rigid, Stabilization,
-};
+use dalembert::constraints::{Constraint, DynamicsError, Formulation, Gear, Model, Prismatic, Revolute, Rigid};
 use dalembert::embedding::Embedding;
 use dalembert::kinematics::{Body, BodyId, BodyRef, Vec2};
 use std::sync::Arc;
@@ -64,14 +62,7 @@ fn wrong_slice_lengths_are_errors_in_every_formulation() {
             (&q, &qd, 3, 1, "λ", 1),
         ];
         for (qq, vv, nqdd, nl, what, got) in cases {
-            let r = f.accelerations(
-                0.0,
-                qq,
-                vv,
-                Stabilization::None,
-                &mut vec![0.0; nqdd],
-                &mut vec![0.0; nl],
-            );
+            let r = f.accelerations(0.0, qq, vv, None, &mut vec![0.0; nqdd], &mut vec![0.0; nl]);
             let expected = if what == "λ" { 2 } else { 3 };
             assert_eq!(
                 r,
@@ -81,8 +72,7 @@ fn wrong_slice_lengths_are_errors_in_every_formulation() {
             );
         }
         // The right lengths still work: at rest and without forces every acceleration is zero.
-        f.accelerations(0.0, &q, &qd, Stabilization::None, &mut qdd, &mut lambda)
-            .unwrap();
+        f.accelerations(0.0, &q, &qd, None, &mut qdd, &mut lambda).unwrap();
         assert!(qdd.iter().all(|a| a.abs() < 1e-12), "{qdd:?}");
     }
 }

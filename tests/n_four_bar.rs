@@ -14,14 +14,14 @@
 //! h = 5e-4 (B₀ error 2.9e-2 / 4.2e-2, 2.0 at 1e-4), the augmented one at h = 1e-4 (2.6e-2).
 //! `smaller_steps_keep_the_branch` states that target and is ignored until it holds.
 
-use dalembert::integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use dalembert::integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert::scene::Scene;
 use dalembert::simulation::{FormulationKind, SimulationError};
 use dalembert_testkit::n_four_bar::NFourBar;
 
 const END: f64 = 20.0;
 const EVERY: f64 = END / 400.0;
-const PROJECTION: ConstraintTreatment = ConstraintTreatment::Projection { tolerance: 1e-12 };
+const PROJECTION: Stabilization = Stabilization::Projection { tolerance: 1e-12 };
 
 /// Largest `B₀` error against the reduction over the benchmark's output grid.
 fn b0_error(n: usize, kind: FormulationKind, h: f64) -> Result<f64, SimulationError> {
@@ -30,7 +30,7 @@ fn b0_error(n: usize, kind: FormulationKind, h: f64) -> Result<f64, SimulationEr
     let scene = Scene::from_toml(&bar.toml(END), "n-four-bar").unwrap();
     let mut sim = scene.simulation();
     sim.formulation = kind;
-    sim.integrator = IntegratorOptions::fixed(Method::Rk4, h, EVERY).with_treatment(PROJECTION);
+    sim.integrator = IntegratorOptions::fixed(Method::rk4(), h, EVERY).with_stabilization(PROJECTION);
     let (mut worst, mut k) = (0.0f64, 0);
     sim.run(&mut |s| {
         let (t, th, _) = reference[k];

@@ -117,7 +117,7 @@ fn every_formulation_runs_a_body_kind_it_has_never_seen() {
         Box::new(Embedding::with_defaults(sys.clone())),
         Box::new(Amalgamated::with_defaults(sys.clone())),
     ];
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.25);
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.25);
     for mut f in formulations {
         let mut worst = (0.0f64, 0.0f64);
         let mut samples = 0;
@@ -307,13 +307,7 @@ fn rotor_formulations() -> Vec<Box<dyn Formulation>> {
 #[test]
 fn every_formulation_runs_bodies_whose_velocities_are_not_position_rates() {
     for mut f in rotor_formulations() {
-        for method in [
-            Method::Rk4,
-            Method::DormandPrince {
-                rtol: 1e-11,
-                atol: 1e-11,
-            },
-        ] {
+        for method in [Method::rk4(), Method::dopri5(1e-11, 1e-11)] {
             let (theta, lambda, unit) = rotor_errors(f.as_mut(), method, 1e-3);
             assert!(
                 theta < 1e-9 && lambda < 1e-9 && unit < 1e-14,
@@ -330,9 +324,9 @@ fn every_formulation_runs_bodies_whose_velocities_are_not_position_rates() {
 #[test]
 fn one_step_methods_keep_their_order_on_the_rotation() {
     for mut f in rotor_formulations() {
-        let mut methods = vec![(Method::SymplecticEuler, 1.8, 1e-3)];
+        let mut methods = vec![(Method::symplectic_euler(), 1.8, 1e-3)];
         if f.is_index3_augmented() {
-            methods.push((Method::GeneralizedAlpha { rho_inf: 0.8 }, 3.5, 4e-3));
+            methods.push((Method::generalized_alpha(0.8), 3.5, 4e-3));
         }
         for (method, ratio, h) in methods {
             let coarse = rotor_errors(f.as_mut(), method, h);

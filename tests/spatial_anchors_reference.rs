@@ -35,14 +35,7 @@ fn spatial_anchor_scenes_match_the_reference_at_one_second() {
             ("slidercrank3d/1".to_string(), spatial::slider_crank_3d()),
         ])
         .collect();
-    let opts = IntegratorOptions::fixed(
-        Method::DormandPrince {
-            rtol: 1e-11,
-            atol: 1e-11,
-        },
-        1e-4,
-        1.0,
-    );
+    let opts = IntegratorOptions::fixed(Method::dopri5(1e-11, 1e-11), 1e-4, 1.0);
     for (name, model) in scenes {
         let rows = reference(&name);
         assert_eq!(rows.len(), model.bodies().len(), "{name}");

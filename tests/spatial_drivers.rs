@@ -73,7 +73,7 @@ fn driven_hinge_needs_the_closed_form_torque() {
     ];
     for mut form in formulations {
         let (mut angle_error, mut torque_error, mut samples) = (0.0f64, 0.0f64, 0);
-        let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05);
+        let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.05);
         integrate(form.as_mut(), 0.0, 2.0, &q0, &v0, &opts, &mut |s| {
             let (theta, torque) = closed_form(s.t);
             let angle = 2.0 * s.q[5].atan2(s.q[3]);

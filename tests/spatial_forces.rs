@@ -309,7 +309,7 @@ fn a_user_force_is_applied_like_the_library_s_own() {
     let (q0, v) = model.initial_state();
     let model: Arc<dyn MultibodySystem> = model;
     let mut f = Augmented::with_defaults(model).unwrap();
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1);
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1);
     let mut worst = 0.0f64;
     integrate(&mut f, 0.0, 2.0, &q0, &v, &opts, &mut |s| {
         let decay = (-b * s.t / m).exp();

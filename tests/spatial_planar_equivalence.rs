@@ -10,7 +10,7 @@ use dalembert::augmented::Augmented;
 use dalembert::embedding::Embedding;
 use dalembert::spatial::euler_parameters::from_axis_angle;
 use dalembert::spatial::{Body, BodyRef, Joint, ModelBuilder};
-use dalembert::system::{Formulation, MultibodySystem, Stabilization};
+use dalembert::system::{Formulation, MultibodySystem};
 use dalembert_testkit::mechanisms;
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -25,7 +25,7 @@ fn formulations(sys: &Arc<dyn MultibodySystem>) -> Vec<Box<dyn Formulation>> {
 
 fn solve(f: &mut dyn Formulation, q: &[f64], v: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let (mut a, mut lambda) = (vec![0.0; v.len()], vec![0.0; f.system().num_equations()]);
-    f.accelerations(0.0, q, v, Stabilization::None, &mut a, &mut lambda)
+    f.accelerations(0.0, q, v, None, &mut a, &mut lambda)
         .unwrap_or_else(|e| panic!("{}: {e}", f.name()));
     (a, lambda)
 }

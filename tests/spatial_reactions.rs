@@ -6,7 +6,7 @@
 use dalembert::augmented::Augmented;
 use dalembert::spatial::euler_parameters::{from_axis_angle, rotation};
 use dalembert::spatial::{Body, BodyRef, Joint, JointKind, Model, ModelBuilder};
-use dalembert::system::{Formulation, MultibodySystem, Stabilization};
+use dalembert::system::{Formulation, MultibodySystem};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
 
@@ -18,8 +18,7 @@ fn solve(model: &Arc<Model>) -> (Vec<f64>, Vec<f64>) {
     let mut f = Augmented::with_defaults(sys).unwrap();
     let (q, v) = model.initial_state();
     let (mut a, mut lambda) = (vec![0.0; v.len()], vec![0.0; model.num_equations()]);
-    f.accelerations(0.0, &q, &v, Stabilization::None, &mut a, &mut lambda)
-        .unwrap();
+    f.accelerations(0.0, &q, &v, None, &mut a, &mut lambda).unwrap();
     (a, lambda)
 }
 

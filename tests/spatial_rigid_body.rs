@@ -62,7 +62,7 @@ fn torque_free_body_conserves_energy_and_momentum_and_the_intermediate_axis_is_u
         let (e0, h0) = (model.kinetic_energy(&q0, &v0), model.angular_momentum(&q0, &v0));
         for mut f in formulations(&model) {
             let (mut drift, mut transverse, mut unit) = (0.0f64, 0.0f64, 0.0f64);
-            run(f.as_mut(), &q0, &v0, Method::Rk4, 1e-3, 0.01, 20.0, &mut |s| {
+            run(f.as_mut(), &q0, &v0, Method::rk4(), 1e-3, 0.01, 20.0, &mut |s| {
                 let de = (model.kinetic_energy(s.q, s.qd) - e0).abs() / e0;
                 let dh = (model.angular_momentum(s.q, s.qd) - h0).norm() / h0.norm();
                 drift = drift.max(de).max(dh);
@@ -128,7 +128,7 @@ fn heavy_top_precesses_steadily_at_the_closed_form_rate() {
     let (q0, v0) = model.initial_state();
     for mut f in formulations(&model) {
         let (mut tilt_error, mut phase_error) = (0.0f64, 0.0f64);
-        run(f.as_mut(), &q0, &v0, Method::Rk4, 2.5e-4, 0.05, 3.0, &mut |s| {
+        run(f.as_mut(), &q0, &v0, Method::rk4(), 2.5e-4, 0.05, 3.0, &mut |s| {
             let r = Vector3::new(s.q[0], s.q[1], s.q[2]).normalize();
             tilt_error = tilt_error.max((r.z.acos() - theta).abs());
             // Precession angle of the axis about z, against Ω t (unwrapped over 3 s < one period... ×2).
@@ -166,7 +166,7 @@ fn heavy_top_released_with_spin_nutates_between_the_closed_form_bounds() {
     let (q0, v0) = model.initial_state();
     for mut f in formulations(&model) {
         let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
-        run(f.as_mut(), &q0, &v0, Method::Rk4, 2.5e-4, 2.5e-4, 2.0, &mut |s| {
+        run(f.as_mut(), &q0, &v0, Method::rk4(), 2.5e-4, 2.5e-4, 2.0, &mut |s| {
             let tilt = (s.q[2] / Vector3::new(s.q[0], s.q[1], s.q[2]).norm()).acos();
             lo = lo.min(tilt);
             hi = hi.max(tilt);
@@ -199,7 +199,7 @@ fn spherical_pendulum_conserves_energy_and_vertical_momentum() {
     for mut f in formulations(&model) {
         let (mut de, mut dl) = (0.0f64, 0.0f64);
         let mut last = Vec::new();
-        run(f.as_mut(), &q0, &v0, Method::Rk4, 1e-3, 0.01, 10.0, &mut |s| {
+        run(f.as_mut(), &q0, &v0, Method::rk4(), 1e-3, 0.01, 10.0, &mut |s| {
             de = de.max((model.kinetic_energy(s.q, s.qd) + model.potential_energy(s.t, s.q) - e0).abs());
             dl = dl.max((model.angular_momentum(s.q, s.qd).z - lz0).abs());
             last = s.q.to_vec();

@@ -3,10 +3,10 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert::constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Stabilization};
+use dalembert::constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment};
 use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert::embedding::{Embedding, EmbeddingOptions};
-use dalembert::integrators::{integrate, ConstraintTreatment, IntegrationError, IntegratorOptions, Method, Statistics};
+use dalembert::integrators::{integrate, IntegrationError, IntegratorOptions, Method, Stabilization, Statistics};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Vec2};
 use dalembert_testkit::closed_form::{pendulum_angle, DoublePendulum};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
@@ -55,7 +55,7 @@ fn spread(mech: &Mechanism) -> f64 {
     let mut results = Vec::new();
     for (name, mut f) in all_formulations(&mech.model) {
         let (mut a, mut l) = (vec![0.0; n], vec![0.0; m]);
-        f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut a, &mut l)
+        f.accelerations(0.0, &mech.q, &mech.qd, None, &mut a, &mut l)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         results.push(a);
     }
@@ -89,8 +89,8 @@ fn extreme_mass_ratios_agree_and_conserve_energy() {
     let masses = [1e-3, 1e3, 1e-3, 1e3, 1e-3, 1e3];
     let mech = mechanisms::chain_with_masses(&masses, 1.0, &[-0.3, 0.2, -0.8, 0.5, 1.0, -0.4]);
     assert!(spread(&mech) < 1e-9, "formulations disagree by {:e}", spread(&mech));
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     let (_, s) = run(
         &mut Augmented::with_defaults(mech.model.clone()).unwrap(),
         &mech,
@@ -137,8 +137,8 @@ fn point_mass_hanging_from_a_heavy_body() {
         qd: vec![0.0; 6],
     };
     assert!(spread(&mech) < 1e-9, "formulations disagree by {:e}", spread(&mech));
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     for (name, mut f) in all_formulations(&mech.model) {
         let (_, s) = run(f.as_mut(), &mech, 1.0, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(
@@ -163,7 +163,12 @@ fn stiffness_sweep() {
         let omega = k.sqrt();
         let e0 = 0.5 * k * 1e-6;
         let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();
-        let rk4 = run(&mut f, &mech, 0.05, &IntegratorOptions::fixed(Method::Rk4, 1e-3, 1e-3));
+        let rk4 = run(
+            &mut f,
+            &mech,
+            0.05,
+            &IntegratorOptions::fixed(Method::rk4(), 1e-3, 1e-3),
+        );
         if 1e-3 * omega < 2.7 {
             let (state, s) = rk4.unwrap_or_else(|e| panic!("k = {k:e}: {e}"));
             let e_end = 0.5 * k * (state[0] - 1.0).powi(2) + 0.5 * state[3].powi(2);
@@ -185,7 +190,7 @@ fn stiffness_sweep() {
             &mut f,
             &mech,
             0.05,
-            &IntegratorOptions::fixed(Method::DormandPrince { rtol: 1e-6, atol: 1e-9 }, 1e-4, 1e-3),
+            &IntegratorOptions::fixed(Method::dopri5(1e-6, 1e-9), 1e-4, 1e-3),
         )
         .unwrap_or_else(|e| panic!("k = {k:e}: dopri5 {e}"));
         dopri_steps.push(s.steps as f64);
@@ -196,7 +201,7 @@ fn stiffness_sweep() {
             0.05,
             &mech.q,
             &mech.qd,
-            &IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 1e-3),
+            &IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 1e-3),
             &mut |s| {
                 worst = worst.max(s.energy);
                 last = s.energy;
@@ -239,8 +244,8 @@ fn parallelogram_passes_through_flat_positions() {
         exact > phi0 + 4.0 * std::f64::consts::PI - 0.3,
         "the test must cross several flat positions: {exact}"
     );
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.05)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     let mut emb = Embedding::with_defaults(mech.model.clone());
     let cases: Vec<(&str, Box<dyn Formulation>)> = vec![
         (
@@ -277,8 +282,8 @@ fn parallelogram_passes_through_flat_positions() {
 fn redundant_parallelogram_motion_and_report() {
     let (phi0, w0) = (0.3, 8.0);
     let mech = mechanisms::parallelogram(phi0, w0, true);
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.05)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     match run(
         &mut Augmented::with_defaults(mech.model.clone()).unwrap(),
         &mech,
@@ -323,8 +328,8 @@ fn redundant_parallelogram_motion_and_report() {
 #[test]
 fn slider_crank_through_dead_centres() {
     let mech = mechanisms::slider_crank(0.2, 10.0);
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.05)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     let mut finals = Vec::new();
     for (name, mut f) in all_formulations(&mech.model) {
         let (state, s) = run(f.as_mut(), &mech, 2.0, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -359,12 +364,12 @@ fn long_runs_stay_bounded() {
     let phi0 = std::f64::consts::FRAC_PI_3;
     let mech = mechanisms::chain(1.0, 1.0, &[phi0 - std::f64::consts::FRAC_PI_2], &[0.0], &[]);
     let t_end = 1e4;
-    let proj = ConstraintTreatment::Projection { tolerance: 1e-11 };
+    let proj = Stabilization::Projection { tolerance: 1e-11 };
     let (state, s) = run(
         &mut Augmented::with_defaults(mech.model.clone()).unwrap(),
         &mech,
         t_end,
-        &IntegratorOptions::fixed(Method::Rk4, 1e-2, 100.0).with_treatment(proj),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-2, 100.0).with_stabilization(proj),
     )
     .unwrap();
     let exact = pendulum_angle(phi0, (1.5 * G).sqrt(), t_end);
@@ -386,8 +391,8 @@ fn long_runs_stay_bounded() {
             t_end,
             &mech.q,
             &mech.qd,
-            &IntegratorOptions::fixed(Method::SymplecticEuler, 1e-2, 1.0)
-                .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 }),
+            &IntegratorOptions::fixed(Method::symplectic_euler(), 1e-2, 1.0)
+                .with_stabilization(Stabilization::Projection { tolerance: 1e-11 }),
             &mut |smp| {
                 let de = (smp.energy - e0).abs();
                 if smp.t <= 0.1 * t_end {
@@ -424,8 +429,8 @@ fn long_runs_stay_bounded() {
         &mut Augmented::with_defaults(dp.model.clone()).unwrap(),
         &dp,
         1e3,
-        &IntegratorOptions::fixed(Method::Rk4, 1e-3, 1.0)
-            .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 }),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-3, 1.0)
+            .with_stabilization(Stabilization::Projection { tolerance: 1e-11 }),
     )
     .unwrap();
     assert!(
@@ -455,14 +460,7 @@ fn step_size_sweep() {
             &mut Augmented::with_defaults(dp.model.clone()).unwrap(),
             &dp,
             0.1,
-            &IntegratorOptions::fixed(
-                Method::DormandPrince {
-                    rtol: 1e-13,
-                    atol: 1e-13,
-                },
-                1e-4,
-                0.1,
-            ),
+            &IntegratorOptions::fixed(Method::dopri5(1e-13, 1e-13), 1e-4, 0.1),
         )
         .unwrap();
         s
@@ -474,7 +472,7 @@ fn step_size_sweep() {
             &mut Augmented::with_defaults(dp.model.clone()).unwrap(),
             &dp,
             0.1,
-            &IntegratorOptions::fixed(Method::Rk4, h, 0.1),
+            &IntegratorOptions::fixed(Method::rk4(), h, 0.1),
         )
         .unwrap();
         assert!(s.iter().all(|v| v.is_finite()));
@@ -503,7 +501,7 @@ fn high_speed_spin_inside_a_linkage() {
         &mut Augmented::with_defaults(mech.model.clone()).unwrap(),
         &mech,
         0.1,
-        &IntegratorOptions::fixed(Method::Rk4, 1e-5, 0.01),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-5, 0.01),
     )
     .unwrap();
     assert!((state[6 + 5] - 1e4).abs() < 1e-9 * 1e4, "disk spin {}", state[11]);
@@ -519,15 +517,13 @@ fn bad_states_are_named() {
     q[4] = f64::NAN;
     for (name, mut f) in all_formulations(&mech.model) {
         let (mut a, mut l) = (vec![0.0; 9], vec![0.0; 8]);
-        let err = f
-            .accelerations(0.0, &q, &mech.qd, Stabilization::None, &mut a, &mut l)
-            .unwrap_err();
+        let err = f.accelerations(0.0, &q, &mech.qd, None, &mut a, &mut l).unwrap_err();
         assert!(err.to_string().contains("coupler"), "{name}: {err}");
     }
     let mut bad = mech.clone();
     bad.q[0] += 0.05;
-    let proj = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-10 });
+    let proj = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-10 });
     let (_, s) = run(
         &mut Augmented::with_defaults(bad.model.clone()).unwrap(),
         &bad,
@@ -540,7 +536,7 @@ fn bad_states_are_named() {
         &mut Augmented::with_defaults(bad.model.clone()).unwrap(),
         &bad,
         0.5,
-        &IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1),
     )
     .unwrap();
     assert!(
@@ -576,7 +572,7 @@ fn doubly_supported_beam_reactions_are_minimum_norm() {
     let (mut qdd, mut lam) = (vec![0.0; 3], vec![0.0; 4]);
     let err = Augmented::with_defaults(model.clone())
         .unwrap()
-        .accelerations(0.0, &q, &[0.0; 3], Stabilization::None, &mut qdd, &mut lam)
+        .accelerations(0.0, &q, &[0.0; 3], None, &mut qdd, &mut lam)
         .unwrap_err();
     assert!(matches!(err, DynamicsError::RedundantConstraints { .. }), "{err}");
     let formulations: Vec<(&str, Box<dyn Formulation>)> = vec![
@@ -612,7 +608,7 @@ fn doubly_supported_beam_reactions_are_minimum_norm() {
     let mut vals = sys.values();
     sys.evaluate(0.0, &q, &[], &mut vals);
     for (name, mut f) in formulations {
-        f.accelerations(0.0, &q, &[0.0; 3], Stabilization::None, &mut qdd, &mut lam)
+        f.accelerations(0.0, &q, &[0.0; 3], None, &mut qdd, &mut lam)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(qdd.iter().all(|a| a.abs() < 1e-9), "{name}: the beam moves: {qdd:?}");
         let mut r = vec![Reaction::default(); 2];
@@ -713,8 +709,8 @@ fn chain_of_parallelogram_loops_passes_flat_positions() {
         .unwrap(),
     );
     let mech = Mechanism { model, q, qd };
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.05)
-        .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 });
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.05)
+        .with_stabilization(Stabilization::Projection { tolerance: 1e-11 });
     let cases: Vec<(&str, Box<dyn Formulation>)> = vec![
         (
             "augmented",
@@ -821,8 +817,8 @@ function = { kind = "linear", rate = 2.0 }
         0.05,
         &mech.q,
         &mech.qd,
-        &IntegratorOptions::fixed(Method::Rk4, 1e-5, 0.005)
-            .with_treatment(ConstraintTreatment::Projection { tolerance: 1e-11 }),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-5, 0.005)
+            .with_stabilization(Stabilization::Projection { tolerance: 1e-11 }),
         &mut |s| {
             sys.evaluate(s.t, s.q, s.qd, &mut vals);
             sys.reactions(s.q, &vals, s.lambda, &mut r);

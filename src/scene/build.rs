@@ -1,10 +1,11 @@
 //! From the parsed file to an assembled model.
 
 use super::error::SceneError;
+use super::format::SIM_KEYS;
 use super::format::{BodyDef, DriverDef, ForceDef, JointDef, Points, SceneFile, SimDef, ValueDef};
 use super::functions::time_function;
 use super::names::{Ctx, Names};
-use super::{unknown_name, IntegratorKind, RunSettings, Scene, StabilizationKind};
+use super::{method_parameter, parameter_keys, unknown_name, RunSettings, Scene};
 use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
 use crate::mechanism::Mechanism;
 use crate::simulation::{FormulationKind, Simulation};
@@ -13,6 +14,7 @@ use dalembert_constraints::{
     BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Gear, JointAngle, JointDisplacement, Model,
     PointOnLine, Prismatic, RackPinion, Revolute, Rigid,
 };
+use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
     Body, BodyId, BodyRef, BodyState, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper,
     TimeFunction, Torque, Vec2,
@@ -571,18 +573,7 @@ fn force(
 
 /// The run settings of a `[simulation]` table (`file` and `text` for errors).
 pub(crate) fn settings(file: &str, text: &str, sim: Option<&Spanned<SimDef>>) -> Result<RunSettings, SceneError> {
-    let mut s = RunSettings {
-        end: 1.0,
-        formulation: FormulationKind::Augmented,
-        integrator: IntegratorKind::Rk4,
-        step: 1e-3,
-        output_every: 1e-2,
-        stabilization: StabilizationKind::Projection,
-        rtol: 1e-8,
-        atol: 1e-10,
-        rho_inf: 0.8,
-        redundancy: Default::default(),
-    };
+    let mut s = RunSettings::default();
     let Some(sim) = sim else { return Ok(s) };
     let span = sim.span();
     let d = sim.get_ref();
@@ -591,37 +582,68 @@ pub(crate) fn settings(file: &str, text: &str, sim: Option<&Spanned<SimDef>>) ->
         s.formulation =
             FormulationKind::parse(f).ok_or_else(|| err(unknown_name("formulation", f, FormulationKind::NAMES)))?;
     }
-    if let Some(i) = &d.integrator {
-        s.integrator =
-            IntegratorKind::parse(i).ok_or_else(|| err(unknown_name("integrator", i, IntegratorKind::NAMES)))?;
-    }
     if let Some(r) = &d.redundant {
         s.redundancy = super::parse_redundancy(r)
             .ok_or_else(|| err(unknown_name("redundancy treatment", r, super::REDUNDANCY_NAMES)))?;
     }
     if let Some(st) = &d.stabilization {
-        s.stabilization = StabilizationKind::parse(st)
-            .ok_or_else(|| err(unknown_name("stabilization", st, StabilizationKind::NAMES)))?;
+        s.stabilization =
+            Stabilization::parse(st).ok_or_else(|| err(unknown_name("stabilization", st, Stabilization::NAMES)))?;
+    }
+    // The methods' parameters: a key no method declares is an unknown field, located at its line.
+    for (key, value) in &d.parameters {
+        if method_parameter(key).is_none() {
+            let keys: Vec<String> = SIM_KEYS
+                .iter()
+                .chain(parameter_keys().iter())
+                .map(|k| format!("`{k}`"))
+                .collect();
+            return Err(SceneError::at(
+                file,
+                text,
+                Some(key_span(text, &span, key).unwrap_or(span.clone())),
+                format!("unknown field `{key}`, expected one of {}", keys.join(", ")),
+            ));
+        }
+        let v = match value {
+            toml::Value::Float(v) => *v,
+            toml::Value::Integer(i) => *i as f64,
+            _ => return Err(err(format!("'{key}' must be a number"))),
+        };
+        s.set_parameter(key, v, &|k| format!("'{k}'")).map_err(err)?;
+    }
+    if let Some(i) = &d.integrator {
+        let m = Method::named(i).ok_or_else(|| err(unknown_name("integrator", i, &method_names())))?;
+        s.set_method(m);
     }
     s.end = d.end.unwrap_or(s.end);
     s.step = d.step.unwrap_or(s.step);
     s.output_every = d.output_every.unwrap_or(s.output_every);
-    s.rtol = d.rtol.unwrap_or(s.rtol);
-    s.atol = d.atol.unwrap_or(s.atol);
-    s.rho_inf = d.rho_inf.unwrap_or(s.rho_inf);
-    if !(0.0..=1.0).contains(&s.rho_inf) {
-        return Err(err(format!("'rho_inf' must lie in [0, 1], got {}", s.rho_inf)));
-    }
-    for (v, what) in [
-        (s.end, "end"),
-        (s.step, "step"),
-        (s.output_every, "output_every"),
-        (s.rtol, "rtol"),
-        (s.atol, "atol"),
-    ] {
+    for (v, what) in [(s.end, "end"), (s.step, "step"), (s.output_every, "output_every")] {
         if !(v.is_finite() && v > 0.0) {
             return Err(err(format!("'{what}' must be positive, got {v}")));
         }
     }
     Ok(s)
+}
+
+/// The span of `key` where the table starting at `table` sets it (`key = …` at the start of a
+/// line, before the next table header).
+fn key_span(text: &str, table: &std::ops::Range<usize>, key: &str) -> Option<std::ops::Range<usize>> {
+    let body = text.get(table.start..)?;
+    let mut offset = table.start;
+    for (k, line) in body.split_inclusive('\n').enumerate() {
+        let trimmed = line.trim_start();
+        if k > 0 && trimmed.starts_with('[') {
+            return None;
+        }
+        if let Some(rest) = trimmed.strip_prefix(key) {
+            if rest.trim_start().starts_with('=') {
+                let start = offset + (line.len() - trimmed.len());
+                return Some(start..start + key.len());
+            }
+        }
+        offset += line.len();
+    }
+    None
 }

@@ -128,8 +128,10 @@ pub(crate) struct ForceDef {
     pub actuator: Option<FunctionDef>,
 }
 
+/// `[simulation]`. The methods' parameters (`rtol`, `rho_inf`, …) come from the integrators'
+/// registry: every other key lands in `parameters` and is checked against it
+/// (`build::settings`), since serde's `deny_unknown_fields` does not combine with `flatten`.
 #[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
 pub(crate) struct SimDef {
     pub end: Option<f64>,
     pub formulation: Option<String>,
@@ -137,8 +139,18 @@ pub(crate) struct SimDef {
     pub step: Option<f64>,
     pub output_every: Option<f64>,
     pub stabilization: Option<String>,
-    pub rtol: Option<f64>,
-    pub atol: Option<f64>,
-    pub rho_inf: Option<f64>,
     pub redundant: Option<String>,
+    #[serde(flatten)]
+    pub parameters: std::collections::BTreeMap<String, toml::Value>,
 }
+
+/// The fixed keys of `[simulation]`, for messages (the methods' parameters follow them).
+pub(crate) const SIM_KEYS: &[&str] = &[
+    "end",
+    "formulation",
+    "integrator",
+    "step",
+    "output_every",
+    "stabilization",
+    "redundant",
+];

@@ -11,6 +11,7 @@ mod format;
 mod functions;
 mod names;
 mod overrides;
+mod run_settings;
 mod spatial;
 mod spatial_forces;
 mod strict;
@@ -18,113 +19,13 @@ mod values;
 
 pub use error::{one_line, SceneError};
 pub use overrides::{RunOverrides, Spelling};
+pub use run_settings::{method_parameter, parameter_keys, RunSettings};
 pub use values::SceneValue;
 
 use crate::mechanism::Mechanism;
 use crate::simulation::{FormulationKind, Simulation};
-use dalembert_constraints::{RedundancyTreatment, Stabilization};
-use dalembert_integrators::{ConstraintTreatment, IntegratorOptions, Method};
+use dalembert_constraints::RedundancyTreatment;
 use std::path::Path;
-
-/// Settings of the `[simulation]` table, with defaults for everything but `end`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RunSettings {
-    /// End time (s). Default 1.
-    pub end: f64,
-    /// Formulation. Default augmented.
-    pub formulation: FormulationKind,
-    /// Integrator name: `symplectic-euler`, `rk4` (default), `dopri5`, `generalized-alpha`.
-    pub integrator: IntegratorKind,
-    /// Fixed step, or the initial step of an adaptive method. Default 1e-3 s.
-    pub step: f64,
-    /// Output interval. Default 1e-2 s.
-    pub output_every: f64,
-    /// Constraint treatment: `none`, `baumgarte` (default gains for the step), `projection` (default).
-    pub stabilization: StabilizationKind,
-    /// Relative tolerance of adaptive methods. Default 1e-8.
-    pub rtol: f64,
-    /// Absolute tolerance of adaptive methods. Default 1e-10.
-    pub atol: f64,
-    /// Spectral radius at infinity of generalized-α. Default 0.8.
-    pub rho_inf: f64,
-    /// Redundant constraints (`redundant = "error" | "minimum-norm"`). Default: an error naming
-    /// them.
-    pub redundancy: RedundancyTreatment,
-}
-
-/// The integrators a scene can name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum IntegratorKind {
-    /// Semi-implicit Euler.
-    SymplecticEuler,
-    /// Classic Runge–Kutta.
-    Rk4,
-    /// Dormand–Prince 5(4).
-    Dopri5,
-    /// Generalized-α (index 3, implicit).
-    GeneralizedAlpha,
-}
-
-/// The constraint treatments a scene can name.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StabilizationKind {
-    /// None.
-    None,
-    /// Baumgarte with `Stabilization::for_step(step)`.
-    Baumgarte,
-    /// Projection to 1e-10 after every step.
-    Projection,
-}
-
-impl IntegratorKind {
-    /// The names a scene or the command line may use.
-    pub const NAMES: &'static [&'static str] = &["symplectic-euler", "rk4", "dopri5", "generalized-alpha"];
-
-    /// Name, as in [`IntegratorKind::NAMES`].
-    pub fn name(&self) -> &'static str {
-        match self {
-            IntegratorKind::SymplecticEuler => "symplectic-euler",
-            IntegratorKind::Rk4 => "rk4",
-            IntegratorKind::Dopri5 => "dopri5",
-            IntegratorKind::GeneralizedAlpha => "generalized-alpha",
-        }
-    }
-
-    /// Parses a scene or command-line name.
-    pub fn parse(s: &str) -> Option<Self> {
-        Some(match s {
-            "symplectic-euler" | "euler" => IntegratorKind::SymplecticEuler,
-            "rk4" => IntegratorKind::Rk4,
-            "dopri5" | "dormand-prince" => IntegratorKind::Dopri5,
-            "generalized-alpha" => IntegratorKind::GeneralizedAlpha,
-            _ => return None,
-        })
-    }
-}
-
-impl StabilizationKind {
-    /// The names a scene or the command line may use.
-    pub const NAMES: &'static [&'static str] = &["none", "baumgarte", "projection"];
-
-    /// Parses a scene or command-line name.
-    pub fn parse(s: &str) -> Option<Self> {
-        Some(match s {
-            "none" => StabilizationKind::None,
-            "baumgarte" => StabilizationKind::Baumgarte,
-            "projection" => StabilizationKind::Projection,
-            _ => return None,
-        })
-    }
-
-    /// Name.
-    pub fn name(&self) -> &'static str {
-        match self {
-            StabilizationKind::None => "none",
-            StabilizationKind::Baumgarte => "baumgarte",
-            StabilizationKind::Projection => "projection",
-        }
-    }
-}
 
 impl FormulationKind {
     /// The names a scene or the command line may use.
@@ -154,30 +55,10 @@ pub fn parse_redundancy(s: &str) -> Option<RedundancyTreatment> {
 }
 
 /// The one-line error for a name that is not one of `names`: `unknown integrator 'rk5' (expected
-/// symplectic-euler, rk4, dopri5, generalized-alpha)`.
+/// symplectic-euler, rk4, dopri5, generalized-alpha)`. The integrators' names come from the
+/// registry ([`dalembert_integrators::method_names`]).
 pub fn unknown_name(what: &str, value: &str, names: &[&str]) -> String {
     format!("unknown {what} '{value}' (expected {})", names.join(", "))
-}
-
-impl RunSettings {
-    /// The integrator options these settings describe.
-    pub fn integrator_options(&self) -> IntegratorOptions {
-        let method = match self.integrator {
-            IntegratorKind::SymplecticEuler => Method::SymplecticEuler,
-            IntegratorKind::Rk4 => Method::Rk4,
-            IntegratorKind::Dopri5 => Method::DormandPrince {
-                rtol: self.rtol,
-                atol: self.atol,
-            },
-            IntegratorKind::GeneralizedAlpha => Method::GeneralizedAlpha { rho_inf: self.rho_inf },
-        };
-        let treatment = match self.stabilization {
-            StabilizationKind::None => ConstraintTreatment::None,
-            StabilizationKind::Baumgarte => ConstraintTreatment::Baumgarte(Stabilization::for_step(self.step)),
-            StabilizationKind::Projection => ConstraintTreatment::Projection { tolerance: 1e-10 },
-        };
-        IntegratorOptions::fixed(method, self.step, self.output_every).with_treatment(treatment)
-    }
 }
 
 /// True when the scene's `[scene] gravity` has three components: a spatial scene.

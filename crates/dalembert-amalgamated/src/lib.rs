@@ -30,8 +30,8 @@
 use dalembert_system::linalg::DenseCholesky;
 use dalembert_system::partition::VelocityTransform;
 use dalembert_system::{
-    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
-    RedundancyTreatment, Stabilization,
+    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
+    PartitionTracker, RedundancyTreatment,
 };
 use std::sync::Arc;
 
@@ -174,7 +174,7 @@ impl Formulation for Amalgamated {
         t: f64,
         q: &[f64],
         qd: &[f64],
-        stabilization: Stabilization,
+        baumgarte: Option<Baumgarte>,
         qdd: &mut [f64],
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
@@ -188,10 +188,10 @@ impl Formulation for Amalgamated {
         let sys = self.model.constraints();
         sys.evaluate(t, q, qd, &mut self.values);
         sys.check_values(t, &self.values)?;
-        if stabilization != Stabilization::None {
+        if baumgarte.is_some() {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }
-        stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
+        Baumgarte::apply(baumgarte, &self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
         let m = sys.num_equations();
         let model = Arc::clone(&self.model);

@@ -4,8 +4,8 @@ use crate::diagnosis::{diagnose, minimum_norm_solve};
 use dalembert_system::linalg::saddle_point::{kkt_mul, kkt_scale};
 use dalembert_system::linalg::SaddlePoint;
 use dalembert_system::{
-    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
-    RedundancyTreatment, Stabilization,
+    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
+    RedundancyTreatment,
 };
 use std::sync::Arc;
 
@@ -201,7 +201,7 @@ impl Formulation for Augmented {
         t: f64,
         q: &[f64],
         qd: &[f64],
-        stabilization: Stabilization,
+        baumgarte: Option<Baumgarte>,
         qdd: &mut [f64],
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
@@ -210,12 +210,12 @@ impl Formulation for Augmented {
         self.load(t, q, qd)?;
         let n = qd.len();
         let sys = self.model.constraints();
-        if stabilization != Stabilization::None {
+        if baumgarte.is_some() {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }
         let (bt, bb) = self.b.split_at_mut(n);
         bt.copy_from_slice(&self.q_e);
-        stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, bb);
+        Baumgarte::apply(baumgarte, &self.values.gamma, &self.values.c, &self.cdot, bb);
         self.factor_and_solve(t)?;
         qdd.copy_from_slice(&self.x[..n]);
         lambda.copy_from_slice(&self.x[n..]);

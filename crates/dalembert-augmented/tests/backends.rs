@@ -2,9 +2,7 @@
 //! sense when asked.
 
 use dalembert_augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert_constraints::{
-    Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Revolute, Stabilization,
-};
+use dalembert_constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Revolute};
 use dalembert_constraints::{ConstraintSet as _, MultibodySystem as _};
 use dalembert_kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};
 use dalembert_testkit::mechanisms;
@@ -27,8 +25,7 @@ fn run(model: &Arc<Model>, q: &[f64], qd: &[f64], backend: Backend) -> (Vec<f64>
     };
     assert_eq!(f.backend_name(), expected);
     let (mut qdd, mut lam) = (vec![0.0; q.len()], vec![0.0; model.num_equations()]);
-    f.accelerations(0.3, q, qd, Stabilization::None, &mut qdd, &mut lam)
-        .unwrap();
+    f.accelerations(0.3, q, qd, None, &mut qdd, &mut lam).unwrap();
     (qdd, lam)
 }
 
@@ -144,9 +141,7 @@ fn redundant_constraints_are_an_error_naming_the_joints() {
         )
         .unwrap();
         let (mut qdd, mut lam) = (vec![0.0; 12], vec![0.0; 12]);
-        let err = f
-            .accelerations(0.7, &q, &qd, Stabilization::None, &mut qdd, &mut lam)
-            .unwrap_err();
+        let err = f.accelerations(0.7, &q, &qd, None, &mut qdd, &mut lam).unwrap_err();
         match &err {
             DynamicsError::RedundantConstraints {
                 time,
@@ -177,8 +172,7 @@ fn minimum_norm_treatment_gives_the_parallelogram_motion() {
     };
     let mut f = Augmented::new(model.clone(), opts).unwrap();
     let (mut qdd, mut lam) = (vec![0.0; 12], vec![0.0; 12]);
-    f.accelerations(0.0, &q, &qd, Stabilization::None, &mut qdd, &mut lam)
-        .unwrap();
+    f.accelerations(0.0, &q, &qd, None, &mut qdd, &mut lam).unwrap();
     // Closed form: three cranks (1 kg, 1 m) and a translating coupler (2 kg) whose centre moves on a
     // circle of radius 1: inertia 3·(1/3) + 2·1² = 3, gravity moment g (3·0.5 + 2·1) cos φ.
     let alpha = -9.81 * (3.0 * 0.5 + 2.0) * phi.cos() / 3.0;
@@ -230,7 +224,7 @@ fn massless_free_body_is_reported_by_name() {
     let mut f = Augmented::with_defaults(Arc::new(model)).unwrap();
     let (mut qdd, mut lam) = (vec![0.0; 3], vec![0.0; 2]);
     let err = f
-        .accelerations(1.5, &q, &[0.0; 3], Stabilization::None, &mut qdd, &mut lam)
+        .accelerations(1.5, &q, &[0.0; 3], None, &mut qdd, &mut lam)
         .unwrap_err();
     assert!(
         matches!(&err, DynamicsError::SingularMass { time, bodies } if *time == 1.5 && bodies == &["ghost"]),
@@ -246,7 +240,7 @@ fn non_finite_state_is_an_error_naming_the_body() {
     q[4] = f64::NAN;
     let (mut qdd, mut lam) = (vec![0.0; 6], vec![0.0; 4]);
     let err = f
-        .accelerations(0.0, &q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+        .accelerations(0.0, &q, &mech.qd, None, &mut qdd, &mut lam)
         .unwrap_err();
     assert!(err.to_string().contains("link1"), "{err}");
 }

@@ -6,8 +6,8 @@
 //! wrong term (any modelling error is O(1)).
 
 use dalembert_augmented::{Augmented, AugmentedOptions, Backend};
+use dalembert_constraints::Formulation;
 use dalembert_constraints::MultibodySystem as _;
-use dalembert_constraints::{Formulation, Stabilization};
 use dalembert_testkit::closed_form::{DoublePendulum, FourBar};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 
@@ -20,7 +20,7 @@ fn solve(mech: &Mechanism, backend: Backend) -> (Vec<f64>, Vec<f64>) {
     let n = mech.q.len();
     let m = mech.model.num_equations();
     let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
-    f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+    f.accelerations(0.0, &mech.q, &mech.qd, None, &mut qdd, &mut lam)
         .unwrap();
     (qdd, lam)
 }

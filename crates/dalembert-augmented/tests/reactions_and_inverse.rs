@@ -3,7 +3,7 @@
 
 use dalembert_augmented::{Augmented, InverseDynamics};
 use dalembert_constraints::{ConstraintSet as _, MultibodySystem as _};
-use dalembert_constraints::{Formulation, KinematicOptions, Reaction, Stabilization};
+use dalembert_constraints::{Formulation, KinematicOptions, Reaction};
 use dalembert_kinematics::Vec2;
 use dalembert_testkit::closed_form::DoublePendulum;
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
@@ -12,7 +12,7 @@ fn forward(mech: &Mechanism) -> (Vec<f64>, Vec<f64>, Vec<Reaction>) {
     let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();
     let (n, m) = (mech.q.len(), mech.model.num_equations());
     let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
-    f.accelerations(0.0, &mech.q, &mech.qd, Stabilization::None, &mut qdd, &mut lam)
+    f.accelerations(0.0, &mech.q, &mech.qd, None, &mut qdd, &mut lam)
         .unwrap();
     let sys = mech.model.constraints();
     let mut vals = sys.values();

@@ -51,6 +51,7 @@ pub fn interrupt_flag() -> &'static std::sync::Arc<std::sync::atomic::AtomicBool
 mod animate;
 mod check;
 mod inverse;
+mod method_args;
 mod plot;
 mod simulate;
 mod sweep;

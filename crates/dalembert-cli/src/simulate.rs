@@ -1,7 +1,9 @@
 //! `dalembert simulate`.
 
+use crate::method_args::MethodParams;
 use dalembert::integrators::Sample;
-use dalembert::scene::{IntegratorKind, RunOverrides, Spelling};
+use dalembert::integrators::StepControl;
+use dalembert::scene::{RunOverrides, Spelling};
 use dalembert::{CsvOutput, Scene};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -34,18 +36,12 @@ pub struct RunArgs {
     /// symplectic-euler | rk4 | dopri5 | generalized-alpha
     #[arg(long)]
     integrator: Option<String>,
-    /// Spectral radius at infinity of generalized-α, 0 to 1.
-    #[arg(long, allow_hyphen_values = true)]
-    rho_inf: Option<f64>,
-    /// Fixed step, or initial step of dopri5 (s).
+    /// The methods' parameters (`--rtol`, `--atol`, `--rho-inf`), from the integrators' registry.
+    #[command(flatten)]
+    parameters: MethodParams,
+    /// Fixed step, or initial step of an adaptive method (s).
     #[arg(long, allow_hyphen_values = true)]
     step: Option<f64>,
-    /// Relative tolerance (dopri5).
-    #[arg(long, allow_hyphen_values = true)]
-    rtol: Option<f64>,
-    /// Absolute tolerance (dopri5).
-    #[arg(long, allow_hyphen_values = true)]
-    atol: Option<f64>,
     /// End time (s).
     #[arg(long, allow_hyphen_values = true)]
     end: Option<f64>,
@@ -67,10 +63,8 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
     let o = RunOverrides {
         formulation: a.formulation.clone(),
         integrator: a.integrator.clone(),
-        rho_inf: a.rho_inf,
+        parameters: a.parameters.0.clone(),
         step: a.step,
-        rtol: a.rtol,
-        atol: a.atol,
         end: a.end,
         every: a.every,
         stabilization: a.stabilization.clone(),
@@ -98,18 +92,10 @@ pub fn run(a: Args) -> Result<(), String> {
             .map_err(|e| e.to_string())?
             .degrees_of_freedom
     };
-    let method = match s.integrator {
-        IntegratorKind::Dopri5 => format!(
-            "dopri5 (rtol {}, atol {}, initial step {} s)",
-            short(s.rtol),
-            short(s.atol),
-            short(s.step)
-        ),
-        IntegratorKind::Rk4 => format!("rk4, step {}", fixed_step(s)),
-        IntegratorKind::SymplecticEuler => format!("symplectic-euler, step {}", fixed_step(s)),
-        IntegratorKind::GeneralizedAlpha => {
-            format!("generalized-alpha (rho_inf {}), step {}", s.rho_inf, fixed_step(s))
-        }
+    let m = &s.method;
+    let method = match m.entry().control {
+        StepControl::Adaptive => format!("{m}, initial step {} s", short(s.step)),
+        _ => format!("{m}, step {}", fixed_step(s)),
     };
     outln!("scene        {}", scene.name);
     outln!(
@@ -123,8 +109,8 @@ pub fn run(a: Args) -> Result<(), String> {
         "method       {} formulation, {}, constraints: {}",
         s.formulation.name(),
         method,
-        if s.integrator == IntegratorKind::GeneralizedAlpha {
-            "index-3 Newton (positions exact)"
+        if m.entry().keeps_constraints {
+            "kept by the method (positions exact to its Newton tolerance)"
         } else {
             s.stabilization.name()
         }

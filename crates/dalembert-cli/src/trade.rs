@@ -22,16 +22,12 @@ pub struct Args {
     /// Formulations to try (comma-separated).
     #[arg(long, value_delimiter = ',', default_value = "augmented,embedding,amalgamated")]
     formulations: Vec<String>,
-    /// Integrators to try.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "symplectic-euler,rk4,dopri5,generalized-alpha"
-    )]
+    /// Integrators to try (default: every registered method).
+    #[arg(long, value_delimiter = ',', default_values_t = registry_names(&dalembert::integrators::method_names()))]
     integrators: Vec<String>,
-    /// Constraint treatments for the fixed-step explicit methods.
-    #[arg(long, value_delimiter = ',', default_value = "none,baumgarte,projection")]
-    treatments: Vec<String>,
+    /// Stabilizations for the fixed-step methods that do not keep the constraints themselves.
+    #[arg(long, alias = "treatments", value_delimiter = ',', default_values_t = registry_names(dalembert::integrators::Stabilization::NAMES))]
+    stabilizations: Vec<String>,
     /// Steps of the fixed-step methods (s).
     #[arg(
         long,
@@ -53,6 +49,10 @@ pub struct Args {
     output: PathBuf,
 }
 
+fn registry_names(names: &[&str]) -> Vec<String> {
+    names.iter().map(|s| s.to_string()).collect()
+}
+
 pub fn run(a: Args) -> Result<(), String> {
     // Named by the flag here; the library names the grid field.
     for (values, flag) in [(&a.steps, "--steps"), (&a.tolerances, "--tolerances")] {
@@ -64,7 +64,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let grid = TradeGrid {
         formulations: a.formulations,
         integrators: a.integrators,
-        treatments: a.treatments,
+        stabilizations: a.stabilizations,
         steps: a.steps,
         tolerances: a.tolerances,
         end: a.end,

@@ -188,7 +188,7 @@ fn trade_measures_a_narrowed_grid() {
         "augmented",
         "--integrators",
         "rk4,dopri5",
-        "--treatments",
+        "--stabilizations",
         "none",
         "--steps",
         "2e-2,1e-2",

@@ -31,8 +31,8 @@ pub use dalembert_system::{error, formulation, gram, kinematics, partition, spar
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
 pub use dalembert_system::StructureReport;
 pub use dalembert_system::{
-    ConstraintError, ConstraintSet, ConstraintValues, DynamicsError, Energy, EquationRef, Formulation,
-    FormulationStats, MultibodySystem, RedundancyTreatment, Stabilization,
+    Baumgarte, ConstraintError, ConstraintSet, ConstraintValues, DynamicsError, Energy, EquationRef, Formulation,
+    FormulationStats, MultibodySystem, RedundancyTreatment,
 };
 pub use dalembert_system::{KinematicOptions, KinematicReport};
 pub use dalembert_system::{Partition, PartitionTracker, Repartition, VelocityTransform};

@@ -21,8 +21,8 @@
 use dalembert_system::linalg::{DenseCholesky, DenseLu};
 use dalembert_system::partition::{Partition, Repartition};
 use dalembert_system::{
-    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
-    RedundancyTreatment, Stabilization,
+    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
+    PartitionTracker, RedundancyTreatment,
 };
 use std::sync::Arc;
 
@@ -189,7 +189,7 @@ impl Formulation for Embedding {
         t: f64,
         q: &[f64],
         qd: &[f64],
-        stabilization: Stabilization,
+        baumgarte: Option<Baumgarte>,
         qdd: &mut [f64],
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
@@ -198,10 +198,10 @@ impl Formulation for Embedding {
         self.load(t, q, qd)?;
         let sys = self.model.constraints();
         let n = qd.len();
-        if stabilization != Stabilization::None {
+        if baumgarte.is_some() {
             sys.velocity_residual(&self.values, qd, &mut self.cdot);
         }
-        stabilization.apply(&self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
+        Baumgarte::apply(baumgarte, &self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
         let m = sys.num_equations();
         let model = Arc::clone(&self.model);

@@ -1,10 +1,8 @@
 //! The integration loop: steps, output scheduling, monitoring and failure reporting.
 
-use crate::dopri5::Dopri5;
-use crate::explicit::{rk4_step, symplectic_euler_step, FixedWork};
-use crate::generalized_alpha::{GeneralizedAlpha, NotConverged};
-use crate::{ConstraintTreatment, IntegrationError, IntegrationFailure, IntegratorOptions, Method, Statistics};
-use dalembert_system::{DynamicsError, Formulation, FormulationStats};
+use crate::stepper::{Setup, StepControl, Stepper};
+use crate::{Applies, IntegrationError, IntegrationFailure, IntegratorOptions, Stabilization, Statistics};
+use dalembert_system::{Baumgarte, DynamicsError, Formulation, FormulationStats};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -49,6 +47,8 @@ struct Run<'o> {
     extra: FormulationStats,
     /// Set by the caller to stop the run after the current step.
     cancel: &'o AtomicBool,
+    /// The Baumgarte gains the method integrates with (the samples' `q̈` and `λ` use them too).
+    baumgarte: Option<Baumgarte>,
 }
 
 fn inf_norm(v: &[f64]) -> f64 {
@@ -57,13 +57,7 @@ fn inf_norm(v: &[f64]) -> f64 {
 
 impl Run<'_> {
     /// Updates the monitors after an accepted step; fails on blow-up.
-    fn monitor<F: Formulation + ?Sized>(
-        &mut self,
-        f: &mut F,
-        t: f64,
-        y: &[f64],
-        h: f64,
-    ) -> Result<(), IntegrationError> {
+    fn monitor(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64], h: f64) -> Result<(), IntegrationError> {
         let size = inf_norm(y);
         if !size.is_finite() {
             return Err(DynamicsError::NonFinite {
@@ -96,22 +90,9 @@ impl Run<'_> {
     }
 
     /// Evaluates `q̈, λ` at an output state and hands the sample to the observer.
-    fn emit<F: Formulation + ?Sized>(
-        &mut self,
-        f: &mut F,
-        t: f64,
-        y: &[f64],
-        opts: &IntegratorOptions,
-    ) -> Result<(), IntegrationError> {
+    fn emit(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64]) -> Result<(), IntegrationError> {
         let (q, qd) = y.split_at(self.n);
-        f.accelerations(
-            t,
-            q,
-            qd,
-            opts.treatment.stabilization(),
-            &mut self.qdd,
-            &mut self.lambda,
-        )?;
+        f.accelerations(t, q, qd, self.baumgarte, &mut self.qdd, &mut self.lambda)?;
         f.residuals(t, q, qd, &mut self.c, &mut self.cdot);
         let sample = Sample {
             t,
@@ -130,7 +111,7 @@ impl Run<'_> {
         Ok(())
     }
 
-    fn finish<F: Formulation + ?Sized>(&mut self, f: &F, wall: Instant) {
+    fn finish(&mut self, f: &dyn Formulation, wall: Instant) {
         let now = f.stats();
         let s = &mut self.stats;
         s.evaluations = now.evaluations - self.start.evaluations + self.extra.evaluations;
@@ -144,21 +125,22 @@ impl Run<'_> {
     }
 }
 
-/// Restores the position invariants of `y = [q; v]` (`n_q` positions) that an explicit step does
-/// not keep (unit Euler parameters): [`dalembert_system::MultibodySystem::normalize`].
-fn normalize<F: Formulation + ?Sized>(f: &F, y: &mut [f64], n_q: usize) {
+/// Restores the position invariants of `y = [q; v]` (`n_q` positions) that a step does not keep
+/// (unit Euler parameters): [`dalembert_system::MultibodySystem::normalize`].
+fn normalize(f: &dyn Formulation, y: &mut [f64], n_q: usize) {
     f.system().normalize(&mut y[..n_q]);
 }
 
-/// Projects `y = [q; v]` (`n_q` positions) when the treatment asks for it; returns true if it did.
-fn project<F: Formulation + ?Sized>(
-    f: &mut F,
+/// Projects `y = [q; v]` (`n_q` positions) when the stabilization asks for it; returns true if it
+/// did.
+fn project(
+    f: &mut dyn Formulation,
     t: f64,
     y: &mut [f64],
     n_q: usize,
-    treatment: ConstraintTreatment,
+    stabilization: Stabilization,
 ) -> Result<bool, DynamicsError> {
-    if let ConstraintTreatment::Projection { tolerance } = treatment {
+    if let Some(tolerance) = stabilization.projection_tolerance() {
         let (q, qd) = y.split_at_mut(n_q);
         f.project(t, q, qd, tolerance)?;
         return Ok(true);
@@ -172,8 +154,8 @@ fn project<F: Formulation + ?Sized>(
 ///
 /// Returns the run's statistics, or the failure with the statistics up to it (every sample before
 /// the failure has already been observed).
-pub fn integrate<F: Formulation + ?Sized>(
-    f: &mut F,
+pub fn integrate(
+    f: &mut dyn Formulation,
     t0: f64,
     t_end: f64,
     q0: &[f64],
@@ -187,8 +169,9 @@ pub fn integrate<F: Formulation + ?Sized>(
 /// [`integrate`] that stops with [`IntegrationError::Interrupted`] after the first accepted step
 /// that finds `cancel` set (a signal handler or another thread sets it). The flag is read once per
 /// step; samples observed before the stop are complete.
-pub fn integrate_cancellable<F: Formulation + ?Sized>(
-    f: &mut F,
+#[allow(clippy::too_many_arguments)]
+pub fn integrate_cancellable(
+    f: &mut dyn Formulation,
     t0: f64,
     t_end: f64,
     q0: &[f64],
@@ -221,6 +204,7 @@ pub fn integrate_cancellable<F: Formulation + ?Sized>(
         observer_time: Duration::ZERO,
         extra: FormulationStats::default(),
         cancel,
+        baumgarte: None,
     };
     crate::vector_state::clear_upper_state();
     let result = run_loop(f, t0, t_end, &mut y, opts, &mut run);
@@ -245,21 +229,29 @@ fn check_options(t0: f64, t_end: f64, opts: &IntegratorOptions) -> Result<(), In
     if !(t_end.is_finite() && t0.is_finite() && t_end >= t0) {
         return bad("end time must be finite and not before the start");
     }
-    if let Method::DormandPrince { rtol, atol } = opts.method {
-        if !(rtol > 0.0 && atol > 0.0) {
-            return bad("rtol and atol must be positive");
-        }
-    }
-    if let Method::GeneralizedAlpha { rho_inf } = opts.method {
-        if !(0.0..=1.0).contains(&rho_inf) {
-            return bad("rho_inf must lie in [0, 1]");
-        }
-    }
-    Ok(())
+    opts.method.check().map_err(IntegrationError::Options)
 }
 
-fn run_loop<F: Formulation + ?Sized>(
-    f: &mut F,
+/// The output times: `t0 + k · every` for `k < n_out`, then `t_end`.
+struct Schedule {
+    t0: f64,
+    t_end: f64,
+    every: f64,
+    n_out: u64,
+}
+
+impl Schedule {
+    fn time(&self, k: u64) -> f64 {
+        if k >= self.n_out {
+            self.t_end
+        } else {
+            self.t0 + k as f64 * self.every
+        }
+    }
+}
+
+fn run_loop(
+    f: &mut dyn Formulation,
     t0: f64,
     t_end: f64,
     y: &mut [f64],
@@ -267,135 +259,179 @@ fn run_loop<F: Formulation + ?Sized>(
     run: &mut Run<'_>,
 ) -> Result<(), IntegrationError> {
     check_options(t0, t_end, opts)?;
-    let n_q = run.n;
-    project(f, t0, y, n_q, opts.treatment)?;
-    run.emit(f, t0, y, opts)?;
-    let stab = opts.treatment.stabilization();
-    let n_out = ((t_end - t0) / opts.output_every - 1e-9).ceil().max(0.0) as u64;
-    let out_time = |k: u64| {
-        if k >= n_out {
-            t_end
-        } else {
-            t0 + k as f64 * opts.output_every
-        }
+    let entry = opts.method.entry();
+    if entry.applies == Applies::AugmentedIndex3 && !f.is_index3_augmented() {
+        return Err(IntegrationError::Options(format!(
+            "{0} integrates the augmented index-3 equations and the {1} formulation has no implicit form of its own yet: use formulation augmented with {0}, or rk4 / dopri5 with {1}",
+            entry.name,
+            f.name()
+        )));
+    }
+    // A method that keeps the constraints itself is not projected.
+    let stabilization = if entry.keeps_constraints {
+        Stabilization::None
+    } else {
+        opts.stabilization
     };
-    match opts.method {
-        Method::SymplecticEuler | Method::Rk4 => {
-            let mut work = FixedWork::new(n_q, run.qdd.len(), run.lambda.len());
-            let mut t = t0;
-            for k in 1..=n_out {
-                let t_next = out_time(k);
-                let span = t_next - t;
-                let steps = (span / opts.step - 1e-9).ceil().max(1.0) as u64;
-                let h = span / steps as f64;
-                for s in 0..steps {
-                    let ts = t + s as f64 * h;
-                    match opts.method {
-                        Method::Rk4 => rk4_step(f, &mut work, ts, h, y, stab)?,
-                        _ => symplectic_euler_step(f, &mut work, ts, h, y, stab)?,
-                    }
-                    let t_after = if s + 1 == steps { t_next } else { ts + h };
-                    normalize(f, y, n_q);
-                    project(f, t_after, y, n_q, opts.treatment)?;
-                    run.monitor(f, t_after, y, h)?;
+    let n_q = run.n;
+    run.baumgarte = stabilization.gains(opts.step);
+    project(f, t0, y, n_q, stabilization)?;
+    run.emit(f, t0, y)?;
+    let schedule = Schedule {
+        t0,
+        t_end,
+        every: opts.output_every,
+        n_out: ((t_end - t0) / opts.output_every - 1e-9).ceil().max(0.0) as u64,
+    };
+    let mut stepper = (entry.build)(
+        &opts.method,
+        Setup {
+            formulation: &mut *f,
+            t0,
+            y0: y,
+            n_q,
+            step: opts.step,
+            baumgarte: run.baumgarte,
+        },
+    )?;
+    let result = match entry.control {
+        StepControl::Fixed => fixed_loop(f, stepper.as_mut(), y, opts, stabilization, run, &schedule),
+        StepControl::Adaptive => adaptive_loop(f, stepper.as_mut(), y, opts, stabilization, run, &schedule),
+    };
+    let work = stepper.work();
+    run.extra.newton_iterations += work.newton_iterations;
+    run.extra.factorizations += work.factorizations;
+    run.extra.evaluations += work.evaluations;
+    result
+}
+
+/// Fixed steps: each output interval is spanned by a whole number of equal steps no longer than
+/// the current step; a rejected step halves the current step (down to `min_step`), four accepted
+/// ones double it back toward `opts.step`.
+fn fixed_loop(
+    f: &mut dyn Formulation,
+    stepper: &mut dyn Stepper,
+    y: &mut [f64],
+    opts: &IntegratorOptions,
+    stabilization: Stabilization,
+    run: &mut Run<'_>,
+    schedule: &Schedule,
+) -> Result<(), IntegrationError> {
+    let n_q = run.n;
+    let mut h = opts.step;
+    let mut t = schedule.t0;
+    let mut successes = 0u32;
+    for k in 1..=schedule.n_out {
+        let t_next = schedule.time(k);
+        let t_start = t;
+        // Steps of this interval at the current step size, and how many are done.
+        let mut steps = ((t_next - t_start) / h - 1e-9).ceil().max(1.0) as u64;
+        let mut hh = (t_next - t_start) / steps as f64;
+        let mut done = 0u64;
+        let mut base = t_start;
+        while done < steps {
+            let ts = base + done as f64 * hh;
+            let outcome = stepper.step(f, ts, hh, y)?;
+            if !outcome.accepted {
+                run.stats.rejected += 1;
+                successes = 0;
+                h = 0.5 * hh;
+                if h < opts.min_step {
+                    return Err(IntegrationError::StepSizeTooSmall {
+                        time: ts,
+                        step: h,
+                        min_step: opts.min_step,
+                        error: outcome.error,
+                    });
                 }
-                t = t_next;
-                run.emit(f, t, y, opts)?;
+                // The rest of the interval at the halved step.
+                base = ts;
+                done = 0;
+                steps = ((t_next - base) / h - 1e-9).ceil().max(1.0) as u64;
+                hh = (t_next - base) / steps as f64;
+                continue;
+            }
+            done += 1;
+            let t_after = if done == steps { t_next } else { base + done as f64 * hh };
+            normalize(f, y, n_q);
+            project(f, t_after, y, n_q, stabilization)?;
+            run.monitor(f, t_after, y, hh)?;
+            successes += 1;
+            if successes >= 4 && h < opts.step && done < steps {
+                // Grow back: the rest of the interval at the doubled step.
+                h = (2.0 * h).min(opts.step);
+                successes = 0;
+                base = t_after;
+                done = 0;
+                steps = ((t_next - base) / h - 1e-9).ceil().max(1.0) as u64;
+                hh = (t_next - base) / steps as f64;
             }
         }
-        Method::GeneralizedAlpha { rho_inf } => {
-            if !f.is_index3_augmented() {
-                return Err(IntegrationError::Options(format!(
-                    "generalized-alpha integrates the augmented index-3 equations and the {0} formulation has no implicit form of its own yet: use formulation augmented with generalized-alpha, or rk4 / dopri5 with {0}",
-                    f.name()
-                )));
-            }
-            let n = run.n;
-            // Its iteration matrix is sparse on the couplings the system declares; a force element
-            // that does not declare its bodies couples all of them (a dense matrix): refuse sizes
-            // that cannot hold it, by name, instead of failing in the allocator.
-            let k = run.qdd.len() + run.lambda.len();
-            if f.system().force_coupling().is_none() && !dalembert_system::structure::dense_fits(k, k) {
-                return Err(IntegrationError::Options(format!(
-                    "generalized-alpha: a force element does not declare the bodies it acts on (ForceElement::bodies), so its iteration matrix couples every body: {k} × {k} dense ({:.1} GiB) is too large; declare the bodies, or use rk4 or dopri5",
-                    (k as f64) * (k as f64) * 8.0 / 1073741824.0
-                )));
-            }
-            let (q0, qd0) = y.split_at(n);
-            f.accelerations(
-                t0,
-                q0,
-                qd0,
-                dalembert_system::Stabilization::None,
-                &mut run.qdd,
-                &mut run.lambda,
-            )?;
-            let mut ga = GeneralizedAlpha::new(f.system(), rho_inf, &run.qdd, &run.lambda, q0).map_err(|e| {
-                DynamicsError::Singular {
-                    time: t0,
-                    what: format!("generalized-alpha's iteration matrix: {e}"),
-                }
-            })?;
-            let result = generalized_alpha_loop(f, &mut ga, t0, y, opts, run, n_out, &out_time);
-            run.extra.newton_iterations += ga.iterations;
-            run.extra.factorizations += ga.factorizations;
-            run.extra.evaluations += ga.evaluations;
-            result?;
+        t = t_next;
+        run.emit(f, t, y)?;
+    }
+    Ok(())
+}
+
+/// Adaptive steps proposed by the method; output samples from its dense output.
+fn adaptive_loop(
+    f: &mut dyn Formulation,
+    stepper: &mut dyn Stepper,
+    y: &mut [f64],
+    opts: &IntegratorOptions,
+    stabilization: Stabilization,
+    run: &mut Run<'_>,
+    schedule: &Schedule,
+) -> Result<(), IntegrationError> {
+    let (n_q, t0, t_end, n_out) = (run.n, schedule.t0, schedule.t_end, schedule.n_out);
+    let max_step = opts.max_step.min(t_end - t0).max(opts.min_step);
+    let mut h = opts.step.min(max_step);
+    let mut t = t0;
+    let mut k_out = 1;
+    let mut guard = SingularPassGuard::default();
+    let name = opts.method.name();
+    while t < t_end && k_out <= n_out {
+        let last = t + h >= t_end - 1e-12 * (1.0 + t_end.abs());
+        if last {
+            h = t_end - t;
         }
-        Method::DormandPrince { rtol, atol } => {
-            let mut dp = Dopri5::new(n_q, run.qdd.len(), run.lambda.len(), rtol, atol);
-            let max_step = opts.max_step.min(t_end - t0).max(opts.min_step);
-            let mut h = opts.step.min(max_step);
-            let mut t = t0;
-            let mut k_out = 1;
-            let mut guard = SingularPassGuard::default();
-            while t < t_end && k_out <= n_out {
-                let last = t + h >= t_end - 1e-12 * (1.0 + t_end.abs());
-                if last {
-                    h = t_end - t;
-                }
-                let attempt = dp.attempt(f, t, h, y, stab)?;
-                guard.check(f, t, y, n_q, attempt.next_step, "dopri5")?;
-                if attempt.error > 1.0 {
-                    run.stats.rejected += 1;
-                    let next = attempt.next_step;
-                    if next < opts.min_step {
-                        return Err(IntegrationError::StepSizeTooSmall {
-                            time: t,
-                            step: next,
-                            min_step: opts.min_step,
-                            error: attempt.error,
-                        });
-                    }
-                    h = next;
-                    continue;
-                }
-                let t_new = if last { t_end } else { t + h };
-                dp.accept(h, attempt.error, y);
-                // Dense output at every output time inside (t, t_new].
-                while k_out <= n_out && out_time(k_out) <= t_new + 1e-12 * (1.0 + t_new.abs()) {
-                    let to = out_time(k_out);
-                    let mut y_out = std::mem::take(&mut run.y_out);
-                    dp.interpolate(((to - t) / h).clamp(0.0, 1.0), &mut y_out);
-                    normalize(f, &mut y_out, n_q);
-                    project(f, to, &mut y_out, n_q, opts.treatment)?;
-                    let r = run.emit(f, to, &y_out, opts);
-                    run.y_out = y_out;
-                    r?;
-                    k_out += 1;
-                }
-                // The stored last stage stays valid after a normalization (it moves `q` by the
-                // order of the local error); a projection moves it further and invalidates it.
-                normalize(f, y, n_q);
-                if project(f, t_new, y, n_q, opts.treatment)? {
-                    dp.invalidate();
-                }
-                run.monitor(f, t_new, y, h)?;
-                guard.accepted(h);
-                t = t_new;
-                h = attempt.next_step.min(max_step);
+        let outcome = stepper.step(f, t, h, y)?;
+        guard.check(f, t, y, n_q, outcome.next_step, name)?;
+        if !outcome.accepted {
+            run.stats.rejected += 1;
+            let next = outcome.next_step;
+            if next < opts.min_step {
+                return Err(IntegrationError::StepSizeTooSmall {
+                    time: t,
+                    step: next,
+                    min_step: opts.min_step,
+                    error: outcome.error,
+                });
             }
+            h = next;
+            continue;
         }
+        let t_new = if last { t_end } else { t + h };
+        // Dense output at every output time inside (t, t_new].
+        while k_out <= n_out && schedule.time(k_out) <= t_new + 1e-12 * (1.0 + t_new.abs()) {
+            let to = schedule.time(k_out);
+            let mut y_out = std::mem::take(&mut run.y_out);
+            stepper.interpolate(((to - t) / h).clamp(0.0, 1.0), &mut y_out);
+            normalize(f, &mut y_out, n_q);
+            project(f, to, &mut y_out, n_q, stabilization)?;
+            let r = run.emit(f, to, &y_out);
+            run.y_out = y_out;
+            r?;
+            k_out += 1;
+        }
+        normalize(f, y, n_q);
+        if project(f, t_new, y, n_q, stabilization)? {
+            stepper.state_changed();
+        }
+        run.monitor(f, t_new, y, h)?;
+        guard.accepted(h);
+        t = t_new;
+        h = outcome.next_step.min(max_step);
     }
     Ok(())
 }
@@ -432,9 +468,9 @@ impl SingularPassGuard {
         }
     }
 
-    fn check<F: Formulation + ?Sized>(
+    fn check(
         &mut self,
-        f: &F,
+        f: &dyn Formulation,
         t: f64,
         y: &[f64],
         n_q: usize,
@@ -459,60 +495,4 @@ impl SingularPassGuard {
             None => Ok(()),
         }
     }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn generalized_alpha_loop<F: Formulation + ?Sized>(
-    f: &mut F,
-    ga: &mut GeneralizedAlpha,
-    t0: f64,
-    y: &mut [f64],
-    opts: &IntegratorOptions,
-    run: &mut Run<'_>,
-    n_out: u64,
-    out_time: &dyn Fn(u64) -> f64,
-) -> Result<(), IntegrationError> {
-    let n = run.n;
-    let mut h = opts.step;
-    let mut t = t0;
-    let mut successes = 0u32;
-    for k in 1..=n_out {
-        let t_next = out_time(k);
-        while t < t_next - 1e-12 * (1.0 + t_next.abs()) {
-            let remaining = t_next - t;
-            // Avoid a sliver of a step before the output time.
-            let hh = if h >= remaining * (1.0 - 1e-9) || remaining - h < 1e-3 * h {
-                remaining
-            } else {
-                h
-            };
-            let (q, qd) = y.split_at_mut(n);
-            match ga.step(f.system(), t, hh, q, qd) {
-                Ok(()) => {
-                    t = if hh == remaining { t_next } else { t + hh };
-                    run.monitor(f, t, y, hh)?;
-                    successes += 1;
-                    if successes >= 4 && h < opts.step {
-                        h = (2.0 * h).min(opts.step);
-                        successes = 0;
-                    }
-                }
-                Err(NotConverged) => {
-                    run.stats.rejected += 1;
-                    successes = 0;
-                    h = 0.5 * hh;
-                    if h < opts.min_step {
-                        return Err(IntegrationError::StepSizeTooSmall {
-                            time: t,
-                            step: h,
-                            min_step: opts.min_step,
-                            error: f64::NAN,
-                        });
-                    }
-                }
-            }
-        }
-        run.emit(f, t, y, opts)?;
-    }
-    Ok(())
 }

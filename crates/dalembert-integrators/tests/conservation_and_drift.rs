@@ -5,8 +5,8 @@ mod common;
 use common::run;
 
 use dalembert_augmented::Augmented;
-use dalembert_constraints::Stabilization;
-use dalembert_integrators::{integrate, ConstraintTreatment, IntegrationError, IntegratorOptions, Method};
+use dalembert_constraints::Baumgarte;
+use dalembert_integrators::{integrate, IntegrationError, IntegratorOptions, Method, Stabilization};
 use dalembert_testkit::closed_form::pendulum_angle;
 use dalembert_testkit::mechanisms::{self, G};
 
@@ -19,7 +19,7 @@ fn pendulum_2000_s_matches_elliptic_solution() {
     let mech = mechanisms::chain(1.0, l, &[phi0 - std::f64::consts::FRAC_PI_2], &[0.0], &[]);
     let omega0 = (1.5 * G / l).sqrt(); // rod about its end: m g L/2 / (m L²/3)
     let t_end = 2000.0;
-    let opts = IntegratorOptions::fixed(Method::Rk4, 1e-3, t_end);
+    let opts = IntegratorOptions::fixed(Method::rk4(), 1e-3, t_end);
     let (q, _, stats) = run(&mech, t_end, &opts).unwrap();
     let phi = q[2] + std::f64::consts::FRAC_PI_2;
     let exact = pendulum_angle(phi0, omega0, t_end);
@@ -42,7 +42,7 @@ fn four_bar_drift_with_each_treatment() {
     let mech = mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false);
     let h = 1e-3;
     let t_end = 10.0;
-    let base = IntegratorOptions::fixed(Method::SymplecticEuler, h, 0.01);
+    let base = IntegratorOptions::fixed(Method::symplectic_euler(), h, 0.01);
     let violations = |treatment| {
         let mut f = Augmented::with_defaults(mech.model.clone()).unwrap();
         let mut early = 0.0f64;
@@ -53,7 +53,7 @@ fn four_bar_drift_with_each_treatment() {
             t_end,
             &mech.q,
             &mech.qd,
-            &base.with_treatment(treatment),
+            &base.with_stabilization(treatment),
             &mut |s| {
                 if s.t <= 2.0 {
                     early = early.max(s.constraint_violation);
@@ -66,12 +66,12 @@ fn four_bar_drift_with_each_treatment() {
         .unwrap();
         (early, late, stats)
     };
-    let (e0, l0, none) = violations(ConstraintTreatment::None);
+    let (e0, l0, none) = violations(Stabilization::None);
     assert!(
         l0 >= 3.0 * e0 && l0 > 1e-6,
         "no treatment: first 2 s {e0:e}, last 2 s {l0:e}"
     );
-    let (e1, l1, baum) = violations(ConstraintTreatment::Baumgarte(Stabilization::for_step(h)));
+    let (e1, l1, baum) = violations(Stabilization::BaumgarteGains(Baumgarte::for_step(h)));
     assert!(
         l1 <= 2.0 * e1.max(1e-12),
         "Baumgarte grows: first 2 s {e1:e}, last 2 s {l1:e}"
@@ -82,7 +82,7 @@ fn four_bar_drift_with_each_treatment() {
         baum.max_constraint_violation,
         none.max_constraint_violation
     );
-    let (_, _, proj) = violations(ConstraintTreatment::Projection { tolerance: 1e-10 });
+    let (_, _, proj) = violations(Stabilization::Projection { tolerance: 1e-10 });
     assert!(
         proj.max_constraint_violation <= 1e-10,
         "projection {}",
@@ -110,7 +110,7 @@ fn explicit_step_beyond_stability_limit_is_an_error() {
         1.0,
         &q,
         &[0.0; 3],
-        &IntegratorOptions::fixed(Method::Rk4, 1e-3, 1e-3),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-3, 1e-3),
         &mut |s| {
             all_finite &= s.q.iter().chain(s.qd).all(|x| x.is_finite());
         },
@@ -127,7 +127,7 @@ fn explicit_step_beyond_stability_limit_is_an_error() {
         0.01,
         &q,
         &[0.0; 3],
-        &IntegratorOptions::fixed(Method::Rk4, 1e-5, 1e-3),
+        &IntegratorOptions::fixed(Method::rk4(), 1e-5, 1e-3),
         &mut |_| {},
     )
     .unwrap();

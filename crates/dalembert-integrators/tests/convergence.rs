@@ -25,7 +25,12 @@ fn mech() -> dalembert_testkit::Mechanism {
 }
 
 fn reference() -> Vec<f64> {
-    let (q, qd, _) = run(&mech(), 1.0, &IntegratorOptions::fixed(Method::Rk4, 1.0 / 8000.0, 1.0)).unwrap();
+    let (q, qd, _) = run(
+        &mech(),
+        1.0,
+        &IntegratorOptions::fixed(Method::rk4(), 1.0 / 8000.0, 1.0),
+    )
+    .unwrap();
     [q, qd].concat()
 }
 
@@ -50,7 +55,7 @@ fn slope(method: Method, steps: &[f64], reference: &[f64]) -> (f64, Vec<f64>) {
 fn fixed_step_methods_converge_at_their_order() {
     let reference = reference();
     let (p_euler, e1) = slope(
-        Method::SymplecticEuler,
+        Method::symplectic_euler(),
         &[1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0, 1.0 / 1600.0],
         &reference,
     );
@@ -59,7 +64,7 @@ fn fixed_step_methods_converge_at_their_order() {
         "symplectic Euler slope {p_euler} (errors {e1:?})"
     );
     let (p_rk4, e4) = slope(
-        Method::Rk4,
+        Method::rk4(),
         &[1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0],
         &reference,
     );
@@ -73,7 +78,7 @@ fn dormand_prince_meets_its_tolerance() {
     let reference = reference();
     let mut last = f64::INFINITY;
     for &tol in &[1e-6, 1e-9] {
-        let opts = IntegratorOptions::fixed(Method::DormandPrince { rtol: tol, atol: tol }, 1e-3, 0.1);
+        let opts = IntegratorOptions::fixed(Method::dopri5(tol, tol), 1e-3, 0.1);
         let (q, qd, stats) = run(&mech(), 1.0, &opts).unwrap();
         let err = max_diff(&[q, qd].concat(), &reference);
         assert!(err < 100.0 * tol, "tol {tol}: error {err}");
@@ -99,9 +104,9 @@ fn dormand_prince_dense_output_is_accurate() {
     };
     let coarse = collect(IntegratorOptions {
         max_step: 0.5,
-        ..IntegratorOptions::fixed(Method::DormandPrince { rtol: 1e-8, atol: 1e-8 }, 1e-2, 0.01)
+        ..IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-8), 1e-2, 0.01)
     });
-    let fine = collect(IntegratorOptions::fixed(Method::Rk4, 1e-4, 0.01));
+    let fine = collect(IntegratorOptions::fixed(Method::rk4(), 1e-4, 0.01));
     assert_eq!(coarse.len(), fine.len());
     for ((t1, a), (t2, b)) in coarse.iter().zip(&fine) {
         assert!((t1 - t2).abs() < 1e-12);

@@ -4,7 +4,7 @@
 
 mod common;
 use common::{max_diff, run};
-use dalembert_integrators::{IntegratorOptions, Method};
+use dalembert_integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert_testkit::mechanisms;
 
 #[test]
@@ -16,8 +16,8 @@ fn second_order_down_to_ten_microseconds() {
     let (qr, qdr, _) = run(
         &mech,
         t_end,
-        &IntegratorOptions::fixed(Method::Rk4, 2.5e-5, t_end)
-            .with_treatment(dalembert_integrators::ConstraintTreatment::Projection { tolerance: 1e-13 }),
+        &IntegratorOptions::fixed(Method::rk4(), 2.5e-5, t_end)
+            .with_stabilization(Stabilization::Projection { tolerance: 1e-13 }),
     )
     .unwrap();
     let reference = [qr, qdr].concat();
@@ -28,7 +28,7 @@ fn second_order_down_to_ten_microseconds() {
             let (q, qd, s) = run(
                 &mech,
                 t_end,
-                &IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, h, t_end),
+                &IntegratorOptions::fixed(Method::generalized_alpha(0.8), h, t_end),
             )
             .unwrap();
             eprintln!(

@@ -21,7 +21,7 @@ fn generalized_alpha_is_second_order() {
         [0.0, 2.0],
         [0.0, 0.0],
     );
-    let (qr, qdr, _) = run(&mech, 1.0, &IntegratorOptions::fixed(Method::Rk4, 1.0 / 8000.0, 1.0)).unwrap();
+    let (qr, qdr, _) = run(&mech, 1.0, &IntegratorOptions::fixed(Method::rk4(), 1.0 / 8000.0, 1.0)).unwrap();
     let reference = [qr, qdr].concat();
     let steps = [1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0];
     let errs: Vec<f64> = steps
@@ -30,7 +30,7 @@ fn generalized_alpha_is_second_order() {
             let (q, qd, s) = run(
                 &mech,
                 1.0,
-                &IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, h, 1.0),
+                &IntegratorOptions::fixed(Method::generalized_alpha(0.8), h, 1.0),
             )
             .unwrap();
             assert!(
@@ -58,7 +58,7 @@ fn generalized_alpha_keeps_the_four_bar_closed() {
     let (_, _, s) = run(
         &mech,
         5.0,
-        &IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.9 }, 1e-3, 0.1),
+        &IntegratorOptions::fixed(Method::generalized_alpha(0.9), 1e-3, 0.1),
     )
     .unwrap();
     assert!(
@@ -95,7 +95,7 @@ fn generalized_alpha_is_stable_far_beyond_the_explicit_limit() {
         1.0,
         &q,
         &[0.0; 3],
-        &IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.5 }, 1e-3, 1e-2),
+        &IntegratorOptions::fixed(Method::generalized_alpha(0.5), 1e-3, 1e-2),
         &mut |s| {
             worst = worst.max(s.energy);
         },
@@ -112,7 +112,7 @@ fn generalized_alpha_is_stable_far_beyond_the_explicit_limit() {
 /// Bounds: 10× the measured values rounded up (they are 20 s figures; this run is 10 s).
 #[test]
 fn energy_drift_of_each_method_on_the_double_pendulum() {
-    use dalembert_integrators::ConstraintTreatment;
+    use dalembert_integrators::Stabilization;
     let mech = mechanisms::double_pendulum(
         DoublePendulum {
             m: [1.0, 1.0],
@@ -122,35 +122,27 @@ fn energy_drift_of_each_method_on_the_double_pendulum() {
         [0.0, 0.0],
         [0.0, 0.0],
     );
-    let proj = ConstraintTreatment::Projection { tolerance: 1e-10 };
+    let proj = Stabilization::Projection { tolerance: 1e-10 };
     let cases = [
         (
             "symplectic-euler + projection",
-            IntegratorOptions::fixed(Method::SymplecticEuler, 1e-3, 0.1).with_treatment(proj),
+            IntegratorOptions::fixed(Method::symplectic_euler(), 1e-3, 0.1).with_stabilization(proj),
             1e2,
         ),
-        ("rk4", IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1), 3e-4),
+        ("rk4", IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1), 3e-4),
         (
             "rk4 + projection",
-            IntegratorOptions::fixed(Method::Rk4, 1e-3, 0.1).with_treatment(proj),
+            IntegratorOptions::fixed(Method::rk4(), 1e-3, 0.1).with_stabilization(proj),
             2e-6,
         ),
         (
             "dopri5",
-            IntegratorOptions::fixed(
-                Method::DormandPrince {
-                    rtol: 1e-8,
-                    atol: 1e-10,
-                },
-                1e-3,
-                0.1,
-            )
-            .with_treatment(proj),
+            IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-10), 1e-3, 0.1).with_stabilization(proj),
             1e-5,
         ),
         (
             "generalized-alpha",
-            IntegratorOptions::fixed(Method::GeneralizedAlpha { rho_inf: 0.8 }, 1e-3, 0.1),
+            IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 0.1),
             6e-2,
         ),
     ];

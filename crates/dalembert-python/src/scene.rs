@@ -6,7 +6,7 @@ use crate::errors::{IntegrationError, SceneError};
 use crate::interrupt;
 use crate::run::PyRun;
 use dalembert::output::Rows;
-use dalembert::scene::{RunOverrides, Spelling};
+use dalembert::scene::{method_parameter, parameter_keys, RunOverrides, Spelling};
 use dalembert::sweep::{run_one, sweep, Assignment, Output};
 use dalembert::trade::{trade, TradeGrid};
 use dalembert::Scene;
@@ -112,13 +112,21 @@ impl PyScene {
         let d = PyDict::new(py);
         d.set_item("end", s.end)?;
         d.set_item("formulation", s.formulation.name())?;
-        d.set_item("integrator", s.integrator.name())?;
+        d.set_item("integrator", s.method.name())?;
         d.set_item("step", s.step)?;
         d.set_item("every", s.output_every)?;
         d.set_item("stabilization", s.stabilization.name())?;
-        d.set_item("rtol", s.rtol)?;
-        d.set_item("atol", s.atol)?;
-        d.set_item("rho_inf", s.rho_inf)?;
+        // Every method parameter of the registry: the method's value, or the one the scene gives,
+        // or the default.
+        for key in parameter_keys() {
+            let given = s.parameters.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
+            let v = s
+                .method
+                .get(key)
+                .or(given)
+                .or_else(|| method_parameter(key).map(|p| p.default));
+            d.set_item(key, v)?;
+        }
         d.set_item(
             "redundant",
             match s.redundancy {
@@ -171,11 +179,11 @@ impl PyScene {
     }
 
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
-    /// line's flags do). Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
+    /// line's flags do); the methods' parameters (`rtol`, `atol`, `rho_inf`) are keywords too. Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
     /// so far) when the run stops early; with `strict=True` also when a conservative model's
     /// energy drifts by more than 1 % (otherwise a warning). The GIL is released during the run,
     /// and Ctrl-C stops it within one step (KeyboardInterrupt, rows so far in `.run`).
-    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, rtol=None, atol=None, rho_inf=None, redundant=None, strict=false))]
+    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, redundant=None, strict=false, **parameters))]
     fn simulate(
         &self,
         py: Python<'_>,
@@ -185,19 +193,23 @@ impl PyScene {
         step: Option<f64>,
         every: Option<f64>,
         stabilization: Option<String>,
-        rtol: Option<f64>,
-        atol: Option<f64>,
-        rho_inf: Option<f64>,
         redundant: Option<String>,
         strict: bool,
+        parameters: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<PyRun> {
+        let mut given = Vec::new();
+        for (k, v) in parameters.into_iter().flatten() {
+            let key: String = k.extract()?;
+            let value: f64 = v
+                .extract()
+                .map_err(|_| PyValueError::new_err(format!("{key} must be a number, got {v}")))?;
+            given.push((key, value));
+        }
         let o = RunOverrides {
             formulation,
             integrator,
-            rho_inf,
+            parameters: given,
             step,
-            rtol,
-            atol,
             end,
             every,
             stabilization,
@@ -277,13 +289,13 @@ impl PyScene {
     /// The speed–accuracy trade of `dalembert trade`: one dict per run of the grid (method,
     /// parameter, time_s, evaluations, error, max_constraint_violation, max_energy_change,
     /// status, pareto). Arguments default to the command line's grid.
-    #[pyo3(signature = (*, formulations=None, integrators=None, treatments=None, steps=None, tolerances=None, end=None, every=None))]
+    #[pyo3(signature = (*, formulations=None, integrators=None, stabilizations=None, steps=None, tolerances=None, end=None, every=None))]
     fn trade<'py>(
         &self,
         py: Python<'py>,
         formulations: Option<Vec<String>>,
         integrators: Option<Vec<String>>,
-        treatments: Option<Vec<String>>,
+        stabilizations: Option<Vec<String>>,
         steps: Option<Vec<f64>>,
         tolerances: Option<Vec<f64>>,
         end: Option<f64>,
@@ -293,7 +305,7 @@ impl PyScene {
         let grid = TradeGrid {
             formulations: formulations.unwrap_or(d.formulations),
             integrators: integrators.unwrap_or(d.integrators),
-            treatments: treatments.unwrap_or(d.treatments),
+            stabilizations: stabilizations.unwrap_or(d.stabilizations),
             steps: steps.unwrap_or(d.steps),
             tolerances: tolerances.unwrap_or(d.tolerances),
             end,
@@ -323,7 +335,7 @@ impl PyScene {
     /// Writes a self-contained HTML animation of a simulation with the scene's settings.
     #[pyo3(signature = (path, max_frames=2400))]
     fn animate(&self, py: Python<'_>, path: std::path::PathBuf, max_frames: usize) -> PyResult<()> {
-        let run = self.simulate(py, None, None, None, None, None, None, None, None, None, None, false)?;
+        let run = self.simulate(py, None, None, None, None, None, None, None, false, None)?;
         run.animate_to(&path, max_frames)
     }
 

@@ -237,7 +237,7 @@ def test_pandas_and_plot(scenes, tmp_path):
 
 def test_trade_table(scenes):
     scene = dalembert.Scene.load(scenes / "pendulum.toml")
-    rows = scene.trade(formulations=["augmented"], integrators=["rk4"], treatments=["projection"], steps=[1e-2, 1e-3], end=1.0)
+    rows = scene.trade(formulations=["augmented"], integrators=["rk4"], stabilizations=["projection"], steps=[1e-2, 1e-3], end=1.0)
     assert [r["parameter"] for r in rows] == [1e-2, 1e-3]
     # RK4 is fourth order: ten times smaller steps give an error at least 1000× smaller (the
     # reference is dopri5 at 1e-12).

@@ -9,26 +9,23 @@
 use crate::{EquationRef, MultibodySystem};
 use thiserror::Error;
 
-/// How the acceleration-level constraint right-hand side is modified.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub enum Stabilization {
-    /// `C_q q̈ = Q_d`: the violation drifts.
-    #[default]
-    None,
-    /// `C_q q̈ = Q_d − 2α Ċ − β² C`: the violation obeys `C̈ + 2α Ċ + β² C = 0`.
-    Baumgarte {
-        /// Damping gain α (1/s).
-        alpha: f64,
-        /// Stiffness gain β (1/s).
-        beta: f64,
-    },
+/// Baumgarte gains: the acceleration-level constraint equation `C_q q̈ = Q_d` becomes
+/// `C_q q̈ = Q_d − 2α Ċ − β² C`, so that the violation obeys `C̈ + 2α Ċ + β² C = 0`
+/// (`FORMULATIONS.md` §3). A formulation takes `Option<Baumgarte>`: `None` leaves `Q_d` as is.
+/// (The integrators' `Stabilization` chooses between no treatment, these gains and projection.)
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Baumgarte {
+    /// Damping gain α (1/s).
+    pub alpha: f64,
+    /// Stiffness gain β (1/s).
+    pub beta: f64,
 }
 
-impl Stabilization {
-    /// Baumgarte gains in physical terms: the violation behaves as an oscillator of natural
-    /// frequency `omega` (rad/s) and damping ratio `zeta`: `α = ζ ω`, `β = ω`.
+impl Baumgarte {
+    /// Gains in physical terms: the violation behaves as an oscillator of natural frequency
+    /// `omega` (rad/s) and damping ratio `zeta`: `α = ζ ω`, `β = ω`.
     pub fn from_frequency(omega: f64, zeta: f64) -> Self {
-        Stabilization::Baumgarte {
+        Baumgarte {
             alpha: zeta * omega,
             beta: omega,
         }
@@ -40,11 +37,11 @@ impl Stabilization {
         Self::from_frequency(0.1 / h, 1.0)
     }
 
-    /// Writes `Q_d − 2α Ċ − β² C` (or `Q_d`) into `rhs`.
-    pub fn apply(&self, gamma: &[f64], c: &[f64], cdot: &[f64], rhs: &mut [f64]) {
-        match *self {
-            Stabilization::None => rhs.copy_from_slice(gamma),
-            Stabilization::Baumgarte { alpha, beta } => {
+    /// Writes `Q_d − 2α Ċ − β² C` (with `gains`) or `Q_d` (without) into `rhs`.
+    pub fn apply(gains: Option<Baumgarte>, gamma: &[f64], c: &[f64], cdot: &[f64], rhs: &mut [f64]) {
+        match gains {
+            None => rhs.copy_from_slice(gamma),
+            Some(Baumgarte { alpha, beta }) => {
                 for i in 0..rhs.len() {
                     rhs[i] = gamma[i] - 2.0 * alpha * cdot[i] - beta * beta * c[i];
                 }
@@ -179,14 +176,14 @@ pub trait Formulation {
     /// The system being solved.
     fn system(&self) -> &dyn MultibodySystem;
 
-    /// Computes `q̈` and `λ` at `(t, q, q̇)` with the given stabilization of the constraint
-    /// right-hand side. `qdd` has length `n`, `lambda` length `m`.
+    /// Computes `q̈` and `λ` at `(t, q, q̇)`, with the Baumgarte terms added to the constraint
+    /// right-hand side when `baumgarte` is given. `qdd` has length `n`, `lambda` length `m`.
     fn accelerations(
         &mut self,
         t: f64,
         q: &[f64],
         qd: &[f64],
-        stabilization: Stabilization,
+        baumgarte: Option<Baumgarte>,
         qdd: &mut [f64],
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError>;

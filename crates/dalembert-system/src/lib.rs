@@ -33,7 +33,7 @@ pub mod time_function;
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
 pub use error::{ConstraintError, EquationRef};
-pub use formulation::{DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment, Stabilization};
+pub use formulation::{Baumgarte, DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment};
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use layout::{BodyBlock, Layout};
 pub use model_error::ModelError;

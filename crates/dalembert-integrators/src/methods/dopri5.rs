@@ -2,8 +2,98 @@
 //! fourth-order continuous extension for output between steps (Hairer, Nørsett & Wanner,
 //! *Solving ODEs I*, §II.5–II.6).
 
-use crate::explicit::derivative;
-use dalembert_system::{DynamicsError, Formulation, Stabilization};
+use super::first_order::derivative;
+use crate::registry::{no_advice, positive, Applies, MethodEntry, Parameter, TradeAxis};
+use crate::stepper::{Setup, StepControl, StepOutcome, Stepper};
+use crate::{IntegrationError, Method};
+use dalembert_system::{Baumgarte, DynamicsError, Formulation};
+
+/// The registry entry.
+pub(crate) static ENTRY: MethodEntry = MethodEntry {
+    name: "dopri5",
+    aliases: &["dormand-prince"],
+    summary: "Dormand-Prince 5(4): adaptive, PI step control, dense output of order 4",
+    order: 5,
+    control: StepControl::Adaptive,
+    keeps_constraints: false,
+    applies: Applies::AnyFormulation,
+    parameters: &[
+        Parameter {
+            key: "rtol",
+            default: 1e-8,
+            doc: "relative tolerance of the local error",
+            valid: positive,
+            expected: "must be positive",
+        },
+        Parameter {
+            key: "atol",
+            default: 1e-10,
+            doc: "absolute tolerance of the local error",
+            valid: positive,
+            expected: "must be positive",
+        },
+    ],
+    trade: TradeAxis::Tolerances(&["rtol", "atol"]),
+    advice: no_advice,
+    build,
+};
+
+impl Method {
+    /// Dormand–Prince 5(4), adaptive, with dense output at the output times.
+    pub fn dopri5(rtol: f64, atol: f64) -> Self {
+        let mut m = Method::of(&ENTRY);
+        m.set(0, rtol);
+        m.set(1, atol);
+        m
+    }
+}
+
+fn build(m: &Method, s: Setup<'_>) -> Result<Box<dyn Stepper>, IntegrationError> {
+    let (rtol, atol) = (m.value(0), m.value(1));
+    let n_v = s.y0.len() - s.n_q;
+    let lambda = s.formulation.system().num_equations();
+    Ok(Box::new(Stepping {
+        dp: Dopri5::new(s.n_q, n_v, lambda, rtol, atol),
+        baumgarte: s.baumgarte,
+    }))
+}
+
+/// The method with the run's Baumgarte gains.
+struct Stepping {
+    dp: Dopri5,
+    baumgarte: Option<Baumgarte>,
+}
+
+impl Stepper for Stepping {
+    fn step(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<StepOutcome, IntegrationError> {
+        let a = self.dp.attempt(f, t, h, y, self.baumgarte)?;
+        let accepted = a.error <= 1.0;
+        if accepted {
+            self.dp.accept(h, a.error, y);
+        }
+        Ok(StepOutcome {
+            accepted,
+            error: a.error,
+            next_step: a.next_step,
+        })
+    }
+
+    fn interpolate(&self, theta: f64, out: &mut [f64]) {
+        self.dp.interpolate(theta, out);
+    }
+
+    /// The stored last stage stays valid after a normalization (it moves `q` by the order of the
+    /// local error); a projection moves it further and invalidates it.
+    fn state_changed(&mut self) {
+        self.dp.invalidate();
+    }
+}
 
 const C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
 const A: [[f64; 6]; 7] = [
@@ -58,7 +148,7 @@ const D: [f64; 7] = [
 ];
 
 /// Storage and controller state of the Dormand–Prince method.
-pub(crate) struct Dopri5 {
+struct Dopri5 {
     k: [Vec<f64>; 7],
     y_new: Vec<f64>,
     y_tmp: Vec<f64>,
@@ -74,7 +164,7 @@ pub(crate) struct Dopri5 {
 }
 
 /// Outcome of one attempted step.
-pub(crate) struct Attempt {
+struct Attempt {
     /// Scaled error norm (accept when ≤ 1).
     pub error: f64,
     /// Proposed next step.
@@ -104,13 +194,13 @@ impl Dopri5 {
     }
 
     /// Attempts a step of size `h` from `(t, y)`; the candidate is kept until [`Dopri5::accept`].
-    pub fn attempt<F: Formulation + ?Sized>(
+    pub fn attempt(
         &mut self,
-        f: &mut F,
+        f: &mut dyn Formulation,
         t: f64,
         h: f64,
         y: &[f64],
-        stab: Stabilization,
+        stab: Option<Baumgarte>,
     ) -> Result<Attempt, DynamicsError> {
         let len = y.len();
         if !self.fsal_valid {

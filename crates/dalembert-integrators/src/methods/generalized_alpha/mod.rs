@@ -39,13 +39,111 @@
 
 mod iteration_matrix;
 
+use crate::registry::{unit_interval, Applies, MethodEntry, Parameter, TradeAxis};
+use crate::stepper::{Setup, StepControl, StepOutcome, Stepper};
+use crate::{IntegrationError, Method};
 use dalembert_system::linalg::LinalgError;
-use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem};
+use dalembert_system::{
+    BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
+};
 use iteration_matrix::{IterationMatrix, Trial};
+
+/// The registry entry.
+pub(crate) static ENTRY: MethodEntry = MethodEntry {
+    name: "generalized-alpha",
+    aliases: &[],
+    summary: "generalized-alpha on the index-3 augmented equations: order 2, implicit, C = 0 to the Newton tolerance",
+    order: 2,
+    control: StepControl::Fixed,
+    keeps_constraints: true,
+    applies: Applies::AugmentedIndex3,
+    parameters: &[Parameter {
+        key: "rho_inf",
+        default: 0.8,
+        doc: "spectral radius at infinite frequency: 0 damps the highest frequencies most, 1 not at all",
+        valid: unit_interval,
+        expected: "must lie in [0, 1]",
+    }],
+    trade: TradeAxis::Steps,
+    advice,
+    build,
+};
+
+impl Method {
+    /// Generalized-α on the index-3 form, implicit, with Newton iterations; the step is halved on
+    /// Newton failure and grows back after successes. `rho_inf`: spectral radius at infinite
+    /// frequency, 0 (maximal damping) to 1 (none).
+    pub fn generalized_alpha(rho_inf: f64) -> Self {
+        let mut m = Method::of(&ENTRY);
+        m.set(0, rho_inf);
+        m
+    }
+}
+
+fn advice(m: &Method) -> Option<String> {
+    let rho = m.value(0);
+    (rho > 0.99).then(|| {
+        format!(
+            "rho_inf = {rho} leaves the index-3 form without numerical damping: the velocity constraints drift and the run can fail (docs/integrators.md); 0.99 or less is stable"
+        )
+    })
+}
+
+fn build(m: &Method, s: Setup<'_>) -> Result<Box<dyn Stepper>, IntegrationError> {
+    let f = s.formulation;
+    let (q0, qd0) = s.y0.split_at(s.n_q);
+    let (n_v, m_eq) = (qd0.len(), f.system().num_equations());
+    // Its iteration matrix is sparse on the couplings the system declares; a force element that
+    // does not declare its bodies couples all of them (a dense matrix): refuse sizes that cannot
+    // hold it, by name, instead of failing in the allocator.
+    let k = n_v + m_eq;
+    if f.system().force_coupling().is_none() && !dalembert_system::structure::dense_fits(k, k) {
+        return Err(IntegrationError::Options(format!(
+            "generalized-alpha: a force element does not declare the bodies it acts on (ForceElement::bodies), so its iteration matrix couples every body: {k} × {k} dense ({:.1} GiB) is too large; declare the bodies, or use rk4 or dopri5",
+            (k as f64) * (k as f64) * 8.0 / 1073741824.0
+        )));
+    }
+    let (mut qdd, mut lambda) = (vec![0.0; n_v], vec![0.0; m_eq]);
+    f.accelerations(s.t0, q0, qd0, None, &mut qdd, &mut lambda)?;
+    let ga = GeneralizedAlpha::new(f.system(), m.value(0), &qdd, &lambda, q0).map_err(|e| DynamicsError::Singular {
+        time: s.t0,
+        what: format!("generalized-alpha's iteration matrix: {e}"),
+    })?;
+    Ok(Box::new(ga))
+}
+
+impl Stepper for GeneralizedAlpha {
+    fn step(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<StepOutcome, IntegrationError> {
+        let (q, qd) = y.split_at_mut(y.len() - self.qdd.len());
+        Ok(match self.advance(f.system(), t, h, q, qd) {
+            Ok(()) => StepOutcome::taken(h),
+            Err(NotConverged) => StepOutcome {
+                accepted: false,
+                error: f64::NAN,
+                next_step: 0.5 * h,
+            },
+        })
+    }
+
+    fn work(&self) -> FormulationStats {
+        FormulationStats {
+            evaluations: self.evaluations,
+            factorizations: self.factorizations,
+            newton_iterations: self.iterations,
+            repartitions: 0,
+        }
+    }
+}
 
 /// Coefficients of the method for a spectral radius `ρ∞`.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Coefficients {
+struct Coefficients {
     alpha_m: f64,
     alpha_f: f64,
     gamma: f64,
@@ -69,7 +167,7 @@ impl Coefficients {
 }
 
 /// State carried between steps: the pseudo-acceleration `a` and the last `q̈`, `λ`.
-pub(crate) struct GeneralizedAlpha {
+struct GeneralizedAlpha {
     coef: Coefficients,
     a: Vec<f64>,
     qdd: Vec<f64>,
@@ -150,7 +248,7 @@ fn residual(
 }
 
 /// Newton did not converge (or produced non-finite values) within the iteration limit.
-pub(crate) struct NotConverged;
+struct NotConverged;
 
 impl GeneralizedAlpha {
     /// Starts from consistent `q̈₀`, `λ₀` (from the formulation). `Err` when the sparse analysis of
@@ -199,8 +297,9 @@ impl GeneralizedAlpha {
         model.integrate_positions(&mut w.q1, &w.delta, h);
     }
 
-    /// One step from `(t, q, q̇)` to `t + h`; on success `q`, `qd` hold the new state.
-    pub fn step(
+    /// One step from `(t, q, q̇)` to `t + h`; on success `q`, `qd` hold the new state (the loop
+    /// normalizes it).
+    fn advance(
         &mut self,
         model: &dyn MultibodySystem,
         t: f64,
@@ -351,7 +450,6 @@ impl GeneralizedAlpha {
                     self.lambda.copy_from_slice(&w.lam);
                     self.h_prev = h;
                     q.copy_from_slice(&w.q1);
-                    model.normalize(q);
                     qd.copy_from_slice(&w.qd1);
                     self.matrix_age += 1;
                     return Ok(());

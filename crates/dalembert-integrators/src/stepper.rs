@@ -1,0 +1,82 @@
+//! The interface between the integration loop ([`crate::integrate`]) and a method: the loop owns
+//! the output schedule, the step-size bookkeeping of its [`StepControl`], normalization,
+//! projection, monitoring and failure reporting; a [`Stepper`] takes one step.
+
+use crate::IntegrationError;
+use dalembert_system::{Baumgarte, Formulation, FormulationStats};
+
+/// How the loop chooses the steps of a method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum StepControl {
+    /// The run's step, shortened so that a whole number of steps spans each output interval;
+    /// halved when the method rejects a step and doubled back after four accepted ones.
+    Fixed,
+    /// The method proposes every next step from its error estimate; output samples come from its
+    /// dense output ([`Stepper::interpolate`]).
+    Adaptive,
+}
+
+/// The outcome of one attempted step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepOutcome {
+    /// True when the step was taken (the state moved); false when it was rejected (the state is
+    /// unchanged).
+    pub accepted: bool,
+    /// The method's scaled error estimate (accept when ≤ 1); NaN when it has none.
+    pub error: f64,
+    /// The step the method proposes next (s); for a fixed-step method, the step it was given.
+    pub next_step: f64,
+}
+
+impl StepOutcome {
+    /// An accepted step of a method without an error estimate.
+    pub fn taken(h: f64) -> Self {
+        StepOutcome {
+            accepted: true,
+            error: f64::NAN,
+            next_step: h,
+        }
+    }
+}
+
+/// What a method is built from (see [`crate::MethodEntry::build`]).
+pub struct Setup<'a> {
+    /// The formulation the run integrates.
+    pub formulation: &'a mut dyn Formulation,
+    /// Start time.
+    pub t0: f64,
+    /// The consistent initial state `y = [q; v]`.
+    pub y0: &'a [f64],
+    /// Number of positions `n_q` (`y` splits there).
+    pub n_q: usize,
+    /// The run's step (fixed), or its initial step (adaptive).
+    pub step: f64,
+    /// The Baumgarte gains of the run's [`crate::Stabilization`], if any.
+    pub baumgarte: Option<Baumgarte>,
+}
+
+/// One integration method. It allocates its storage when it is built and nothing while stepping.
+pub trait Stepper {
+    /// Attempts a step of size `h` from `(t, y = [q; v])`. When the outcome is accepted `y` holds
+    /// the state at `t + h` (before normalization and projection, which the loop does); when it
+    /// is rejected `y` is unchanged. Errors stop the run.
+    fn step(&mut self, f: &mut dyn Formulation, t: f64, h: f64, y: &mut [f64])
+        -> Result<StepOutcome, IntegrationError>;
+
+    /// Dense output at fraction `theta ∈ [0, 1]` of the last accepted step, into `out`. Called only
+    /// for [`StepControl::Adaptive`] methods.
+    fn interpolate(&self, theta: f64, out: &mut [f64]) {
+        let _ = (theta, out);
+    }
+
+    /// The loop changed the state after the last step (a projection): anything the method kept
+    /// about it is stale.
+    fn state_changed(&mut self) {}
+
+    /// Work done outside the formulation (Newton iterations, factorizations and residual
+    /// evaluations of an implicit method), added to the run's statistics.
+    fn work(&self) -> FormulationStats {
+        FormulationStats::default()
+    }
+}
