@@ -69,11 +69,9 @@ class Scene:
         step: Optional[float] = None,
         every: Optional[float] = None,
         stabilization: Optional[str] = None,
-        rtol: Optional[float] = None,
-        atol: Optional[float] = None,
-        rho_inf: Optional[float] = None,
         redundant: Optional[str] = None,
         strict: bool = False,
+        **parameters: float,  # the methods' parameters from the registry: rtol, atol, rho_inf
     ) -> Run: ...
     def inverse(self, end: Optional[float] = None, every: Optional[float] = None) -> Run: ...
     def trade(
@@ -81,7 +79,7 @@ class Scene:
         *,
         formulations: Optional[List[str]] = None,
         integrators: Optional[List[str]] = None,
-        treatments: Optional[List[str]] = None,
+        stabilizations: Optional[List[str]] = None,
         steps: Optional[List[float]] = None,
         tolerances: Optional[List[float]] = None,
         end: Optional[float] = None,
