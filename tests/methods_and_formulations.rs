@@ -6,7 +6,7 @@
 //! the run). Projection is not compared here: the augmented formulation projects in the mass metric
 //! and the others by coordinate partitioning, two different (both valid) corrections.
 
-use dalembert::integrators::{integrate, Applies, IntegratorOptions, Method, StepControl, Stabilization, METHODS};
+use dalembert::integrators::{integrate, Applies, IntegratorOptions, Method, Stabilization, StepControl, METHODS};
 use dalembert::{FormulationKind, Simulation};
 use dalembert_testkit::mechanisms;
 

@@ -30,6 +30,7 @@ impl Args for MethodParams {
             cmd = cmd.arg(
                 Arg::new(key)
                     .long(key.replace('_', "-"))
+                    .value_name(key.to_uppercase())
                     .value_parser(clap::value_parser!(f64))
                     .allow_hyphen_values(true)
                     .help(format!("{doc} ({})", users.join(", "))),

@@ -71,6 +71,7 @@ impl Run<'_> {
                 time: t,
                 what: format!("state magnitude {size:.3e} vs initial {:.3e}", self.scale0),
                 step: h,
+                hint: String::new(),
             });
         }
         let (q, qd) = y.split_at(self.n);
@@ -298,6 +299,16 @@ fn run_loop(
         StepControl::Fixed => fixed_loop(f, stepper.as_mut(), y, opts, stabilization, run, &schedule),
         StepControl::Adaptive => adaptive_loop(f, stepper.as_mut(), y, opts, stabilization, run, &schedule),
     };
+    // The method says what a divergence likely means for it.
+    let result = result.map_err(|e| match e {
+        IntegrationError::Diverged { time, what, step, .. } => IntegrationError::Diverged {
+            time,
+            what,
+            step,
+            hint: stepper.divergence_hint(step),
+        },
+        other => other,
+    });
     let work = stepper.work();
     run.extra.newton_iterations += work.newton_iterations;
     run.extra.factorizations += work.factorizations;

@@ -22,8 +22,10 @@ pub enum IntegrationError {
         /// The scaled error estimate of the last attempt.
         error: f64,
     },
-    /// The state grew without bound (an explicit step beyond its stability limit).
-    #[error("t = {time}: the solution diverged ({what}); the step {step:e} s is probably beyond the method's stability limit")]
+    /// The state grew without bound (an explicit step beyond its stability limit; for an
+    /// implicit method, what its [`Stepper::divergence_hint`](crate::Stepper::divergence_hint)
+    /// says).
+    #[error("t = {time}: the solution diverged ({what}) at step {step:e} s; {hint}")]
     Diverged {
         /// Time.
         time: f64,
@@ -31,6 +33,8 @@ pub enum IntegrationError {
         what: String,
         /// The step in use.
         step: f64,
+        /// The likely cause, from the method.
+        hint: String,
     },
     /// An adaptive method's steps collapsed at a singular position of a closed chain (`C_q` nearly
     /// rank deficient: links lining up). Stepping on would let the motion leave on the other

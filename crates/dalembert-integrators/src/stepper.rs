@@ -74,6 +74,13 @@ pub trait Stepper {
     /// about it is stale.
     fn state_changed(&mut self) {}
 
+    /// The likely cause when the state grows without bound at step `h`, for
+    /// [`IntegrationError::Diverged`]: for an explicit method, a step beyond its stability limit.
+    fn divergence_hint(&self, h: f64) -> String {
+        let _ = h;
+        "the step is probably beyond the method's stability limit: take a smaller one".into()
+    }
+
     /// Work done outside the formulation (Newton iterations, factorizations and residual
     /// evaluations of an implicit method), added to the run's statistics.
     fn work(&self) -> FormulationStats {

@@ -131,6 +131,21 @@ impl Stepper for GeneralizedAlpha {
         })
     }
 
+    /// Not a stability limit: the method is unconditionally stable on linear problems. Without
+    /// numerical damping (ρ∞ = 1) the index-3 form lets the velocity constraints drift until the
+    /// run blows up (docs/integrators.md); otherwise the model itself grows, or Newton followed a
+    /// wrong branch.
+    fn divergence_hint(&self, _h: f64) -> String {
+        if self.rho_inf > 0.99 {
+            format!(
+                "generalized-alpha has no stability limit, but with rho_inf = {} it does not damp the index-3 form's highest frequencies and the velocity constraints drift until the run blows up: use rho_inf = 0.99 or less (docs/integrators.md)",
+                self.rho_inf
+            )
+        } else {
+            "generalized-alpha has no stability limit on linear problems: the model's own motion grows here, or Newton followed a wrong solution; a smaller step tells which".into()
+        }
+    }
+
     fn work(&self) -> FormulationStats {
         FormulationStats {
             evaluations: self.evaluations,
@@ -169,6 +184,7 @@ impl Coefficients {
 /// State carried between steps: the pseudo-acceleration `a` and the last `q̈`, `λ`.
 struct GeneralizedAlpha {
     coef: Coefficients,
+    rho_inf: f64,
     a: Vec<f64>,
     qdd: Vec<f64>,
     lambda: Vec<f64>,
@@ -264,6 +280,7 @@ impl GeneralizedAlpha {
         model.mass(q0, &mut mass);
         Ok(GeneralizedAlpha {
             coef: Coefficients::new(rho_inf),
+            rho_inf,
             a: qdd0.to_vec(),
             qdd: qdd0.to_vec(),
             lambda: lambda0.to_vec(),
