@@ -56,6 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         redundancy: Default::default(),
         integrator: IntegratorOptions::fixed(Method::rk4(), h, 0.5).with_stabilization(Stabilization::None),
         velocity_weights: None,
+        independent: None,
     };
     sim.assemble()?;
 

@@ -95,6 +95,10 @@ pub struct Simulation {
     /// exactly when the constraints allow (otherwise it gets weight 1e6 against the others). `None`:
     /// all equal.
     pub velocity_weights: Option<Vec<f64>>,
+    /// Independent coordinates (velocity indices) of the embedding formulation's partition, used
+    /// while they stay independent; `None`: chosen by the formulation. Other formulations ignore
+    /// it.
+    pub independent: Option<Vec<usize>>,
 }
 
 impl Simulation {
@@ -154,6 +158,7 @@ impl Simulation {
                 system,
                 EmbeddingOptions {
                     redundancy,
+                    independent: self.independent.clone(),
                     ..Default::default()
                 },
             )),

@@ -161,6 +161,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
         redundancy: Default::default(),
         integrator: IntegratorOptions::fixed(Method::rk4(), 1e-3, 1e-2),
         velocity_weights: None,
+        independent: None,
     };
     for kind in [FormulationKind::Embedding, FormulationKind::Amalgamated] {
         sim.formulation = kind;
@@ -197,6 +198,7 @@ fn generalized_alpha_steps_a_chain_of_forty_thousand_links() {
         redundancy: Default::default(),
         integrator: IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 1e-3),
         velocity_weights: None,
+        independent: None,
     };
     let stats = sim.run(&mut |_| {}).unwrap();
     assert_eq!(stats.steps, 2);

@@ -39,6 +39,7 @@ fn every_method_runs_on_every_formulation() {
                 redundancy: Default::default(),
                 integrator: opts,
                 velocity_weights: None,
+                independent: None,
             };
             let mut f = sim.formulation().unwrap();
             let mut last = Vec::new();

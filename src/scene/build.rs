@@ -317,10 +317,16 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         forces.push(element);
     }
     let model = Model::new(bodies, forces, constraints).map_err(|e| b.ctx.err(None, e.to_string()))?;
-    let settings = settings(b.ctx.file, b.ctx.text, file.simulation.as_ref())?;
+    let mechanism: Mechanism = Arc::new(model).into();
+    let settings = settings(
+        b.ctx.file,
+        b.ctx.text,
+        file.simulation.as_ref(),
+        &mechanism.velocity_names(),
+    )?;
     let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
     let state = (b.q.clone(), qd, weights);
-    assembled(&b.ctx, name, Arc::new(model).into(), state, settings, drawing)
+    assembled(&b.ctx, name, mechanism, state, settings, drawing)
 }
 
 /// The scene of `model` with its initial state `(q, q̇, velocity weights)` assembled (position
@@ -343,9 +349,30 @@ pub(crate) fn assembled(
         redundancy: settings.redundancy,
         integrator: settings.integrator_options(),
         velocity_weights: Some(weights),
+        independent: settings.independent.clone(),
     };
     sim.assemble()
         .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
+    if let Some(independent) = &settings.independent {
+        // As many independent coordinates as degrees of freedom at the assembled position.
+        let sys = sim.model.as_system();
+        let sys = sys.constraints();
+        let mut v = sys.values();
+        sys.evaluate(0.0, &sim.q, &[], &mut v);
+        let dof = sys
+            .analyse_structure(&v, 1e-9)
+            .map_err(|e| ctx.err(None, e.to_string()))?
+            .degrees_of_freedom;
+        if independent.len() != dof {
+            return Err(ctx.err(
+                None,
+                format!(
+                    "[simulation] independent names {} coordinate(s); the mechanism has {dof} degree(s) of freedom",
+                    independent.len()
+                ),
+            ));
+        }
+    }
     Ok(Scene {
         name,
         model: sim.model,
@@ -571,8 +598,14 @@ fn force(
     Ok((element, mark))
 }
 
-/// The run settings of a `[simulation]` table (`file` and `text` for errors).
-pub(crate) fn settings(file: &str, text: &str, sim: Option<&Spanned<SimDef>>) -> Result<RunSettings, SceneError> {
+/// The run settings of a `[simulation]` table (`file` and `text` for errors; `coordinates`: the
+/// model's velocity names, `body.label`, for `independent`).
+pub(crate) fn settings(
+    file: &str,
+    text: &str,
+    sim: Option<&Spanned<SimDef>>,
+    coordinates: &[String],
+) -> Result<RunSettings, SceneError> {
     let mut s = RunSettings::default();
     let Some(sim) = sim else { return Ok(s) };
     let span = sim.span();
@@ -589,6 +622,24 @@ pub(crate) fn settings(file: &str, text: &str, sim: Option<&Spanned<SimDef>>) ->
     if let Some(st) = &d.stabilization {
         s.stabilization =
             Stabilization::parse(st).ok_or_else(|| err(unknown_name("stabilization", st, Stabilization::NAMES)))?;
+    }
+    if let Some(names) = &d.independent {
+        let mut indices = Vec::with_capacity(names.len());
+        for name in names {
+            let i = coordinates.iter().position(|c| c == name).ok_or_else(|| {
+                let shown: Vec<&str> = coordinates.iter().take(6).map(|c| c.as_str()).collect();
+                let more = if coordinates.len() > 6 { ", …" } else { "" };
+                err(format!(
+                    "independent: unknown coordinate '{name}' (expected body.label: {}{more})",
+                    shown.join(", ")
+                ))
+            })?;
+            if indices.contains(&i) {
+                return Err(err(format!("independent: '{name}' is named twice")));
+            }
+            indices.push(i);
+        }
+        s.independent = Some(indices);
     }
     // The methods' parameters: a key no method declares is an unknown field, located at its line.
     for (key, value) in &d.parameters {

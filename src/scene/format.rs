@@ -140,6 +140,7 @@ pub(crate) struct SimDef {
     pub output_every: Option<f64>,
     pub stabilization: Option<String>,
     pub redundant: Option<String>,
+    pub independent: Option<Vec<String>>,
     #[serde(flatten)]
     pub parameters: std::collections::BTreeMap<String, toml::Value>,
 }
@@ -153,4 +154,5 @@ pub(crate) const SIM_KEYS: &[&str] = &[
     "output_every",
     "stabilization",
     "redundant",
+    "independent",
 ];

@@ -126,6 +126,7 @@ impl Scene {
             redundancy: self.settings.redundancy,
             integrator: self.settings.integrator_options(),
             velocity_weights: None,
+            independent: self.settings.independent.clone(),
         }
     }
 }

@@ -96,6 +96,12 @@ impl RunOverrides {
             }
         }
         warnings.extend((method.entry().advice)(&method));
+        if s.independent.is_some() && s.formulation != FormulationKind::Embedding {
+            warnings.push(format!(
+                "the scene's independent coordinates apply to the embedding formulation only; ignored with {}",
+                s.formulation.name()
+            ));
+        }
         if method.entry().keeps_constraints && self.stabilization.is_some() {
             warnings.push(format!(
                 "{} is ignored with {} (it keeps the position constraints itself)",

@@ -25,6 +25,10 @@ pub struct RunSettings {
     /// Redundant constraints (`redundant = "error" | "minimum-norm"`). Default: an error naming
     /// them.
     pub redundancy: RedundancyTreatment,
+    /// Independent coordinates of the embedding formulation's partition (`independent =
+    /// ["link1.angle", …]`, indices into the velocities), used while they stay independent; `None`:
+    /// chosen by the formulation (full pivoting on `C_q`). Other formulations ignore it.
+    pub independent: Option<Vec<usize>>,
     /// Every method parameter given (`rtol = 1e-6`), by key, whether or not [`Self::method`] has
     /// it: choosing another method later ([`RunSettings::set_method`]) applies those it has.
     pub parameters: Vec<(&'static str, f64)>,
@@ -40,6 +44,7 @@ impl Default for RunSettings {
             output_every: 1e-2,
             stabilization: Stabilization::projection(),
             redundancy: RedundancyTreatment::default(),
+            independent: None,
             parameters: Vec::new(),
         }
     }

@@ -470,17 +470,16 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         model.force(f);
     }
     let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
-    let settings = build::settings(ctx.file, ctx.text, file.simulation.as_ref())?;
-    let name = file.scene.name.unwrap_or_else(|| origin.to_string());
     let (q, qd) = model.initial_state();
-    build::assembled(
-        &ctx,
-        name,
-        Arc::new(model).into(),
-        (q, qd, weights),
-        settings,
-        Drawing::default(),
-    )
+    let mechanism: crate::mechanism::Mechanism = Arc::new(model).into();
+    let settings = build::settings(
+        ctx.file,
+        ctx.text,
+        file.simulation.as_ref(),
+        &mechanism.velocity_names(),
+    )?;
+    let name = file.scene.name.unwrap_or_else(|| origin.to_string());
+    build::assembled(&ctx, name, mechanism, (q, qd, weights), settings, Drawing::default())
 }
 
 /// The joint a `[[joints]]` table describes.
