@@ -316,6 +316,28 @@ fn run_loop(
     result
 }
 
+/// The number of equal steps no longer than `h` that span `span`, and their size.
+fn split(span: f64, h: f64) -> (u64, f64) {
+    let steps = (span / h - 1e-9).ceil().max(1.0) as u64;
+    (steps, span / steps as f64)
+}
+
+impl Run<'_> {
+    /// Counts a rejected step; fails when the next step would fall below the minimum.
+    fn rejected(&mut self, t: f64, next: f64, error: f64, min_step: f64) -> Result<(), IntegrationError> {
+        self.stats.rejected += 1;
+        if next < min_step {
+            return Err(IntegrationError::StepSizeTooSmall {
+                time: t,
+                step: next,
+                min_step,
+                error,
+            });
+        }
+        Ok(())
+    }
+}
+
 /// Fixed steps: each output interval is spanned by a whole number of equal steps no longer than
 /// the current step; a rejected step halves the current step (down to `min_step`), four accepted
 /// ones double it back toward `opts.step`.
@@ -336,30 +358,20 @@ fn fixed_loop(
         let t_next = schedule.time(k);
         let t_start = t;
         // Steps of this interval at the current step size, and how many are done.
-        let mut steps = ((t_next - t_start) / h - 1e-9).ceil().max(1.0) as u64;
-        let mut hh = (t_next - t_start) / steps as f64;
+        let (mut steps, mut hh) = split(t_next - t_start, h);
         let mut done = 0u64;
         let mut base = t_start;
         while done < steps {
             let ts = base + done as f64 * hh;
             let outcome = stepper.step(f, ts, hh, y)?;
             if !outcome.accepted {
-                run.stats.rejected += 1;
                 successes = 0;
                 h = 0.5 * hh;
-                if h < opts.min_step {
-                    return Err(IntegrationError::StepSizeTooSmall {
-                        time: ts,
-                        step: h,
-                        min_step: opts.min_step,
-                        error: outcome.error,
-                    });
-                }
+                run.rejected(ts, h, outcome.error, opts.min_step)?;
                 // The rest of the interval at the halved step.
                 base = ts;
                 done = 0;
-                steps = ((t_next - base) / h - 1e-9).ceil().max(1.0) as u64;
-                hh = (t_next - base) / steps as f64;
+                (steps, hh) = split(t_next - base, h);
                 continue;
             }
             done += 1;
@@ -374,8 +386,7 @@ fn fixed_loop(
                 successes = 0;
                 base = t_after;
                 done = 0;
-                steps = ((t_next - base) / h - 1e-9).ceil().max(1.0) as u64;
-                hh = (t_next - base) / steps as f64;
+                (steps, hh) = split(t_next - base, h);
             }
         }
         t = t_next;
@@ -409,17 +420,8 @@ fn adaptive_loop(
         let outcome = stepper.step(f, t, h, y)?;
         guard.check(f, t, y, n_q, outcome.next_step, name)?;
         if !outcome.accepted {
-            run.stats.rejected += 1;
-            let next = outcome.next_step;
-            if next < opts.min_step {
-                return Err(IntegrationError::StepSizeTooSmall {
-                    time: t,
-                    step: next,
-                    min_step: opts.min_step,
-                    error: outcome.error,
-                });
-            }
-            h = next;
+            run.rejected(t, outcome.next_step, outcome.error, opts.min_step)?;
+            h = outcome.next_step;
             continue;
         }
         let t_new = if last { t_end } else { t + h };
