@@ -291,7 +291,6 @@ fn run_loop(
             t0,
             y0: y,
             n_q,
-            step: opts.step,
             baumgarte: run.baumgarte,
         },
     )?;

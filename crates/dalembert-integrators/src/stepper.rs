@@ -50,8 +50,6 @@ pub struct Setup<'a> {
     pub y0: &'a [f64],
     /// Number of positions `n_q` (`y` splits there).
     pub n_q: usize,
-    /// The run's step (fixed), or its initial step (adaptive).
-    pub step: f64,
     /// The Baumgarte gains of the run's [`crate::Stabilization`], if any.
     pub baumgarte: Option<Baumgarte>,
 }
