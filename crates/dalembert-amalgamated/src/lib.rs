@@ -92,13 +92,16 @@ impl Amalgamated {
     pub fn new(model: Arc<dyn MultibodySystem>, redundancy: RedundancyTreatment) -> Self {
         let n = model.layout().n_v();
         let m = model.num_equations();
+        let mut tracker = PartitionTracker::new(1e3);
+        // Without the hand-over (its setup failed) coordinate partitioning projects everywhere.
+        let _ = tracker.set_up_handover(&*model);
         Amalgamated {
             mass: model.mass_storage(),
             values: model.constraints().values(),
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
             rhs: vec![0.0; m],
-            tracker: PartitionTracker::new(1e3),
+            tracker,
             redundancy,
             model,
             stats: FormulationStats::default(),
@@ -262,11 +265,12 @@ impl Formulation for Amalgamated {
     }
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
-    /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation.
+    /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation; at
+    /// singular positions, where no partition is well conditioned, the mass-orthogonal projection
+    /// (`PartitionTracker::project_or_hand_over`, counted in `FormulationStats::handovers`).
     fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
-        let sys = self.model.constraints();
         self.tracker
-            .project_counted(t, sys, &mut self.values, (q, qd), tolerance, &mut self.stats)
+            .project_or_hand_over(t, &*self.model, &mut self.values, (q, qd), tolerance, &mut self.stats)
     }
 
     fn stats(&self) -> FormulationStats {

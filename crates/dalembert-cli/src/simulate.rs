@@ -191,8 +191,12 @@ pub fn run(a: Args) -> Result<(), String> {
         );
     }
     outln!(
-        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions",
-        stats.steps, stats.rejected, stats.evaluations, stats.factorizations, stats.newton_iterations, stats.repartitions
+        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions{}",
+        stats.steps, stats.rejected, stats.evaluations, stats.factorizations, stats.newton_iterations, stats.repartitions,
+        match stats.handovers {
+            0 => String::new(),
+            k => format!(", {k} projections handed over to the mass-orthogonal one at singular positions"),
+        }
     );
     outln!(
         "time         {:.3} ms in the integration loop ({:.2} µs per step)",

@@ -133,6 +133,8 @@ impl Embedding {
         if let Some(ind) = &options.independent {
             tracker = tracker.with_independent(model.constraints(), ind.clone());
         }
+        // Without the hand-over (its setup failed) coordinate partitioning projects everywhere.
+        let _ = tracker.set_up_handover(&*model);
         let n = model.layout().n_v();
         let m = model.num_equations();
         Embedding {
@@ -308,11 +310,12 @@ impl Formulation for Embedding {
     }
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
-    /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation.
+    /// dependent positions by Newton–Raphson, dependent velocities from the velocity equation; at
+    /// singular positions, where no partition is well conditioned, the mass-orthogonal projection
+    /// (`PartitionTracker::project_or_hand_over`, counted in `FormulationStats::handovers`).
     fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
-        let sys = self.model.constraints();
         self.tracker
-            .project_counted(t, sys, &mut self.values, (q, qd), tolerance, &mut self.stats)
+            .project_or_hand_over(t, &*self.model, &mut self.values, (q, qd), tolerance, &mut self.stats)
     }
 
     fn stats(&self) -> FormulationStats {

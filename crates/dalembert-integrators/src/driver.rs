@@ -119,6 +119,7 @@ impl Run<'_> {
         s.factorizations = now.factorizations - self.start.factorizations + self.extra.factorizations;
         s.newton_iterations = now.newton_iterations - self.start.newton_iterations + self.extra.newton_iterations;
         s.repartitions = now.repartitions - self.start.repartitions;
+        s.handovers = now.handovers - self.start.handovers;
         s.wall_time = wall.elapsed().saturating_sub(self.observer_time);
         if s.steps == 0 {
             s.min_step_taken = 0.0;

@@ -17,6 +17,9 @@ pub struct Statistics {
     pub newton_iterations: u64,
     /// Coordinate re-partitions.
     pub repartitions: u64,
+    /// Projections handed over from coordinate partitioning to the mass-orthogonal projection at
+    /// singular positions (embedding and amalgamated formulations).
+    pub handovers: u64,
     /// Wall time of the integration loop (excluding the observer's own time is not attempted).
     pub wall_time: Duration,
     /// Largest `‖C‖∞` after any accepted step.

@@ -166,6 +166,9 @@ pub struct FormulationStats {
     pub repartitions: u64,
     /// Newton iterations spent in projections / position recovery.
     pub newton_iterations: u64,
+    /// Projections coordinate partitioning handed over to the mass-orthogonal projection at
+    /// singular positions (embedding and amalgamated formulations; [`crate::partition`]).
+    pub handovers: u64,
 }
 
 /// The forward-dynamics interface shared by all formulations.

@@ -14,12 +14,14 @@
 //! of `C_qd` is estimated from the ratio of the factor's pivots; the embedding and amalgamated
 //! formulations re-partition when it exceeds a threshold.
 
+mod handover;
 mod reduced_mass;
 mod transform;
+pub use handover::{MassOrthogonalProjection, HANDOVER_CONDITION};
 pub use transform::{VelocityTransform, DENSE_LIMIT};
 
 use crate::structure::column_rank;
-use crate::{ConstraintSet, ConstraintValues};
+use crate::{ConstraintSet, ConstraintValues, MultibodySystem};
 use faer::Mat;
 
 /// A choice of dependent and independent coordinates and of independent equations.
@@ -88,6 +90,8 @@ pub struct PartitionTracker {
     pub rank_tolerance: f64,
     /// If given, the user's choice of independent coordinates (used while `C_qd` stays regular).
     preferred: Option<Vec<usize>>,
+    /// The projection handed over to at singular positions ([`handover`]), if set up.
+    handover: Option<MassOrthogonalProjection>,
     /// Scratch of the projection: Ċ (m), a row-sized vector, a coordinate-sized one.
     cdot: Vec<f64>,
     y: Vec<f64>,
@@ -104,6 +108,7 @@ impl PartitionTracker {
             threshold,
             rank_tolerance: 1e-9,
             preferred: None,
+            handover: None,
             cdot: Vec::new(),
             y: Vec::new(),
             delta: Vec::new(),
@@ -193,6 +198,53 @@ impl PartitionTracker {
 }
 
 impl PartitionTracker {
+    /// Sets up the mass-orthogonal projection that [`PartitionTracker::project_or_hand_over`]
+    /// hands over to at singular positions (its saddle-point factorization: allocated here).
+    ///
+    /// When it cannot be set up (its saddle-point analysis fails) the tracker keeps coordinate
+    /// partitioning everywhere, as before the hand-over existed, and this says why.
+    pub fn set_up_handover(&mut self, model: &dyn MultibodySystem) -> Result<(), crate::linalg::LinalgError> {
+        self.handover = Some(MassOrthogonalProjection::new(model)?);
+        Ok(())
+    }
+
+    /// Coordinate partitioning ([`PartitionTracker::project`]), or, when the partition's `C_qd`
+    /// stays ill-conditioned after re-partitioning (condition estimate above
+    /// [`HANDOVER_CONDITION`], or singular) and [`PartitionTracker::set_up_handover`] set it up, the
+    /// mass-orthogonal projection ([`MassOrthogonalProjection`]). Adds Newton iterations,
+    /// re-partitions and hand-overs to `stats`.
+    pub fn project_or_hand_over(
+        &mut self,
+        t: f64,
+        model: &dyn MultibodySystem,
+        values: &mut ConstraintValues,
+        (q, qd): (&mut [f64], &mut [f64]),
+        tolerance: f64,
+        stats: &mut crate::FormulationStats,
+    ) -> Result<usize, crate::DynamicsError> {
+        let sys = model.constraints();
+        if self.handover.is_some() {
+            let before = self.log.len();
+            sys.evaluate(t, q, qd, values);
+            let singular = match self.factor(t, sys, values) {
+                None => true,
+                Some((_, vt)) => vt.condition > HANDOVER_CONDITION || vt.condition.is_nan(),
+            };
+            stats.repartitions += (self.log.len() - before) as u64;
+            if let (true, Some(h)) = (singular, self.handover.as_mut()) {
+                // With redundant equations (kept under `RedundancyTreatment::MinimumNorm`) the
+                // saddle-point matrix is singular: partitioning, which projects on a maximal
+                // independent set of equations, goes on from wherever the hand-over stopped.
+                if let Ok(it) = h.project(t, model, values, q, qd, tolerance) {
+                    stats.handovers += 1;
+                    stats.newton_iterations += it as u64;
+                    return Ok(it);
+                }
+            }
+        }
+        self.project_counted(t, sys, values, (q, qd), tolerance, stats)
+    }
+
     /// [`PartitionTracker::project`], adding its Newton iterations and re-partitions to `stats`.
     pub fn project_counted(
         &mut self,

@@ -152,6 +152,7 @@ impl Stepper for GeneralizedAlpha {
             factorizations: self.factorizations,
             newton_iterations: self.iterations,
             repartitions: 0,
+            handovers: 0,
         }
     }
 }
