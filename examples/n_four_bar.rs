@@ -74,7 +74,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             });
             let wall = start.elapsed().as_secs_f64();
             match result {
-                Ok(_) => println!("{:>12} {name:<42} error {worst:.1e}  {wall:.2} s", kind.name()),
+                Ok(s) => println!(
+                    "{:>12} {name:<42} error {worst:.1e}  {wall:.2} s  (projection share {:.1e})",
+                    kind.name(),
+                    s.max_projection_share
+                ),
                 Err(e) => println!(
                     "{:>12} {name:<42} STOPPED (error so far {worst:.1e}, {wall:.2} s): {}",
                     kind.name(),

@@ -50,6 +50,20 @@ pub enum IntegrationError {
         /// The equations that become dependent.
         involved: Vec<dalembert_system::EquationRef>,
     },
+    /// One step's projection removed a large share of the kinetic energy at once
+    /// ([`crate::BRANCH_SWITCH_SHARE`]): the step left the branch of the motion at a singular
+    /// position of a closed chain (links lining up), and the projection put it on another branch.
+    /// The run stops there rather than go on with another motion; every sample before it was
+    /// observed on the branch.
+    #[error("t = {time}: the projection after the step removed {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}): the motion left its branch at a singular position of the mechanism and the run stops here rather than go on along another branch; where the steps fall near that position decides the branch: retry with another step size (docs/stability.md)")]
+    BranchSwitch {
+        /// Time at the end of the step.
+        time: f64,
+        /// Share of the run's largest kinetic energy the projection removed.
+        share: f64,
+        /// The shares of the steps before (decaying maximum).
+        before: f64,
+    },
     /// Invalid options.
     #[error("invalid integrator options: {0}")]
     Options(String),

@@ -37,7 +37,7 @@ mod statistics;
 mod stepper;
 mod vector_state;
 
-pub use driver::{integrate, integrate_cancellable, Sample};
+pub use driver::{integrate, integrate_cancellable, Sample, BRANCH_SWITCH_SHARE};
 pub use error::{IntegrationError, IntegrationFailure};
 pub use options::IntegratorOptions;
 pub use registry::{method_names, Applies, Build, Method, MethodEntry, Parameter, TradeAxis, MAX_PARAMETERS, METHODS};

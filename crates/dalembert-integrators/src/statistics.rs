@@ -28,6 +28,13 @@ pub struct Statistics {
     pub max_velocity_violation: f64,
     /// Largest `|E − E₀|` after any accepted step.
     pub max_energy_change: f64,
+    /// Largest share of the kinetic energy one step's velocity projection removed:
+    /// `T(q, v − v_p) / T_max`, with `v` the stepped and `v_p` the projected velocity and `T_max` the
+    /// largest kinetic energy of the run so far (0 without projection). An accurate step leaves a
+    /// drift of the order of its local error; a large share means the projection moved the motion
+    /// to another branch at a singular position (the run stops above
+    /// [`BRANCH_SWITCH_SHARE`](crate::BRANCH_SWITCH_SHARE)).
+    pub max_projection_share: f64,
     /// Smallest accepted step.
     pub min_step_taken: f64,
     /// Largest accepted step.

@@ -36,6 +36,7 @@ pub fn statistics_dict<'py>(py: Python<'py>, s: &Statistics) -> PyResult<Bound<'
     d.set_item("max_constraint_violation", s.max_constraint_violation)?;
     d.set_item("max_velocity_violation", s.max_velocity_violation)?;
     d.set_item("max_energy_change", s.max_energy_change)?;
+    d.set_item("max_projection_share", s.max_projection_share)?;
     d.set_item("min_step", s.min_step_taken)?;
     d.set_item("max_step", s.max_step_taken)?;
     Ok(d)

@@ -46,9 +46,31 @@ pub enum Backend {
     SparseSchur,
 }
 
+/// Condition estimate of the Schur complement `C_q M⁻¹ C_qᵀ` above which [`Backend::Auto`] factors
+/// the whole saddle-point matrix by LU instead (from the same values, set up at construction).
+///
+/// The Schur complement squares the conditioning of `C_q M^-1/2`, so near a singular position of a
+/// closed chain it loses twice the digits the LU of the whole matrix loses. 1e8 ≈ 1/√ε is where it
+/// has lost half of them. Measured on the IFToMM A02 N-four-bar (N = 40, augmented, RK4 +
+/// projection, 20 s, B₀ error, h = 2, 1, 0.5, 0.25, 0.1 ms; `cargo run --release --example
+/// n_four_bar`): with the Schur complement alone 0.42 (on another branch, silently), 2.9e-5, 9.3e-6,
+/// 2.6e-4, stopped at 8.58 s ("singular"); with this fallback 1.6e-5, 4.7e-6, a branch switch
+/// (stopped by `dalembert_integrators::IntegrationError::BranchSwitch`), 5.5e-6, 1.4e-3. A lower threshold helps
+/// that benchmark no more reliably (1e4: 1.0e-4 … 2.0e-3, no switch) and falls back on every step
+/// of well-posed spatial scenes whose Schur complement is merely badly scaled (`scenes/arm-6.toml`,
+/// `scenes/slider-crank-3d.toml`); at 1e8 no shipped scene and no chain of 64 or 256 falls back
+/// (`dalembert simulate`, RK4 at 1 ms, 5 s).
+pub const SCHUR_FALLBACK_CONDITION: f64 = 1e8;
+
 /// The saddle-point matrix of one system, factored by the back end chosen at construction.
 pub struct SaddlePoint {
     kind: Kind,
+    /// For a Schur back end chosen by [`Backend::Auto`]: the LU of the whole matrix (dense below
+    /// the dense limit, sparse above), set up at construction and factored instead when the Schur
+    /// complement is singular or its condition estimate exceeds [`SCHUR_FALLBACK_CONDITION`].
+    fallback: Option<Kind>,
+    /// Whether the last factorization is the fallback's.
+    on_fallback: bool,
 }
 
 impl std::fmt::Debug for SaddlePoint {
@@ -62,6 +84,31 @@ enum Kind {
     Schur(Box<SchurKkt>),
     Sparse(Box<SparseKkt>),
     SparseSchur(Box<SparseSchurKkt>),
+}
+
+impl Kind {
+    fn factor(
+        &mut self,
+        mass: &BlockDiagonal,
+        pattern: &ConstraintPattern,
+        vals: &ConstraintValues,
+    ) -> Result<(), LinalgError> {
+        Ok(match self {
+            Kind::Dense(d) => d.factor(mass, pattern, vals),
+            Kind::Schur(s) => s.factor(mass, pattern, vals),
+            Kind::Sparse(s) => s.factor(mass, pattern, vals),
+            Kind::SparseSchur(s) => s.factor(mass, pattern, vals),
+        }?)
+    }
+
+    fn solve(&mut self, pattern: &ConstraintPattern, x: &mut [f64]) {
+        match self {
+            Kind::Dense(d) => d.solve(x),
+            Kind::Schur(s) => s.solve(pattern, x),
+            Kind::Sparse(s) => s.solve(x),
+            Kind::SparseSchur(s) => s.solve(pattern, x),
+        }
+    }
 }
 
 /// `Auto` resolved for a system: the back end [`SaddlePoint::new`] would build.
@@ -92,7 +139,17 @@ impl SaddlePoint {
     ) -> Result<Self, LinalgError> {
         let m = sys.num_equations();
         let pattern = sys.pattern();
-        let kind = match resolve(backend, mass, m, dense_limit) {
+        let resolved = resolve(backend, mass, m, dense_limit);
+        let fallback = match (backend, resolved) {
+            (Backend::Auto, Backend::SparseSchur) => SparseKkt::new(mass, pattern, pivot_tolerance)
+                .ok()
+                .map(|s| Kind::Sparse(Box::new(s))),
+            (Backend::Auto, Backend::Schur) => {
+                Some(Kind::Dense(Box::new(DenseKkt::new(mass.dim(), m, pivot_tolerance))))
+            }
+            _ => None,
+        };
+        let kind = match resolved {
             Backend::Schur if !schur::applicable(mass, m) => {
                 return Err(LinalgError::Singular(
                     "the Schur back end needs mass blocks that are positive definite or diagonal".into(),
@@ -120,32 +177,46 @@ impl SaddlePoint {
             Backend::Sparse => Kind::Sparse(Box::new(SparseKkt::new(mass, pattern, pivot_tolerance)?)),
             _ => Kind::Dense(Box::new(DenseKkt::new(mass.dim(), m, pivot_tolerance))),
         };
-        Ok(SaddlePoint { kind })
+        Ok(SaddlePoint {
+            kind,
+            fallback,
+            on_fallback: false,
+        })
     }
 
     /// Factors `[M C_qᵀ; C_q 0]` for the current values.
+    ///
+    /// A Schur back end chosen by [`Backend::Auto`] hands over to the LU of the whole matrix when
+    /// the Schur complement is singular or worse conditioned than [`SCHUR_FALLBACK_CONDITION`].
     pub fn factor(
         &mut self,
         mass: &BlockDiagonal,
         pattern: &ConstraintPattern,
         vals: &ConstraintValues,
     ) -> Result<(), LinalgError> {
-        Ok(match &mut self.kind {
-            Kind::Dense(d) => d.factor(mass, pattern, vals),
-            Kind::Schur(s) => s.factor(mass, pattern, vals),
-            Kind::Sparse(s) => s.factor(mass, pattern, vals),
-            Kind::SparseSchur(s) => s.factor(mass, pattern, vals),
-        }?)
+        self.on_fallback = false;
+        let primary = self.kind.factor(mass, pattern, vals);
+        let ill = match &self.kind {
+            Kind::Schur(s) => s.condition > SCHUR_FALLBACK_CONDITION,
+            Kind::SparseSchur(s) => s.condition > SCHUR_FALLBACK_CONDITION,
+            _ => false,
+        };
+        match (&mut self.fallback, primary.is_err() || ill) {
+            (Some(f), true) => {
+                f.factor(mass, pattern, vals)?;
+                self.on_fallback = true;
+                Ok(())
+            }
+            _ => Ok(primary?),
+        }
     }
 
     /// Solves in place: `x` holds the right-hand side `[top (n); bottom (m)]` on entry, the solution
     /// on exit.
     pub fn solve(&mut self, pattern: &ConstraintPattern, x: &mut [f64]) {
-        match &mut self.kind {
-            Kind::Dense(d) => d.solve(x),
-            Kind::Schur(s) => s.solve(pattern, x),
-            Kind::Sparse(s) => s.solve(x),
-            Kind::SparseSchur(s) => s.solve(pattern, x),
+        match (&mut self.fallback, self.on_fallback) {
+            (Some(f), true) => f.solve(pattern, x),
+            _ => self.kind.solve(pattern, x),
         }
     }
 
@@ -156,6 +227,9 @@ impl SaddlePoint {
     /// relative.
     pub fn refines(&self) -> bool {
         const ILL_CONDITIONED: f64 = 1e3;
+        if self.on_fallback {
+            return false;
+        }
         match &self.kind {
             Kind::Schur(s) => s.condition > ILL_CONDITIONED,
             Kind::SparseSchur(s) => s.condition > ILL_CONDITIONED,
