@@ -75,9 +75,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let wall = start.elapsed().as_secs_f64();
             match result {
                 Ok(s) => println!(
-                    "{:>12} {name:<42} error {worst:.1e}  {wall:.2} s  (projection share {:.1e})",
+                    "{:>12} {name:<42} error {worst:.1e}  {wall:.2} s  (projection share {:.1e}, energy change {:.1e} J)",
                     kind.name(),
-                    s.max_projection_share
+                    s.max_projection_share,
+                    s.max_energy_change
                 ),
                 Err(e) => println!(
                     "{:>12} {name:<42} STOPPED (error so far {worst:.1e}, {wall:.2} s): {}",

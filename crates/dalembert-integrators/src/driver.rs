@@ -1,5 +1,6 @@
 //! The integration loop: steps, output scheduling, monitoring and failure reporting.
 
+use crate::branch::BranchMonitor;
 use crate::stepper::{Setup, StepControl, Stepper};
 use crate::{Applies, IntegrationError, IntegrationFailure, IntegratorOptions, Stabilization, Statistics};
 use dalembert_system::{Baumgarte, DynamicsError, Formulation, FormulationStats};
@@ -27,22 +28,6 @@ pub struct Sample<'a> {
     pub energy: f64,
 }
 
-/// Share of the largest kinetic energy one step's velocity projection may remove
-/// ([`Statistics::max_projection_share`]) before the run stops as a branch switch, when it is also
-/// [`BRANCH_SWITCH_JUMP`] times the shares of the steps before (their maximum, decaying by 1 % per
-/// step).
-///
-/// Measured on the IFToMM A02 N-four-bar (N = 40, RK4 + projection, h = 0.1 … 2 ms, 20 s, every
-/// formulation; `cargo run --release --example n_four_bar`): runs that kept the branch removed at
-/// most 8.7e-6 in one step (mostly below 1e-7); the two that left it (B₀ error 0.28 and 0.38)
-/// removed 9.0e-3 and 4.6e-3 in the step where they left.
-pub const BRANCH_SWITCH_SHARE: f64 = 1e-3;
-
-/// How many times the shares of the earlier steps one step's share must exceed to count as a
-/// branch switch ([`BRANCH_SWITCH_SHARE`]): a coarse step drifts by a similar share on every
-/// step, a switch in one.
-pub const BRANCH_SWITCH_JUMP: f64 = 100.0;
-
 /// Monitors, output buffers and counters shared by all methods.
 struct Run<'o> {
     /// Number of positions `n_q` (`y = [q; v]` splits there).
@@ -65,18 +50,9 @@ struct Run<'o> {
     cancel: &'o AtomicBool,
     /// The Baumgarte gains the method integrates with (the samples' `q̈` and `λ` use them too).
     baumgarte: Option<Baumgarte>,
-    /// The velocities before a step's projection (length `n_v`).
-    v_stepped: Vec<f64>,
-    /// The largest kinetic energy seen (initial state and after every projected step).
-    largest_kinetic: f64,
-    /// The shares of the steps before ([`Statistics::max_projection_share`]), as a maximum that
-    /// decays by [`SHARE_MEMORY`] per step: the start from rest, where the drift is most of the
-    /// little kinetic energy there is, is forgotten once the motion is under way.
-    share_reference: f64,
+    /// Stops the run where it leaves its branch at a singular position.
+    branch: BranchMonitor,
 }
-
-/// Decay per step of [`Run::share_reference`] (1e-4 after about 900 steps).
-const SHARE_MEMORY: f64 = 0.99;
 
 fn inf_norm(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
@@ -108,6 +84,7 @@ impl Run<'_> {
         s.max_velocity_violation = s.max_velocity_violation.max(inf_norm(&self.cdot));
         let e = f.energy(t, q, qd).total();
         s.max_energy_change = s.max_energy_change.max((e - self.energy0).abs());
+        self.branch.after_step(f, t, (q, qd), e, s.steps == 0)?;
         s.steps += 1;
         s.min_step_taken = s.min_step_taken.min(h);
         s.max_step_taken = s.max_step_taken.max(h);
@@ -188,34 +165,12 @@ impl Run<'_> {
         stabilization: Stabilization,
     ) -> Result<bool, IntegrationError> {
         let n_q = self.n;
-        self.v_stepped.copy_from_slice(&y[n_q..]);
+        self.branch.before_projection(&y[n_q..]);
         if !project(f, t, y, n_q, stabilization)? {
             return Ok(false);
         }
         let (q, v) = y.split_at(n_q);
-        let kinetic = f.system().kinetic_energy(q, v);
-        self.largest_kinetic = self.largest_kinetic.max(kinetic);
-        for (d, p) in self.v_stepped.iter_mut().zip(v) {
-            *d -= p;
-        }
-        let removed = f.system().kinetic_energy(q, &self.v_stepped);
-        // Round-off at rest is no motion to switch: the removed energy must be above round-off of
-        // the run's energy scale.
-        let scale = self.largest_kinetic.max(self.energy0.abs());
-        if self.largest_kinetic > 0.0 && removed > 1e-12 * scale {
-            let share = removed / self.largest_kinetic;
-            let s = &mut self.stats;
-            if s.steps > 0 && share > BRANCH_SWITCH_SHARE && share > BRANCH_SWITCH_JUMP * self.share_reference {
-                return Err(IntegrationError::BranchSwitch {
-                    time: t,
-                    share,
-                    before: self.share_reference,
-                });
-            }
-            s.max_projection_share = s.max_projection_share.max(share);
-            self.share_reference = self.share_reference.max(share);
-        }
-        self.share_reference *= SHARE_MEMORY;
+        self.branch.after_projection(f, t, q, v, &mut self.stats)?;
         Ok(true)
     }
 }
@@ -277,9 +232,13 @@ pub fn integrate_cancellable(
         extra: FormulationStats::default(),
         cancel,
         baumgarte: None,
-        v_stepped: vec![0.0; n_v],
-        largest_kinetic: f.system().kinetic_energy(q0, qd0),
-        share_reference: 0.0,
+        branch: BranchMonitor::new(
+            f,
+            q0,
+            qd0,
+            energy0,
+            f.system().is_conservative() && opts.method.entry().control == StepControl::Fixed,
+        ),
     };
     crate::vector_state::clear_upper_state();
     let result = run_loop(f, t0, t_end, &mut y, opts, &mut run);

@@ -50,19 +50,23 @@ pub enum IntegrationError {
         /// The equations that become dependent.
         involved: Vec<dalembert_system::EquationRef>,
     },
-    /// One step's projection removed a large share of the kinetic energy at once
-    /// ([`crate::BRANCH_SWITCH_SHARE`]): the step left the branch of the motion at a singular
-    /// position of a closed chain (links lining up), and the projection put it on another branch.
-    /// The run stops there rather than go on with another motion; every sample before it was
-    /// observed on the branch.
-    #[error("t = {time}: the projection after the step removed {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}): the motion left its branch at a singular position of the mechanism and the run stops here rather than go on along another branch; where the steps fall near that position decides the branch: retry with another step size (docs/stability.md)")]
+    /// In one step the motion left its branch at a singular position of a closed chain (links
+    /// lining up): the step's projection removed a large share of the kinetic energy at once
+    /// ([`crate::BRANCH_SWITCH_SHARE`]), or the energy of a conservative model jumped
+    /// ([`crate::BRANCH_SWITCH_ENERGY`]). The run stops there rather than go on with another
+    /// motion; every sample before it has been observed.
+    #[error("t = {time}: {sign} {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}) near a singular position of the mechanism (constraint Jacobian nearly rank deficient; equations involved: {}): the motion left its branch there and the run stops here rather than go on along another branch; where the steps fall near that position decides the branch: retry with another step size (docs/stability.md)", list(.involved))]
     BranchSwitch {
         /// Time at the end of the step.
         time: f64,
-        /// Share of the run's largest kinetic energy the projection removed.
+        /// What was measured: the kinetic energy the projection removed, or the change of energy.
+        sign: &'static str,
+        /// The share of the run's largest kinetic energy.
         share: f64,
         /// The shares of the steps before (decaying maximum).
         before: f64,
+        /// The equations that become dependent at the singular position.
+        involved: Vec<dalembert_system::EquationRef>,
     },
     /// Invalid options.
     #[error("invalid integrator options: {0}")]

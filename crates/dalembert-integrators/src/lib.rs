@@ -27,6 +27,7 @@
 //! energy change seen. A failure is an [`IntegrationError`] with the time and the cause, carrying
 //! the statistics up to it.
 
+mod branch;
 mod driver;
 mod error;
 mod methods;
@@ -37,7 +38,8 @@ mod statistics;
 mod stepper;
 mod vector_state;
 
-pub use driver::{integrate, integrate_cancellable, Sample, BRANCH_SWITCH_SHARE};
+pub use branch::{BRANCH_SWITCH_ENERGY, BRANCH_SWITCH_JUMP, BRANCH_SWITCH_SHARE};
+pub use driver::{integrate, integrate_cancellable, Sample};
 pub use error::{IntegrationError, IntegrationFailure};
 pub use options::IntegratorOptions;
 pub use registry::{method_names, Applies, Build, Method, MethodEntry, Parameter, TradeAxis, MAX_PARAMETERS, METHODS};

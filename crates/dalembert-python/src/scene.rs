@@ -134,6 +134,13 @@ impl PyScene {
                 _ => "error",
             },
         )?;
+        // The embedding's independent coordinates by name (`body.label`), or None.
+        let names = self.inner.model.velocity_names();
+        let independent: Option<Vec<&str>> = s
+            .independent
+            .as_ref()
+            .map(|ix| ix.iter().filter_map(|&i| names.get(i).map(String::as_str)).collect());
+        d.set_item("independent", independent)?;
         Ok(d)
     }
 

@@ -131,6 +131,19 @@ def test_with_values_errors_are_one_line(scenes):
         dalembert.Scene.from_toml("[scene]\nname = 'x'\nbogus = 1\n", "x.toml")
 
 
+def test_settings_name_the_independent_coordinates():
+    # The scene key `independent` reads back by name (the model's velocity names), and runs: the
+    # embedding with the rod's angle independent keeps the augmented formulation's motion to the
+    # projection's tolerance (both RK4 at 1e-4 s from the same state; 1e-9 rad leaves room for the
+    # 1e-12 Newton tolerance accumulated over 20 000 steps).
+    scene = dalembert.Scene.from_toml(PENDULUM.replace('step = 1e-4', 'step = 1e-4\nformulation = "embedding"\nindependent = ["rod.angle"]'))
+    assert scene.settings["independent"] == ["rod.angle"]
+    assert dalembert.Scene.from_toml(PENDULUM).settings["independent"] is None
+    emb = scene.simulate()
+    aug = scene.simulate(formulation="augmented")
+    assert abs(emb["rod.angle"][-1] - aug["rod.angle"][-1]) < 1e-9
+
+
 def test_bad_keywords_name_the_keyword(scenes):
     scene = dalembert.Scene.load(scenes / "slider-crank.toml")
     with pytest.raises(ValueError, match="^step must be positive, got -0.001$"):
