@@ -168,8 +168,11 @@ pub fn dependent_equations<S: ConstraintSet + ?Sized>(
         return redundant();
     }
     singular_vector_rows(sys, values, 1e-6, |s, largest| {
+        // The caller found `C_q` rank deficient (by its own pivoting); where the singular values
+        // all clear the tolerance, the weakest direction is the one that failed (seen on Bricard's
+        // loop with dopri5: "rank 29 of 30" with no equation named).
         let rank = s.iter().filter(|&&v| v > rank_tolerance * largest).count();
-        Some((rank, m))
+        Some((rank.min(m.saturating_sub(1)), m))
     })
     .unwrap_or_else(redundant)
 }
