@@ -104,32 +104,21 @@ fn fixed_step_methods_keep_the_smooth_branch_through_five_turns() {
 }
 
 #[test]
-fn dopri5_stops_at_the_change_point_instead_of_switching_branch() {
-    // Error-controlled steps shrink toward t_0 = π/2 until they resolve the drifted geometry, which
-    // decides the branch: the run must stop there with the cause, never go on on the other branch.
+fn dopri5_bridges_the_change_points_on_the_branch() {
+    // Error-controlled steps shrink toward t_0 = π/2 + kπ until they would resolve the drifted
+    // geometry, which decides the branch (before the bridge the run stopped there with
+    // `SingularPass`). The loop now bridges each change point with dopri5 steps of the size it had,
+    // checked one step against two half steps (integrators/src/driver/bridge.rs). Measured
+    // 2026-11-25: 1.8e-10 rad with every formulation over the ten change points of five turns, as
+    // RK4 at 1 ms (the fixed-step test above); the bound is the rows' 1e-6 of the other tests here.
     for kind in [
         FormulationKind::Augmented,
         FormulationKind::Embedding,
         FormulationKind::Amalgamated,
     ] {
-        let scene = scene();
-        let mut sim = scene.simulation();
-        sim.formulation = kind;
-        sim.integrator =
-            IntegratorOptions::fixed(Method::dopri5(1e-8, 1e-10), 1e-3, 0.05).with_stabilization(PROJECTION);
-        let mut worst = 0.0f64;
-        let res = sim.run(&mut |s| {
-            let (c, _) = closed_form(s.t);
-            worst = worst.max(angle_error(s.q[COUPLER_ANGLE], c));
-        });
-        assert!(
-            worst < 1e-6,
-            "{kind:?}: rows kept before the stop are on the branch ({worst:.2e})"
-        );
-        let err = res.expect_err("dopri5 stops at the change point").to_string();
-        assert!(err.contains("singular position") && err.contains("'B' (x)"), "{err}");
-        let time: f64 = err["t = ".len()..err.find(':').unwrap()].parse().unwrap();
-        assert!((time - PI / 2.0).abs() < 2e-3, "{kind:?}: stopped at t = {time}");
+        let err = run(kind, Method::dopri5(1e-8, 1e-10), PROJECTION, 5.0 * PI);
+        let err = err.unwrap_or_else(|e| panic!("{kind:?}: {e}"));
+        assert!(err < 1e-6, "{kind:?}: angle error {err:.2e}");
     }
 }
 

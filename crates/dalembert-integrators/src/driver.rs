@@ -3,6 +3,7 @@
 use crate::branch::BranchMonitor;
 use crate::stepper::{Setup, StepControl, Stepper};
 use crate::{Applies, IntegrationError, IntegrationFailure, IntegratorOptions, Stabilization, Statistics};
+use bridge::Bridge;
 use dalembert_system::{Baumgarte, DynamicsError, Formulation, FormulationStats};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -27,6 +28,8 @@ pub struct Sample<'a> {
     /// Total energy `T + V`.
     pub energy: f64,
 }
+
+mod bridge;
 
 /// Monitors, output buffers and counters shared by all methods.
 struct Run<'o> {
@@ -443,6 +446,7 @@ fn adaptive_loop(
     let mut t = t0;
     let mut k_out = 1;
     let mut guard = SingularPassGuard::default();
+    let mut bridge = Bridge::new(y.len(), &opts.method);
     let name = opts.method.name();
     while t < t_end && k_out <= n_out {
         let last = t + h >= t_end - 1e-12 * (1.0 + t_end.abs());
@@ -450,33 +454,65 @@ fn adaptive_loop(
             h = t_end - t;
         }
         let outcome = stepper.step(f, t, h, y)?;
-        guard.check(f, t, y, n_q, outcome.next_step, name)?;
-        if !outcome.accepted {
+        let collapse = guard.check(f, t, y, n_q, outcome.next_step, name).err();
+        if outcome.accepted {
+            let t_new = if last { t_end } else { t + h };
+            emit_dense(f, stepper, run, schedule, &mut k_out, stabilization, (t, h, t_new))?;
+            normalize(f, y, n_q);
+            if run.project_step(f, t_new, y, stabilization)? {
+                stepper.state_changed();
+            }
+            run.monitor(f, t_new, y, h)?;
+            guard.accepted(h);
+            bridge.steady();
+            t = t_new;
+            h = outcome.next_step.min(max_step);
+        } else if collapse.is_none() {
             run.rejected(t, outcome.next_step, outcome.error, opts.min_step)?;
             h = outcome.next_step;
-            continue;
         }
-        let t_new = if last { t_end } else { t + h };
-        // Dense output at every output time inside (t, t_new].
-        while k_out <= n_out && schedule.time(k_out) <= t_new + 1e-12 * (1.0 + t_new.abs()) {
-            let to = schedule.time(k_out);
-            let mut y_out = std::mem::take(&mut run.y_out);
-            stepper.interpolate(((to - t) / h).clamp(0.0, 1.0), &mut y_out);
-            normalize(f, &mut y_out, n_q);
-            project(f, to, &mut y_out, n_q, stabilization)?;
-            let r = run.emit(f, to, &y_out);
-            run.y_out = y_out;
-            r?;
-            k_out += 1;
+        if let Some(stop) = collapse {
+            if t >= t_end || k_out > n_out {
+                break;
+            }
+            // Across the singular position with checked steps of the size the run had before its
+            // steps collapsed, or stop with the cause.
+            let largest = guard.largest.min(t_end - t);
+            match bridge.across(f, stepper, y, t, largest, run, schedule, &mut k_out, stabilization)? {
+                Some(step) => {
+                    t = (t + step).min(t_end);
+                    h = step.min(max_step);
+                    guard.rearm();
+                }
+                None => return Err(stop),
+            }
         }
-        normalize(f, y, n_q);
-        if run.project_step(f, t_new, y, stabilization)? {
-            stepper.state_changed();
-        }
-        run.monitor(f, t_new, y, h)?;
-        guard.accepted(h);
-        t = t_new;
-        h = outcome.next_step.min(max_step);
+    }
+    Ok(())
+}
+
+/// Samples of the dense output of the last accepted step `(t, h, t_new)` at every output time in
+/// `(t, t_new]`, each normalized and projected.
+fn emit_dense(
+    f: &mut dyn Formulation,
+    stepper: &mut dyn Stepper,
+    run: &mut Run<'_>,
+    schedule: &Schedule,
+    k_out: &mut u64,
+    stabilization: Stabilization,
+    (t, h, t_new): (f64, f64, f64),
+) -> Result<(), IntegrationError> {
+    let n_q = run.n;
+    while *k_out <= schedule.n_out && schedule.time(*k_out) <= t_new + 1e-12 * (1.0 + t_new.abs()) {
+        let to = schedule.time(*k_out);
+        let mut y_out = std::mem::take(&mut run.y_out);
+        stepper.interpolate(((to - t) / h).clamp(0.0, 1.0), &mut y_out);
+        normalize(f, &mut y_out, n_q);
+        project(f, to, &mut y_out, n_q, stabilization)?;
+        let r = run.emit(f, to, &y_out);
+        run.y_out = y_out;
+        r?;
+        *k_out += 1;
     }
     Ok(())
 }
@@ -505,6 +541,11 @@ struct SingularPassGuard {
 impl SingularPassGuard {
     const COLLAPSE: f64 = 1e-3;
     const NEAR: f64 = 1e-3;
+
+    /// After a bridge across the singular position: the next collapse is checked again.
+    fn rearm(&mut self) {
+        self.armed_below = self.armed_below.max(Self::COLLAPSE);
+    }
 
     fn accepted(&mut self, h: f64) {
         if h > self.largest {

@@ -20,6 +20,10 @@ pub struct Statistics {
     /// Projections handed over from coordinate partitioning to the mass-orthogonal projection at
     /// singular positions (embedding and amalgamated formulations).
     pub handovers: u64,
+    /// Singular positions an adaptive method's steps collapsed at and the loop bridged with checked
+    /// steps (one step against two half steps; integrators/src/driver/bridge.rs). A bridged run is
+    /// accurate to about 31 × its tolerances there, not to its tolerances.
+    pub bridges: u64,
     /// Wall time of the integration loop (excluding the observer's own time is not attempted).
     pub wall_time: Duration,
     /// Largest `‖C‖∞` after any accepted step.

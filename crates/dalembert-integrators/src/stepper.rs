@@ -62,6 +62,22 @@ pub trait Stepper {
     fn step(&mut self, f: &mut dyn Formulation, t: f64, h: f64, y: &mut [f64])
         -> Result<StepOutcome, IntegrationError>;
 
+    /// Takes a step of size `h` from `(t, y)` whatever the method's error estimate says, with dense
+    /// output over it as after an accepted step; `Ok(false)` (and `y` unchanged) when the method
+    /// cannot or the step is not finite. The loop bridges a singular position of a closed chain
+    /// with it, where the error control would shrink the steps until the drift decides the branch,
+    /// and checks such steps itself (a step against two half steps). Default: cannot.
+    fn step_unchecked(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<bool, IntegrationError> {
+        let _ = (f, t, h, y);
+        Ok(false)
+    }
+
     /// Dense output at fraction `theta ∈ [0, 1]` of the last accepted step, into `out`. Called only
     /// for [`StepControl::Adaptive`] methods.
     fn interpolate(&self, theta: f64, out: &mut [f64]) {

@@ -84,6 +84,21 @@ impl Stepper for Stepping {
         })
     }
 
+    fn step_unchecked(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<bool, IntegrationError> {
+        let a = self.dp.attempt(f, t, h, y, self.baumgarte)?;
+        if !a.error.is_finite() {
+            return Ok(false);
+        }
+        self.dp.accept(h, a.error.min(1.0), y);
+        Ok(true)
+    }
+
     fn interpolate(&self, theta: f64, out: &mut [f64]) {
         self.dp.interpolate(theta, out);
     }
