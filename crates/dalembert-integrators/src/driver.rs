@@ -526,7 +526,8 @@ fn emit_dense(
 /// (measured on `scenes/driven-four-bar.toml` with dopri5: steps of 1e-6 s, the rocker turning back
 /// 3e-5 rad before the line, i.e. a silent switch to the other assembly). When a step falls below
 /// `COLLAPSE` × the largest accepted step, `C_q` is checked ([`near_singular`], relative singular
-/// value `NEAR`); a nearly singular `C_q` stops the run with the time and the equations involved.
+/// value `NEAR`); at a nearly singular `C_q` the loop bridges the position with checked steps
+/// ([`bridge`]) or, when no checked step passes, stops with the time and the equations involved.
 /// A well-conditioned one (a stiff model) re-arms the check a factor 10 lower, so a stiff run pays
 /// one SVD per decade of step size.
 ///
