@@ -199,3 +199,52 @@ impl BranchMonitor {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Feeds `shares` to a fresh [`Jump`] with the projection limit; the index of the first that
+    /// counts as a switch.
+    fn first_switch(shares: impl IntoIterator<Item = f64>) -> Option<usize> {
+        let mut jump = Jump::default();
+        shares
+            .into_iter()
+            .enumerate()
+            .find_map(|(k, s)| jump.record(Some(s), BRANCH_SWITCH_SHARE, k == 0, || true).map(|_| k))
+    }
+
+    #[test]
+    fn a_lone_jump_above_the_limit_counts() {
+        // 100 steps drifting by 1e-9, then one removing 5e-3 (the N-four-bar's switches removed
+        // 4.6e-3 and 9.0e-3): the 101st step.
+        let shares = std::iter::repeat_n(1e-9, 100).chain([5e-3]);
+        assert_eq!(first_switch(shares), Some(100));
+    }
+
+    #[test]
+    fn a_coarse_step_drifting_alike_every_step_never_counts() {
+        // 1e-2 on every step: above the limit, but never 100 times the steps before.
+        assert_eq!(first_switch(std::iter::repeat_n(1e-2, 10_000)), None);
+    }
+
+    #[test]
+    fn the_start_is_forgotten_at_the_memory_rate() {
+        // A start from rest whose first steps' drift is the whole kinetic energy (share 1), then
+        // steps of 1e-12: a later 2e-3 counts once 1 × 0.99^k < 2e-3 / 100, i.e. after
+        // k > ln(2e-5) / ln(0.99) = 1076.5 steps; before that it is within the memory.
+        let at = |k: usize| first_switch([1.0].into_iter().chain(std::iter::repeat_n(1e-12, k - 1)).chain([2e-3]));
+        assert_eq!(at(1070), None);
+        assert_eq!(at(1080), Some(1080));
+    }
+
+    #[test]
+    fn the_first_step_and_unconfirmed_jumps_do_not_count() {
+        let mut jump = Jump::default();
+        assert_eq!(jump.record(Some(0.5), BRANCH_SWITCH_SHARE, true, || true), None);
+        let mut jump = Jump::default();
+        jump.record(Some(1e-9), BRANCH_SWITCH_SHARE, true, || true);
+        // C_q well conditioned after the step (confirm says no): not a branch switch.
+        assert_eq!(jump.record(Some(0.5), BRANCH_SWITCH_SHARE, false, || false), None);
+    }
+}
