@@ -373,6 +373,30 @@ impl Run<'_> {
     }
 }
 
+/// A step that failed down to the minimum at `(t, y)`: where `C_q` is nearly singular there, the
+/// cause is the singular position (an implicit method's Newton matrix `[… C_qᵀ; C_q 0]` loses rank
+/// with it), said with the equations involved; otherwise `e` as it is. Allocates (on failure only).
+fn singular_or(e: IntegrationError, f: &dyn Formulation, t: f64, y: &[f64], method: &'static str) -> IntegrationError {
+    let IntegrationError::StepSizeTooSmall { step, .. } = e else {
+        return e;
+    };
+    let sys = f.system().constraints();
+    let mut values = sys.values();
+    let n_v = f.system().layout().n_v();
+    let (q, v) = y.split_at(y.len() - n_v);
+    sys.evaluate(t, q, v, &mut values);
+    match dalembert_system::structure::near_singular(sys, &values, SingularPassGuard::NEAR, 1e-9) {
+        Some(involved) => IntegrationError::SingularPass {
+            time: t,
+            method,
+            step,
+            involved,
+            advice: "its Newton iteration does not converge there (the iteration matrix [M C_qᵀ; C_q 0] loses rank with C_q) and halving the step only lands nearer, so the run stops: pass singular positions with a fixed-step rk4 with projection (docs/stability.md)",
+        },
+        None => e,
+    }
+}
+
 /// Fixed steps: each output interval is spanned by a whole number of equal steps no longer than
 /// the current step; a rejected step halves the current step (down to `min_step`), four accepted
 /// ones double it back toward `opts.step`.
@@ -402,7 +426,9 @@ fn fixed_loop(
             if !outcome.accepted {
                 successes = 0;
                 h = 0.5 * hh;
-                run.rejected(ts, h, outcome.error, opts.min_step)?;
+                if let Err(e) = run.rejected(ts, h, outcome.error, opts.min_step) {
+                    return Err(singular_or(e, f, ts, y, opts.method.name()));
+                }
                 // The rest of the interval at the halved step.
                 base = ts;
                 done = 0;
@@ -578,6 +604,7 @@ impl SingularPassGuard {
                 method,
                 step: next,
                 involved,
+                advice: "an adaptive error-controlled step resolves the perturbed geometry there and may leave on the other branch, and no checked step bridged it, so the run stops: pass singular positions with a fixed-step rk4 with projection (docs/stability.md)",
             }),
             None => Ok(()),
         }

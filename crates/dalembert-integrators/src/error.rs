@@ -39,7 +39,7 @@ pub enum IntegrationError {
     /// An adaptive method's steps collapsed at a singular position of a closed chain (`C_q` nearly
     /// rank deficient: links lining up). Stepping on would let the motion leave on the other
     /// branch without notice, so the run stops here.
-    #[error("t = {time}: {method}'s steps collapse (to {step:.1e} s) at a singular position of the mechanism: the constraint Jacobian is nearly rank deficient (equations involved: {}); an adaptive error-controlled step resolves the perturbed geometry there and may leave on the other branch, so the run stops: pass singular positions with generalized-alpha (positions kept to round-off) or a fixed-step rk4 with projection (docs/stability.md)", list(.involved))]
+    #[error("t = {time}: {method}'s steps collapse (to {step:.1e} s) at a singular position of the mechanism: the constraint Jacobian is nearly rank deficient (equations involved: {}); {advice}", list(.involved))]
     SingularPass {
         /// Time of the last accepted step.
         time: f64,
@@ -49,6 +49,8 @@ pub enum IntegrationError {
         step: f64,
         /// The equations that become dependent.
         involved: Vec<dalembert_system::EquationRef>,
+        /// Why the method cannot go on there, and what to pick instead.
+        advice: &'static str,
     },
     /// In one step the motion left its branch at a singular position of a closed chain (links
     /// lining up): the step's projection removed a large share of the kinetic energy at once
@@ -114,6 +116,7 @@ mod tests {
             method: "dopri5",
             step: 8.4e-6,
             involved,
+            advice: "",
         }
         .to_string();
         assert!(msg.contains("'O11' (x) and 109 more)"), "{msg}");
