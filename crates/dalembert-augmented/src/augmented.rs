@@ -244,15 +244,13 @@ impl Formulation for Augmented {
             }
             if iterations == MAX_ITERATIONS {
                 let sys = self.model.constraints();
-                let violated = (0..self.values.c.len())
-                    .filter(|&r| self.values.c[r].abs() > tolerance)
-                    .map(|r| (sys.equation(r), self.values.c[r]))
-                    .collect();
-                return Err(dalembert_system::ConstraintError::NotConverged {
-                    time: t,
+                return Err(dalembert_system::ConstraintError::not_converged(
+                    sys,
+                    &self.values.c,
+                    t,
                     iterations,
-                    violated,
-                }
+                    tolerance,
+                )
                 .into());
             }
             self.b[..n].iter_mut().for_each(|v| *v = 0.0);

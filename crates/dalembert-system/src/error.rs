@@ -114,3 +114,27 @@ pub enum ConstraintError {
         what: String,
     },
 }
+
+impl ConstraintError {
+    /// [`ConstraintError::NotConverged`] at `t` after `iterations`, listing the equations of `sys`
+    /// whose residual in `c` is above `tolerance` or not a number.
+    pub fn not_converged<S: crate::ConstraintSet + ?Sized>(
+        sys: &S,
+        c: &[f64],
+        t: f64,
+        iterations: usize,
+        tolerance: f64,
+    ) -> Self {
+        let violated = c
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.abs() > tolerance || c.is_nan())
+            .map(|(r, c)| (sys.equation(r), *c))
+            .collect();
+        ConstraintError::NotConverged {
+            time: t,
+            iterations,
+            violated,
+        }
+    }
+}

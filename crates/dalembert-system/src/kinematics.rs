@@ -261,18 +261,13 @@ pub fn solve_positions<S: ConstraintSet + ?Sized>(
         }
         sys.correct_positions(q, &delta);
     }
-    let violated = values
-        .c
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| c.abs() > opts.tolerance)
-        .map(|(r, c)| (sys.equation(r), *c))
-        .collect();
-    Err(ConstraintError::NotConverged {
-        time: t,
-        iterations: opts.max_iterations,
-        violated,
-    })
+    Err(ConstraintError::not_converged(
+        sys,
+        &values.c,
+        t,
+        opts.max_iterations,
+        opts.tolerance,
+    ))
 }
 
 /// Velocity analysis minimising the weighted change `Σ w_i Δq̇_i²`: coordinates with a large

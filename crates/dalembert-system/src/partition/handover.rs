@@ -110,16 +110,7 @@ impl MassOrthogonalProjection {
                 break;
             }
             if iterations == MAX_ITERATIONS || !res.is_finite() {
-                let violated = (0..values.c.len())
-                    .filter(|&r| values.c[r].abs() > tolerance || values.c[r].is_nan())
-                    .map(|r| (sys.equation(r), values.c[r]))
-                    .collect();
-                return Err(ConstraintError::NotConverged {
-                    time: t,
-                    iterations,
-                    violated,
-                }
-                .into());
+                return Err(ConstraintError::not_converged(sys, &values.c, t, iterations, tolerance).into());
             }
             self.x[..n].iter_mut().for_each(|x| *x = 0.0);
             for (x, c) in self.x[n..].iter_mut().zip(&values.c) {

@@ -292,16 +292,7 @@ impl PartitionTracker {
                     break;
                 }
                 if iterations == MAX_ITERATIONS || !res.is_finite() {
-                    let violated = (0..values.c.len())
-                        .filter(|&r| values.c[r].abs() > tolerance || values.c[r].is_nan())
-                        .map(|r| (sys.equation(r), values.c[r]))
-                        .collect();
-                    return Err(crate::ConstraintError::NotConverged {
-                        time: t,
-                        iterations,
-                        violated,
-                    }
-                    .into());
+                    return Err(crate::ConstraintError::not_converged(sys, &values.c, t, iterations, tolerance).into());
                 }
                 let Some((p, vt)) = self.factor(t, sys, values) else {
                     return Err(sys.redundancy_error(t, values));
