@@ -53,13 +53,20 @@ const MEMORY: f64 = 0.99;
 /// `h` ends up to `h·|v|` past the singular position.
 pub const NEAR: f64 = 1e-2;
 
-/// The equations of `C_q` at `(t, q, v)` when it is nearly singular ([`NEAR`]); allocates (the
-/// check runs only when a sign fired).
-fn near_singular(f: &dyn Formulation, t: f64, q: &[f64], v: &[f64]) -> Option<Vec<EquationRef>> {
+/// The equations of `C_q` at `(t, q, v)` when it has singular values below `near` of the largest
+/// (above the rank tolerance 1e-9, which redundant constraints fall under for good); allocates, so
+/// the loop calls it only when a check fired (here, the adaptive guard, a step failed down to the
+/// minimum).
+pub(crate) fn near_singular(
+    f: &dyn Formulation,
+    t: f64,
+    (q, v): (&[f64], &[f64]),
+    near: f64,
+) -> Option<Vec<EquationRef>> {
     let sys = f.system().constraints();
     let mut values = sys.values();
     sys.evaluate(t, q, v, &mut values);
-    dalembert_system::structure::near_singular(sys, &values, NEAR, 1e-9)
+    dalembert_system::structure::near_singular(sys, &values, near, 1e-9)
 }
 
 /// A share measured against the steps before.
@@ -146,7 +153,7 @@ impl BranchMonitor {
         let share = self.share(f.system().kinetic_energy(q, &self.v_stepped));
         let mut involved = None;
         let confirm = || {
-            involved = near_singular(f, t, q, v);
+            involved = near_singular(f, t, (q, v), NEAR);
             involved.is_some()
         };
         if let Some(before) = self
@@ -167,24 +174,26 @@ impl BranchMonitor {
         Ok(())
     }
 
-    /// After the step ending at `t` at the state `(q, v)` with energy `energy`.
+    /// After the step ending at `t` at the state `(q, v)` with `energy` (the monitor's, so nothing
+    /// is evaluated twice per step).
     pub(crate) fn after_step(
         &mut self,
         f: &dyn Formulation,
         t: f64,
         (q, v): (&[f64], &[f64]),
-        energy: f64,
+        energy: dalembert_system::Energy,
         first: bool,
     ) -> Result<(), IntegrationError> {
         if !self.energy_check {
             return Ok(());
         }
-        self.largest_kinetic = self.largest_kinetic.max(f.system().kinetic_energy(q, v));
+        self.largest_kinetic = self.largest_kinetic.max(energy.kinetic);
+        let energy = energy.total();
         let share = self.share((energy - self.last_energy).abs());
         self.last_energy = energy;
         let mut involved = None;
         let confirm = || {
-            involved = near_singular(f, t, q, v);
+            involved = near_singular(f, t, (q, v), NEAR);
             involved.is_some()
         };
         match self.energy.record(share, BRANCH_SWITCH_ENERGY, first, confirm) {

@@ -1,6 +1,6 @@
 //! The integration loop: steps, output scheduling, monitoring and failure reporting.
 
-use crate::branch::BranchMonitor;
+use crate::branch::{near_singular, BranchMonitor};
 use crate::stepper::{Setup, StepControl, Stepper};
 use crate::{Applies, IntegrationError, IntegrationFailure, IntegratorOptions, Stabilization, Statistics};
 use bridge::Bridge;
@@ -85,9 +85,9 @@ impl Run<'_> {
         let s = &mut self.stats;
         s.max_constraint_violation = s.max_constraint_violation.max(inf_norm(&self.c));
         s.max_velocity_violation = s.max_velocity_violation.max(inf_norm(&self.cdot));
-        let e = f.energy(t, q, qd).total();
-        s.max_energy_change = s.max_energy_change.max((e - self.energy0).abs());
-        self.branch.after_step(f, t, (q, qd), e, s.steps == 0)?;
+        let energy = f.energy(t, q, qd);
+        s.max_energy_change = s.max_energy_change.max((energy.total() - self.energy0).abs());
+        self.branch.after_step(f, t, (q, qd), energy, s.steps == 0)?;
         s.steps += 1;
         s.min_step_taken = s.min_step_taken.min(h);
         s.max_step_taken = s.max_step_taken.max(h);
@@ -380,12 +380,8 @@ fn singular_or(e: IntegrationError, f: &dyn Formulation, t: f64, y: &[f64], meth
     let IntegrationError::StepSizeTooSmall { step, .. } = e else {
         return e;
     };
-    let sys = f.system().constraints();
-    let mut values = sys.values();
     let n_v = f.system().layout().n_v();
-    let (q, v) = y.split_at(y.len() - n_v);
-    sys.evaluate(t, q, v, &mut values);
-    match dalembert_system::structure::near_singular(sys, &values, SingularPassGuard::NEAR, 1e-9) {
+    match near_singular(f, t, y.split_at(y.len() - n_v), SingularPassGuard::NEAR) {
         Some(involved) => IntegrationError::SingularPass {
             time: t,
             method,
@@ -557,7 +553,6 @@ fn emit_dense(
 /// A well-conditioned one (a stiff model) re-arms the check a factor 10 lower, so a stiff run pays
 /// one SVD per decade of step size.
 ///
-/// [`near_singular`]: dalembert_system::structure::near_singular
 #[derive(Default)]
 struct SingularPassGuard {
     largest: f64,
@@ -594,11 +589,7 @@ impl SingularPassGuard {
             return Ok(());
         }
         self.armed_below = next / self.largest / 10.0;
-        let sys = f.system().constraints();
-        let mut values = sys.values();
-        let (q, qd) = y.split_at(n_q);
-        sys.evaluate(t, q, qd, &mut values);
-        match dalembert_system::structure::near_singular(sys, &values, Self::NEAR, 1e-9) {
+        match near_singular(f, t, y.split_at(n_q), Self::NEAR) {
             Some(involved) => Err(IntegrationError::SingularPass {
                 time: t,
                 method,
