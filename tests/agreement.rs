@@ -82,6 +82,26 @@ fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
             })
             .unwrap(),
         ),
+        // The tree factorization needs positive mass and inertia too.
+        Box::new(
+            Augmented::new(
+                m.clone(),
+                AugmentedOptions {
+                    backend: Backend::Tree,
+                    ..Default::default()
+                },
+            )
+            .or_else(|_| {
+                Augmented::new(
+                    m.clone(),
+                    AugmentedOptions {
+                        backend: Backend::Dense,
+                        ..Default::default()
+                    },
+                )
+            })
+            .unwrap(),
+        ),
         Box::new(Embedding::with_defaults(m.clone())),
         Box::new(Embedding::new(
             m.clone(),
@@ -94,11 +114,12 @@ fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
     ]
 }
 
-const NAMES: [&str; 7] = [
+const NAMES: [&str; 8] = [
     "augmented/dense",
     "augmented/sparse",
     "augmented/schur",
     "augmented/sparse-schur",
+    "augmented/tree",
     "embedding",
     "embedding/elimination",
     "amalgamated",

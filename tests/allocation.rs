@@ -135,6 +135,7 @@ fn stepping_allocates_nothing_after_setup() {
     for (mech, kind, backend, what) in [
         (&four_bar, "augmented", Backend::Dense, "four-bar, augmented, dense"),
         (&chain, "augmented", Backend::Sparse, "chain of 64, augmented, sparse"),
+        (&chain, "augmented", Backend::Tree, "chain of 64, augmented, tree"),
         (&four_bar, "embedding", Backend::Auto, "four-bar, embedding"),
         (&chain, "embedding", Backend::Auto, "chain of 64, embedding"),
         (&four_bar, "amalgamated", Backend::Auto, "four-bar, amalgamated (dense)"),
@@ -155,6 +156,12 @@ fn stepping_allocates_nothing_after_setup() {
             "augmented",
             Backend::Sparse,
             "spatial chain of 64, augmented, sparse",
+        ),
+        (
+            &chain_3d,
+            "augmented",
+            Backend::Tree,
+            "spatial chain of 64, augmented, tree",
         ),
         (
             &slider_crank_3d,
@@ -212,7 +219,7 @@ fn stepping_allocates_nothing_after_setup() {
     assert!(failures.is_empty(), "{failures:#?}");
 
     // Size: a chain of 10 000 bodies (30 000 coordinates, 20 000 equations). Setup and one RK4 step
-    // with the augmented formulation (sparse Schur back end) stay within 100 MB: memory linear in the
+    // with the augmented formulation (tree back end, sparse LU fallback set up) stay within 100 MB: memory linear in the
     // size (a dense matrix of that order would need 3.2 GB), and the step is timed.
     let n = 10_000;
     let angles: Vec<f64> = (0..n).map(|k| -0.3 - 1e-4 * k as f64).collect();
@@ -220,7 +227,7 @@ fn stepping_allocates_nothing_after_setup() {
     let base = LIVE_BYTES.load(Ordering::Relaxed);
     PEAK_BYTES.store(base, Ordering::Relaxed);
     let mut f = Augmented::with_defaults(big.model.clone()).unwrap();
-    assert_eq!(f.backend_name(), "sparse-schur");
+    assert_eq!(f.backend_name(), "tree");
     let t0 = std::time::Instant::now();
     let mut finite = true;
     let stats = integrate(

@@ -3,13 +3,15 @@
 //! factorization into storage allocated at setup.
 //!
 //! * [`small_lu`]: unblocked dense LU for matrices up to a few dozen rows;
+//! * [`small_cholesky`]: unblocked dense Cholesky of a small definite block (either sign);
 //! * [`dense`]: dense LU and Cholesky (faer's in-place kernels) in storage allocated once;
 //! * [`sparse_lu`]: faer's sparse LU behind a fixed pattern (scatter positions computed once);
 //! * [`pattern_lu`]: a matrix given by an entry list, dense LU when small and sparse LU above (the
 //!   implicit integrator's iteration matrix);
 //! * [`saddle_point`]: the saddle-point matrix `[M C_qᵀ; C_q 0]` by dense LU, dense Schur
-//!   complement (Cholesky of `C_q M⁻¹ C_qᵀ`), sparse LU, or sparse Schur complement
-//!   ([`crate::gram`]'s sparse Cholesky);
+//!   complement (Cholesky of `C_q M⁻¹ C_qᵀ`), sparse LU, sparse Schur complement
+//!   ([`crate::gram`]'s sparse Cholesky), or the block `L D Lᵀ` along the body–joint tree (linear
+//!   cost, loops closed by a small dense Schur complement);
 //! * [`LinalgError`]: typed failures, keeping the solver's own error as the source.
 //!
 //! faer is the factorization library (dense and sparse LU, sparse Cholesky with a reusable symbolic
@@ -20,6 +22,7 @@ pub mod dense;
 pub mod pattern_lu;
 mod rows;
 pub mod saddle_point;
+pub mod small_cholesky;
 pub mod small_lu;
 pub mod sparse_lu;
 

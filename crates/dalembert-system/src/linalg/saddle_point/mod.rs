@@ -5,11 +5,13 @@ mod dense;
 mod schur;
 mod sparse;
 mod sparse_schur;
+mod tree;
 
 use dense::DenseKkt;
 use schur::SchurKkt;
 use sparse::SparseKkt;
 use sparse_schur::SparseSchurKkt;
+use tree::TreeKkt;
 
 use super::LinalgError;
 use crate::{BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues};
@@ -29,9 +31,10 @@ impl From<SingularKkt> for LinalgError {
 #[non_exhaustive]
 pub enum Backend {
     /// Up to the dense limit (`n + m` unknowns): the Schur complement when the mass blocks allow it
-    /// (positive definite or diagonal), dense LU otherwise; above it the sparse Schur complement
-    /// when every mass block is positive definite; with singular mass blocks the dense back ends
-    /// up to twice the limit and the sparse LU above.
+    /// (positive definite or diagonal), dense LU otherwise. Above it, when every mass block is
+    /// positive definite: the tree factorization when at most 24 equations close loops, the sparse
+    /// Schur complement otherwise; with singular mass blocks the dense back ends up to twice the
+    /// limit and the sparse LU above.
     #[default]
     Auto,
     /// Dense LU with partial pivoting of the whole saddle-point matrix.
@@ -44,6 +47,10 @@ pub enum Backend {
     /// Sparse Cholesky of `S = C_q M⁻¹ C_qᵀ` (positive definite mass blocks), symbolic analysis
     /// reused: linear cost for chains.
     SparseSchur,
+    /// Block `L D Lᵀ` of the whole matrix along the body–joint tree (no fill-in: linear cost with
+    /// small dense blocks), loops closed by the Schur complement of the cut equations (needs
+    /// positive definite mass blocks).
+    Tree,
 }
 
 /// Condition estimate of the Schur complement `C_q M⁻¹ C_qᵀ` above which [`Backend::Auto`] factors
@@ -84,6 +91,7 @@ enum Kind {
     Schur(Box<SchurKkt>),
     Sparse(Box<SparseKkt>),
     SparseSchur(Box<SparseSchurKkt>),
+    Tree(Box<TreeKkt>),
 }
 
 impl Kind {
@@ -98,6 +106,7 @@ impl Kind {
             Kind::Schur(s) => s.factor(mass, pattern, vals),
             Kind::Sparse(s) => s.factor(mass, pattern, vals),
             Kind::SparseSchur(s) => s.factor(mass, pattern, vals),
+            Kind::Tree(t) => t.factor(mass, pattern, vals),
         }?)
     }
 
@@ -107,15 +116,19 @@ impl Kind {
             Kind::Schur(s) => s.solve(pattern, x),
             Kind::Sparse(s) => s.solve(x),
             Kind::SparseSchur(s) => s.solve(pattern, x),
+            Kind::Tree(t) => t.solve(x),
         }
     }
 }
 
-/// `Auto` resolved for a system: the back end [`SaddlePoint::new`] would build.
-pub fn resolve(backend: Backend, mass: &BlockDiagonal, m: usize, dense_limit: usize) -> Backend {
-    let n = mass.dim();
+/// `Auto` resolved for a system with mass matrix `mass` and constraint pattern `pattern`: the back
+/// end [`SaddlePoint::new`] would build.
+pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPattern, dense_limit: usize) -> Backend {
+    let (n, m) = (mass.dim(), pattern.rows());
     let spd = mass.clone().invert_blocks(&mut mass.clone()).is_ok();
+    let tree = || tree::cut_rows(pattern, mass.num_blocks()).is_some_and(|c| c <= tree::MAX_CUT_ROWS);
     match backend {
+        Backend::Auto if n + m > dense_limit && spd && tree() => Backend::Tree,
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
         Backend::Auto if n + m > 2 * dense_limit => Backend::Sparse,
         Backend::Auto if schur::applicable(mass, m) => Backend::Schur,
@@ -139,9 +152,9 @@ impl SaddlePoint {
     ) -> Result<Self, LinalgError> {
         let m = sys.num_equations();
         let pattern = sys.pattern();
-        let resolved = resolve(backend, mass, m, dense_limit);
+        let resolved = resolve(backend, mass, pattern, dense_limit);
         let fallback = match (backend, resolved) {
-            (Backend::Auto, Backend::SparseSchur) => SparseKkt::new(mass, pattern, pivot_tolerance)
+            (Backend::Auto, Backend::SparseSchur | Backend::Tree) => SparseKkt::new(mass, pattern, pivot_tolerance)
                 .ok()
                 .map(|s| Kind::Sparse(Box::new(s))),
             (Backend::Auto, Backend::Schur) => {
@@ -174,6 +187,20 @@ impl SaddlePoint {
                     pivot_tolerance,
                 )?))
             }
+            Backend::Tree => {
+                if mass.clone().invert_blocks(&mut mass.clone()).is_err() {
+                    return Err(LinalgError::Singular(
+                        "the tree back end needs every body's mass and inertia positive".into(),
+                    ));
+                }
+                Kind::Tree(Box::new(TreeKkt::new(mass, pattern, pivot_tolerance).ok_or_else(
+                    || {
+                        LinalgError::Singular(
+                            "the tree back end needs every equation on one or more distinct bodies".into(),
+                        )
+                    },
+                )?))
+            }
             Backend::Sparse => Kind::Sparse(Box::new(SparseKkt::new(mass, pattern, pivot_tolerance)?)),
             _ => Kind::Dense(Box::new(DenseKkt::new(mass.dim(), m, pivot_tolerance))),
         };
@@ -199,6 +226,7 @@ impl SaddlePoint {
         let ill = match &self.kind {
             Kind::Schur(s) => s.condition > SCHUR_FALLBACK_CONDITION,
             Kind::SparseSchur(s) => s.condition > SCHUR_FALLBACK_CONDITION,
+            Kind::Tree(t) => t.condition > SCHUR_FALLBACK_CONDITION,
             _ => false,
         };
         match (&mut self.fallback, primary.is_err() || ill) {
@@ -233,17 +261,19 @@ impl SaddlePoint {
         match &self.kind {
             Kind::Schur(s) => s.condition > ILL_CONDITIONED,
             Kind::SparseSchur(s) => s.condition > ILL_CONDITIONED,
+            Kind::Tree(t) => t.condition > ILL_CONDITIONED,
             _ => false,
         }
     }
 
-    /// Back end name: `"dense"`, `"schur"`, `"sparse"` or `"sparse-schur"`.
+    /// Back end name: `"dense"`, `"schur"`, `"sparse"`, `"sparse-schur"` or `"tree"`.
     pub fn name(&self) -> &'static str {
         match &self.kind {
             Kind::Dense(_) => "dense",
             Kind::Schur(_) => "schur",
             Kind::Sparse(_) => "sparse",
             Kind::SparseSchur(_) => "sparse-schur",
+            Kind::Tree(_) => "tree",
         }
     }
 }
