@@ -17,7 +17,9 @@ pub struct AugmentedOptions {
     /// Back end.
     pub backend: Backend,
     /// With [`Backend::Auto`], the largest `n + m` solved densely when every mass block is positive
-    /// definite (the sparse Schur complement above it; with singular mass blocks the sparse LU
+    /// definite and the tree factorization does not apply (it is chosen above
+    /// [`dalembert_system::linalg::saddle_point::TREE_LIMIT`] unknowns whatever this limit; the
+    /// sparse Schur complement above this limit; with singular mass blocks the sparse LU
     /// above twice this). Default 60: one evaluation of a planar chain by the dense and the sparse
     /// Schur complement, 12 links (`n + m = 60`) 2.99 / 2.70 µs, 16 links 5.28 / 3.65 µs, 24 links
     /// 13.9 / 5.2 µs; 8 links 1.53 / 1.88 µs (2026-11-25, a loop of evaluations per back end).
@@ -108,7 +110,7 @@ impl Augmented {
         Self::new(model, AugmentedOptions::default())
     }
 
-    /// The back end in use: `"dense"`, `"schur"`, `"sparse"` or `"sparse-schur"`.
+    /// The back end in use: `"dense"`, `"schur"`, `"sparse"`, `"sparse-schur"` or `"tree"`.
     pub fn backend_name(&self) -> &'static str {
         self.solver.name()
     }

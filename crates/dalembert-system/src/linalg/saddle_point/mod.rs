@@ -30,11 +30,12 @@ impl From<SingularKkt> for LinalgError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Backend {
-    /// Up to the dense limit (`n + m` unknowns): the Schur complement when the mass blocks allow it
-    /// (positive definite or diagonal), dense LU otherwise. Above it, when every mass block is
-    /// positive definite: the tree factorization when at most 24 equations close loops, the sparse
-    /// Schur complement otherwise; with singular mass blocks the dense back ends up to twice the
-    /// limit and the sparse LU above.
+    /// Above [`TREE_LIMIT`] unknowns (`n + m`), when every mass block is positive definite and at
+    /// most 24 equations close loops: the tree factorization. Otherwise, up to the dense limit:
+    /// the Schur complement when the mass blocks allow it (positive definite or diagonal), dense
+    /// LU otherwise; above it the sparse Schur complement when every mass block is positive
+    /// definite; with singular mass blocks the dense back ends up to twice the limit and the
+    /// sparse LU above.
     #[default]
     Auto,
     /// Dense LU with partial pivoting of the whole saddle-point matrix.
@@ -69,10 +70,17 @@ pub enum Backend {
 /// (`dalembert simulate`, RK4 at 1 ms, 5 s).
 pub const SCHUR_FALLBACK_CONDITION: f64 = 1e8;
 
+/// Size `n + m` above which [`Backend::Auto`] chooses the tree factorization (when it applies),
+/// whatever the dense limit. One evaluation of a chain (a loop of
+/// `Augmented::accelerations`, 2026-11-25, tree / dense Schur): planar 6 links (`n + m = 30`)
+/// 0.995 / 0.911 µs, 8 links (40) 1.39 / 1.50 µs, 12 links 2.18 / 3.68 µs; spatial `chain3d` 2 links
+/// (22) 1.00 / 1.03 µs, 3 links (33) 1.53 / 1.78 µs, 8 links 4.3 / 10.6 µs.
+pub const TREE_LIMIT: usize = 32;
+
 /// The saddle-point matrix of one system, factored by the back end chosen at construction.
 pub struct SaddlePoint {
     kind: Kind,
-    /// For a Schur back end chosen by [`Backend::Auto`]: the LU of the whole matrix (dense below
+    /// For a Schur or tree back end chosen by [`Backend::Auto`]: the LU of the whole matrix (dense below
     /// the dense limit, sparse above), set up at construction and factored instead when the Schur
     /// complement is singular or its condition estimate exceeds [`SCHUR_FALLBACK_CONDITION`].
     fallback: Option<Kind>,
@@ -128,7 +136,7 @@ pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPatte
     let spd = mass.clone().invert_blocks(&mut mass.clone()).is_ok();
     let tree = || tree::cut_rows(pattern, mass.num_blocks()).is_some_and(|c| c <= tree::MAX_CUT_ROWS);
     match backend {
-        Backend::Auto if n + m > dense_limit && spd && tree() => Backend::Tree,
+        Backend::Auto if n + m > TREE_LIMIT && spd && tree() => Backend::Tree,
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
         Backend::Auto if n + m > 2 * dense_limit => Backend::Sparse,
         Backend::Auto if schur::applicable(mass, m) => Backend::Schur,
@@ -153,13 +161,16 @@ impl SaddlePoint {
         let m = sys.num_equations();
         let pattern = sys.pattern();
         let resolved = resolve(backend, mass, pattern, dense_limit);
-        let fallback = match (backend, resolved) {
-            (Backend::Auto, Backend::SparseSchur | Backend::Tree) => SparseKkt::new(mass, pattern, pivot_tolerance)
+        let dense_lu = || Some(Kind::Dense(Box::new(DenseKkt::new(mass.dim(), m, pivot_tolerance))));
+        let sparse_lu = || {
+            SparseKkt::new(mass, pattern, pivot_tolerance)
                 .ok()
-                .map(|s| Kind::Sparse(Box::new(s))),
-            (Backend::Auto, Backend::Schur) => {
-                Some(Kind::Dense(Box::new(DenseKkt::new(mass.dim(), m, pivot_tolerance))))
-            }
+                .map(|s| Kind::Sparse(Box::new(s)))
+        };
+        let fallback = match (backend, resolved) {
+            (Backend::Auto, Backend::SparseSchur) => sparse_lu(),
+            (Backend::Auto, Backend::Tree) if mass.dim() + m > dense_limit => sparse_lu(),
+            (Backend::Auto, Backend::Schur | Backend::Tree) => dense_lu(),
             _ => None,
         };
         let kind = match resolved {
