@@ -201,7 +201,7 @@ fn find(parent: &mut [usize], mut a: usize) -> usize {
 /// on this pattern (an equation on no body, or listing a body twice).
 pub(crate) fn cut_rows(pattern: &ConstraintPattern, bodies: usize) -> Option<usize> {
     let groups = group_equations(pattern)?;
-    let (tree, _) = spanning_forest(&groups, bodies);
+    let tree = spanning_forest(&groups, bodies);
     Some(
         (0..groups.rows.len())
             .filter(|&g| !tree[g])
@@ -210,8 +210,9 @@ pub(crate) fn cut_rows(pattern: &ConstraintPattern, bodies: usize) -> Option<usi
     )
 }
 
-/// Which groups form the forest (grounded groups first, then in order), and the union-find state.
-fn spanning_forest(groups: &Groups, bodies: usize) -> (Vec<bool>, Vec<usize>) {
+/// Which groups form the forest (grounded groups first, then in order; union–find over the bodies
+/// and the ground).
+fn spanning_forest(groups: &Groups, bodies: usize) -> Vec<bool> {
     let ground = bodies;
     let mut uf: Vec<usize> = (0..=bodies).collect();
     let mut tree = vec![false; groups.rows.len()];
@@ -227,7 +228,7 @@ fn spanning_forest(groups: &Groups, bodies: usize) -> (Vec<bool>, Vec<usize>) {
             tree[g] = true;
         }
     }
-    (tree, uf)
+    tree
 }
 
 impl TreeKkt {
@@ -237,7 +238,7 @@ impl TreeKkt {
         let nb = mass.num_blocks();
         let n = mass.dim();
         let groups = group_equations(pattern)?;
-        let (tree, _) = spanning_forest(&groups, nb);
+        let tree = spanning_forest(&groups, nb);
         let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nb];
         for g in (0..groups.rows.len()).filter(|&g| tree[g] && groups.bodies[g].len() == 2) {
             for &b in &groups.bodies[g] {
@@ -338,7 +339,7 @@ impl TreeKkt {
     ) -> Result<(), SingularKkt> {
         self.jacobian.copy_from_slice(&vals.jacobian);
         let jac = &self.jacobian;
-        // Diagonal blocks: M_b for bodies (found by their packed global offset), 0 for groups.
+        // Diagonal blocks: M_b for bodies, 0 for groups.
         for node in &self.nodes {
             let d = &mut self.d[node.d..node.d + node.size * node.size];
             if node.sign > 0.0 {
