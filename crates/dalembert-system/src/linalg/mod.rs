@@ -3,7 +3,7 @@
 //! factorization into storage allocated at setup.
 //!
 //! * [`small_lu`]: unblocked dense LU for matrices up to a few dozen rows;
-//! * [`small_cholesky`]: unblocked dense Cholesky of a small definite block (either sign);
+//! * [`small_ldlt`]: square-root-free Cholesky `L D Lᵀ` of a small definite block (either sign);
 //! * [`dense`]: dense LU and Cholesky (faer's in-place kernels) in storage allocated once;
 //! * [`sparse_lu`]: faer's sparse LU behind a fixed pattern (scatter positions computed once);
 //! * [`pattern_lu`]: a matrix given by an entry list, dense LU when small and sparse LU above (the
@@ -22,7 +22,7 @@ pub mod dense;
 pub mod pattern_lu;
 mod rows;
 pub mod saddle_point;
-pub mod small_cholesky;
+pub mod small_ldlt;
 pub mod small_lu;
 pub mod sparse_lu;
 

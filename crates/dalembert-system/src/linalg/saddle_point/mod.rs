@@ -11,7 +11,7 @@ use dense::DenseKkt;
 use schur::SchurKkt;
 use sparse::SparseKkt;
 use sparse_schur::SparseSchurKkt;
-use tree::TreeKkt;
+use tree::{TreeKkt, MAX_CUT_ROWS};
 
 use super::LinalgError;
 use crate::{BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues};
@@ -30,8 +30,9 @@ impl From<SingularKkt> for LinalgError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Backend {
-    /// Above [`TREE_LIMIT`] unknowns (`n + m`), when every mass block is positive definite and at
-    /// most 24 equations close loops: the tree factorization. Otherwise, up to the dense limit:
+    /// When every mass block is positive definite: the tree factorization for systems without loops,
+    /// and above [`TREE_LIMIT`] unknowns (`n + m`) for systems with at most 24 equations closing
+    /// loops. Otherwise, up to the dense limit:
     /// the Schur complement when the mass blocks allow it (positive definite or diagonal), dense
     /// LU otherwise; above it the sparse Schur complement when every mass block is positive
     /// definite; with singular mass blocks the dense back ends up to twice the limit and the
@@ -70,11 +71,14 @@ pub enum Backend {
 /// (`dalembert simulate`, RK4 at 1 ms, 5 s).
 pub const SCHUR_FALLBACK_CONDITION: f64 = 1e8;
 
-/// Size `n + m` above which [`Backend::Auto`] chooses the tree factorization (when it applies),
-/// whatever the dense limit. One evaluation of a chain (a loop of
-/// `Augmented::accelerations`, 2026-11-25, tree / dense Schur): planar 6 links (`n + m = 30`)
-/// 0.995 / 0.911 µs, 8 links (40) 1.39 / 1.50 µs, 12 links 2.18 / 3.68 µs; spatial `chain3d` 2 links
-/// (22) 1.00 / 1.03 µs, 3 links (33) 1.53 / 1.78 µs, 8 links 4.3 / 10.6 µs.
+/// Size `n + m` above which [`Backend::Auto`] chooses the tree factorization for a system with
+/// loops (when it applies), whatever the dense limit; without loops it is chosen at any size.
+/// One evaluation (a loop of `Augmented::accelerations`, 2026-11-25, tree / dense Schur): chains
+/// without loops, planar 1 link 0.156 / 0.178 µs, 3 links 0.385 / 0.432 µs, 8 links 0.948 / 1.263
+/// µs; spatial `chain3d` 1 link 0.387 / 0.390 µs, 2 links 0.885 / 0.975 µs, 8 links 3.47 / 8.65 µs;
+/// with a loop, the four-bar (`n + m = 17`, two cut equations) 0.595 / 0.525 µs. The crossover with
+/// loops was not measured further: 32 is the planar chains' crossover of the first version of the
+/// tree kernels, kept as a conservative bound.
 pub const TREE_LIMIT: usize = 32;
 
 /// The saddle-point matrix of one system, factored by the back end chosen at construction.
@@ -134,9 +138,9 @@ impl Kind {
 pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPattern, dense_limit: usize) -> Backend {
     let (n, m) = (mass.dim(), pattern.rows());
     let spd = mass.clone().invert_blocks(&mut mass.clone()).is_ok();
-    let tree = || tree::cut_rows(pattern, mass.num_blocks()).is_some_and(|c| c <= tree::MAX_CUT_ROWS);
+    let tree = |most_cut: usize| tree::cut_rows(pattern, mass.num_blocks()).is_some_and(|c| c <= most_cut);
     match backend {
-        Backend::Auto if n + m > TREE_LIMIT && spd && tree() => Backend::Tree,
+        Backend::Auto if spd && tree(if n + m > TREE_LIMIT { MAX_CUT_ROWS } else { 0 }) => Backend::Tree,
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
         Backend::Auto if n + m > 2 * dense_limit => Backend::Sparse,
         Backend::Auto if schur::applicable(mass, m) => Backend::Schur,

@@ -2,7 +2,7 @@
 //! inlined into copies specialised for the sizes of planar and spatial models (a body of 3 or 6
 //! velocities against a group of 1 to 6 equations), so that the compiler unrolls the small loops.
 
-use crate::linalg::small_cholesky;
+use crate::linalg::small_ldlt;
 
 /// The block `K_ip` between a node and its parent, read from the Jacobian values: for the group
 /// side, equation `r` on the body's coordinate `c` is `jac[edge[r] + c]`; for the body side the
@@ -48,8 +48,9 @@ macro_rules! sized {
     };
 }
 
-/// Factors node `i`'s block `d_i` (`si × si`, sign `sign`), then, when it has a parent block
-/// `d_p` (`sp × sp`), forms `Z_i = L_i⁻¹ K_ip` and `D_p ← D_p − sign Z_iᵀ Z_i` (lower triangle).
+/// Factors node `i`'s block `d_i = L_i Δ_i L_iᵀ` (`si × si`, definite of sign `sign`), then, when
+/// it has a parent block `d_p` (`sp × sp`), forms `Z_i = L_i⁻¹ K_ip`, `D_p ← D_p − Z_iᵀ Δ_i⁻¹ Z_i`
+/// (lower triangle) and stores `W_i = Δ_i⁻¹ Z_i`.
 pub(super) fn eliminate(
     si: usize,
     sp: usize,
@@ -57,7 +58,7 @@ pub(super) fn eliminate(
     tolerance: f64,
     di: &mut [f64],
     parent: Option<(Coupling<'_>, &mut [f64], &mut [f64])>,
-) -> Result<small_cholesky::Pivots, f64> {
+) -> Result<small_ldlt::Pivots, f64> {
     sized!(eliminate_sized, si, sp, sign, tolerance, di, parent)
 }
 
@@ -69,71 +70,75 @@ fn eliminate_sized(
     tolerance: f64,
     di: &mut [f64],
     parent: Option<(Coupling<'_>, &mut [f64], &mut [f64])>,
-) -> Result<small_cholesky::Pivots, f64> {
+) -> Result<small_ldlt::Pivots, f64> {
     let di = &mut di[..si * si];
-    let pivots = small_cholesky::factor(di, si, sign, tolerance)?;
-    let Some((k, z, dp)) = parent else { return Ok(pivots) };
-    let (z, dp) = (&mut z[..si * sp], &mut dp[..sp * sp]);
+    let pivots = small_ldlt::factor(di, si, sign, tolerance)?;
+    let Some((k, w, dp)) = parent else { return Ok(pivots) };
+    let (w, dp) = (&mut w[..si * sp], &mut dp[..sp * sp]);
+    // Z = L⁻¹ K (unit L), row by row into `w`.
     for r in 0..si {
         for c in 0..sp {
             let mut v = k.at(r, c);
             for q in 0..r {
-                v -= di[r * si + q] * z[q * sp + c];
+                v -= di[r * si + q] * w[q * sp + c];
             }
-            z[r * sp + c] = v * di[r * si + r];
+            w[r * sp + c] = v;
         }
     }
     for a in 0..sp {
         for b in 0..=a {
             let mut v = 0.0;
             for r in 0..si {
-                v += z[r * sp + a] * z[r * sp + b];
+                v += w[r * sp + a] * w[r * sp + b] * di[r * si + r];
             }
-            dp[a * sp + b] -= sign * v;
+            dp[a * sp + b] -= v;
+        }
+    }
+    for r in 0..si {
+        let inv = di[r * si + r];
+        for c in 0..sp {
+            w[r * sp + c] *= inv;
         }
     }
     Ok(pivots)
 }
 
-/// Children-first half of a tree solve at node `i`: `y_i = L_i⁻¹ w_i`, then `w_p −= sign Z_iᵀ y_i`.
-pub(super) fn up(si: usize, sp: usize, sign: f64, l: &[f64], z: &[f64], wi: &mut [f64], wp: &mut [f64]) {
-    sized!(up_sized, si, sp, sign, l, z, wi, wp)
+/// Children-first half of a tree solve at node `i`: `y_i = L_i⁻¹ w_i`, then `w_p −= W_iᵀ y_i`.
+pub(super) fn up(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &mut [f64]) {
+    sized!(up_sized, si, sp, l, z, wi, wp)
 }
 
 #[inline(always)]
-fn up_sized(si: usize, sp: usize, sign: f64, l: &[f64], z: &[f64], wi: &mut [f64], wp: &mut [f64]) {
+fn up_sized(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &mut [f64]) {
     let (wi, wp, z) = (&mut wi[..si], &mut wp[..sp], &z[..si * sp]);
-    small_cholesky::forward(l, si, wi);
+    small_ldlt::forward(l, si, wi);
     for r in 0..si {
-        let v = sign * wi[r];
+        let v = wi[r];
         for c in 0..sp {
             wp[c] -= z[r * sp + c] * v;
         }
     }
 }
 
-/// Parents-first half of a tree solve at node `i`: `w_i = sign L_i⁻ᵀ (y_i − Z_i w_p)`.
-pub(super) fn down(si: usize, sp: usize, sign: f64, l: &[f64], z: &[f64], wi: &mut [f64], wp: &[f64]) {
-    sized!(down_sized, si, sp, sign, l, z, wi, wp)
+/// Parents-first half of a tree solve at node `i`: `w_i = L_i⁻ᵀ (Δ_i⁻¹ y_i − W_i w_p)`.
+pub(super) fn down(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &[f64]) {
+    sized!(down_sized, si, sp, l, z, wi, wp)
 }
 
 #[inline(always)]
-fn down_sized(si: usize, sp: usize, sign: f64, l: &[f64], z: &[f64], wi: &mut [f64], wp: &[f64]) {
+fn down_sized(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &[f64]) {
     let (wi, wp, z) = (&mut wi[..si], &wp[..sp], &z[..si * sp]);
     for r in 0..si {
-        let mut v = wi[r];
+        let mut v = wi[r] * l[r * si + r];
         for c in 0..sp {
             v -= z[r * sp + c] * wp[c];
         }
         wi[r] = v;
     }
-    small_cholesky::backward(l, si, wi);
-    if sign < 0.0 {
-        wi.iter_mut().for_each(|v| *v = -*v);
-    }
+    small_ldlt::backward(l, si, wi);
 }
 
-/// `w_i = sign L_i⁻ᵀ L_i⁻¹ w_i` at a root (no parent).
-pub(super) fn root(si: usize, sign: f64, l: &[f64], wi: &mut [f64]) {
-    small_cholesky::solve(l, si, sign, wi);
+/// `w_i = D_i⁻¹ w_i` at a root (no parent).
+pub(super) fn root(si: usize, l: &[f64], wi: &mut [f64]) {
+    small_ldlt::solve(l, si, wi);
 }

@@ -13,14 +13,14 @@
 //! `K_ip` its block with its parent `p`). Children before parents:
 //!
 //! ```text
-//! D_i = s_i L_i L_iᵀ,     Z_i = L_i⁻¹ K_ip,     D_p ← D_p − s_i Z_iᵀ Z_i   (= K_piᵀ D_i⁻¹ K_ip)
+//! D_i = L_i Δ_i L_iᵀ,   Z_i = L_i⁻¹ K_ip,   W_i = Δ_i⁻¹ Z_i,   D_p ← D_p − Z_iᵀ W_i   (= K_piᵀ D_i⁻¹ K_ip)
 //! ```
 //!
-//! starting from `D_body = M_b` and `D_group = 0`. A body's block stays positive definite (`s = +1`),
-//! a group's becomes `−J D_child⁻¹ Jᵀ`, negative definite (`s = −1`) when the group's equations are
-//! independent on its child body: each is factored by Cholesky with its sign ([`small_cholesky`]).
-//! Solve `K_t w = b`: children first `y_i = L_i⁻¹ b_i`, `b_p −= s_i Z_iᵀ y_i`; then parents first
-//! `w_i = s_i L_i⁻ᵀ (y_i − Z_i w_p)`.
+//! (`L_i` unit lower triangular, `Δ_i` diagonal), starting from `D_body = M_b` and `D_group = 0`. A
+//! body's block stays positive definite, a group's becomes `−J D_child⁻¹ Jᵀ`, negative definite when
+//! the group's equations are independent on its child body: each is factored by the square-root-free
+//! Cholesky with its expected sign ([`small_ldlt`]). Solve `K_t w = b`: children first
+//! `y_i = L_i⁻¹ b_i`, `b_p −= W_iᵀ y_i`; then parents first `w_i = L_i⁻ᵀ (Δ_i⁻¹ y_i − W_i w_p)`.
 //!
 //! **Loops.** With `G` the cut equations' rows of `C_q` (over the bodies) and `Y = K_t⁻¹ Gᵀ` (one
 //! tree solve per cut equation at factorization), `P = G Y` is positive definite when `C_q` has full
@@ -35,15 +35,15 @@
 //! **Condition estimate.** Block elimination along a fixed order is unchanged by scaling each
 //! node's unknowns (a body's translations against its rotations, one body's mass against
 //! another's), so only each block's own loss of digits counts: the estimate is the inverse of the
-//! smallest scale-free pivot decay `l_kk² / d_kk` over all blocks and `P`
-//! ([`small_cholesky::Pivots::decay`]). Near a singular position of a closed chain `P` loses rank
+//! smallest scale-free pivot decay `d_k / a_kk` over all blocks and `P`
+//! ([`small_ldlt::Pivots::decay`]). Near a singular position of a closed chain `P` loses rank
 //! and the estimate grows as for the Schur complement; a thin rod's inertia against its mass, or a
 //! mass ratio of 1e4 between bodies, does not make it grow.
 
 mod kernels;
 
 use super::SingularKkt;
-use crate::linalg::small_cholesky;
+use crate::linalg::small_ldlt;
 use crate::{BlockDiagonal, ConstraintPattern, ConstraintValues};
 use kernels::Coupling;
 use std::collections::HashMap;
@@ -62,7 +62,7 @@ struct Node {
     parent: Option<usize>,
     /// The body (mass block) of a body node.
     body: usize,
-    /// Offsets of its diagonal block, of `Z_i`, and of its unknowns in the packed vector.
+    /// Offsets of its diagonal block, of `W_i`, and of its unknowns in the packed vector.
     d: usize,
     x: usize,
     w: usize,
@@ -350,7 +350,7 @@ impl TreeKkt {
         }
         // Pivot range of the multiplier blocks (singularity test, as for the Schur complement) and
         // the worst scale-free pivot decay of any block (condition estimate).
-        let (mut lmin, mut lmax, mut decay) = (f64::INFINITY, 0.0f64, 1.0f64);
+        let (mut lmin, mut lmax, mut decay) = (f64::INFINITY, 0.0f64, 1.0f64); // |d_k| range
         for i in (0..self.nodes.len()).rev() {
             let node = &self.nodes[i];
             let si = node.size;
@@ -403,13 +403,13 @@ impl TreeKkt {
                     self.p[i * mc + j] += (0..len).map(|c| jac[first + c] * yj[c]).sum::<f64>();
                 }
             }
-            let pivots = small_cholesky::factor(&mut self.p, mc, 1.0, self.pivot_tolerance)
+            let pivots = small_ldlt::factor(&mut self.p, mc, 1.0, self.pivot_tolerance)
                 .map_err(|d| SingularKkt(format!("loop-closure Schur complement pivot {d:.3e}")))?;
             lmin = lmin.min(pivots.min);
             lmax = lmax.max(pivots.max);
             decay = decay.min(pivots.decay);
         }
-        let span = if lmin > 0.0 { (lmax / lmin).powi(2) } else { 1.0 };
+        let span = if lmin > 0.0 { lmax / lmin } else { 1.0 };
         if span * self.pivot_tolerance > 1.0 {
             return Err(SingularKkt(format!(
                 "multiplier pivots span {span:.3e} (tree factorization)"
@@ -420,7 +420,7 @@ impl TreeKkt {
     }
 
     /// `w ← K_t⁻¹ w` on the packed tree unknowns: children first `y_i = L_i⁻¹ w_i`,
-    /// `w_p −= sign_i Z_iᵀ y_i`; then parents first `w_i = sign_i L_i⁻ᵀ (y_i − Z_i w_p)`.
+    /// `w_p −= W_iᵀ y_i`; then parents first `w_i = L_i⁻ᵀ (Δ_i⁻¹ y_i − W_i w_p)`.
     fn tree_solve(&self, w: &mut [f64]) {
         let nodes = &self.nodes;
         for node in nodes.iter().rev() {
@@ -431,9 +431,9 @@ impl TreeKkt {
                 Some(p) => {
                     let sp = nodes[p].size;
                     let z = &self.z[node.x..node.x + si * sp];
-                    kernels::up(si, sp, node.sign, l, z, tail, &mut head[nodes[p].w..]);
+                    kernels::up(si, sp, l, z, tail, &mut head[nodes[p].w..]);
                 }
-                None => kernels::root(si, node.sign, l, tail),
+                None => kernels::root(si, l, tail),
             }
         }
         for node in nodes {
@@ -443,7 +443,7 @@ impl TreeKkt {
             let l = &self.d[node.d..node.d + si * si];
             let z = &self.z[node.x..node.x + si * sp];
             let (head, tail) = w.split_at_mut(node.w);
-            kernels::down(si, sp, node.sign, l, z, tail, &head[nodes[p].w..]);
+            kernels::down(si, sp, l, z, tail, &head[nodes[p].w..]);
         }
     }
 
@@ -462,7 +462,7 @@ impl TreeKkt {
             for &(j, off, first, len) in &self.cut_segments {
                 self.mu[j] += (0..len).map(|c| self.jacobian[first + c] * w[off + c]).sum::<f64>();
             }
-            small_cholesky::solve(&self.p, mc, 1.0, &mut self.mu);
+            small_ldlt::solve(&self.p, mc, &mut self.mu);
             for (j, &mu) in self.mu.iter().enumerate() {
                 for (v, y) in w.iter_mut().zip(&self.y[j * nt..(j + 1) * nt]) {
                     *v -= y * mu;
