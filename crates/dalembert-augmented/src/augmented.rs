@@ -17,9 +17,8 @@ pub struct AugmentedOptions {
     /// Back end.
     pub backend: Backend,
     /// With [`Backend::Auto`], the largest `n + m` solved densely when every mass block is positive
-    /// definite and the tree factorization does not apply (it is chosen above
-    /// [`dalembert_system::linalg::saddle_point::TREE_LIMIT`] unknowns whatever this limit; the
-    /// sparse Schur complement above this limit; with singular mass blocks the sparse LU
+    /// definite and the system has loops (loop-free systems take the tree factorization at any
+    /// size; the sparse Schur complement above this limit; with singular mass blocks the sparse LU
     /// above twice this). Default 60: one evaluation of a planar chain by the dense and the sparse
     /// Schur complement, 12 links (`n + m = 60`) 2.99 / 2.70 µs, 16 links 5.28 / 3.65 µs, 24 links
     /// 13.9 / 5.2 µs; 8 links 1.53 / 1.88 µs (2026-11-25, a loop of evaluations per back end).

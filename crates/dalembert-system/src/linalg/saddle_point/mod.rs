@@ -11,7 +11,7 @@ use dense::DenseKkt;
 use schur::SchurKkt;
 use sparse::SparseKkt;
 use sparse_schur::SparseSchurKkt;
-use tree::{TreeKkt, MAX_CUT_ROWS};
+use tree::TreeKkt;
 
 use super::LinalgError;
 use crate::{BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues};
@@ -30,13 +30,20 @@ impl From<SingularKkt> for LinalgError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[non_exhaustive]
 pub enum Backend {
-    /// When every mass block is positive definite: the tree factorization for systems without loops,
-    /// and above [`TREE_LIMIT`] unknowns (`n + m`) for systems with at most 24 equations closing
-    /// loops. Otherwise, up to the dense limit:
-    /// the Schur complement when the mass blocks allow it (positive definite or diagonal), dense
-    /// LU otherwise; above it the sparse Schur complement when every mass block is positive
-    /// definite; with singular mass blocks the dense back ends up to twice the limit and the
-    /// sparse LU above.
+    /// The tree factorization for systems without loops whose mass blocks are all positive definite,
+    /// at any size. Otherwise, up to the dense limit (`n + m` unknowns): the Schur complement when
+    /// the mass blocks allow it (positive definite or diagonal), dense LU otherwise; above it the
+    /// sparse Schur complement when every mass block is positive definite; with singular mass
+    /// blocks the dense back ends up to twice the limit and the sparse LU above.
+    ///
+    /// One evaluation, tree / dense Schur complement (a loop of `Augmented::accelerations`,
+    /// 2026-11-25): planar chains of 1, 3 and 8 links 0.156 / 0.178, 0.385 / 0.432 and 0.948 / 1.263
+    /// µs; spatial `chain3d` of 1, 2 and 8 links 0.387 / 0.390, 0.885 / 0.975 and 3.47 / 8.65 µs. With
+    /// loops the tree is not chosen: on the four-bar it is slower (0.595 / 0.525 µs), and near the
+    /// singular positions of the IFToMM A02 N-four-bar its different rounding moved which step sizes
+    /// lose the branch without a stop (N = 4, RK4 + projection at 0.5 ms: 2.6e-3 with the tree, 1.4e-4
+    /// with the Schur complement), so closed chains keep the back ends their robustness figures
+    /// (`docs/stability.md`) were measured with.
     #[default]
     Auto,
     /// Dense LU with partial pivoting of the whole saddle-point matrix.
@@ -70,16 +77,6 @@ pub enum Backend {
 /// `scenes/slider-crank-3d.toml`); at 1e8 no shipped scene and no chain of 64 or 256 falls back
 /// (`dalembert simulate`, RK4 at 1 ms, 5 s).
 pub const SCHUR_FALLBACK_CONDITION: f64 = 1e8;
-
-/// Size `n + m` above which [`Backend::Auto`] chooses the tree factorization for a system with
-/// loops (when it applies), whatever the dense limit; without loops it is chosen at any size.
-/// One evaluation (a loop of `Augmented::accelerations`, 2026-11-25, tree / dense Schur): chains
-/// without loops, planar 1 link 0.156 / 0.178 µs, 3 links 0.385 / 0.432 µs, 8 links 0.948 / 1.263
-/// µs; spatial `chain3d` 1 link 0.387 / 0.390 µs, 2 links 0.885 / 0.975 µs, 8 links 3.47 / 8.65 µs;
-/// with a loop, the four-bar (`n + m = 17`, two cut equations) 0.595 / 0.525 µs. The crossover with
-/// loops was not measured further: 32 is the planar chains' crossover of the first version of the
-/// tree kernels, kept as a conservative bound.
-pub const TREE_LIMIT: usize = 32;
 
 /// The saddle-point matrix of one system, factored by the back end chosen at construction.
 pub struct SaddlePoint {
@@ -138,9 +135,9 @@ impl Kind {
 pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPattern, dense_limit: usize) -> Backend {
     let (n, m) = (mass.dim(), pattern.rows());
     let spd = mass.clone().invert_blocks(&mut mass.clone()).is_ok();
-    let tree = |most_cut: usize| tree::cut_rows(pattern, mass.num_blocks()).is_some_and(|c| c <= most_cut);
+    let loop_free = || tree::cut_rows(pattern, mass.num_blocks()) == Some(0);
     match backend {
-        Backend::Auto if spd && tree(if n + m > TREE_LIMIT { MAX_CUT_ROWS } else { 0 }) => Backend::Tree,
+        Backend::Auto if spd && loop_free() => Backend::Tree,
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
         Backend::Auto if n + m > 2 * dense_limit => Backend::Sparse,
         Backend::Auto if schur::applicable(mass, m) => Backend::Schur,

@@ -25,8 +25,8 @@
 //! **Loops.** With `G` the cut equations' rows of `C_q` (over the bodies) and `Y = K_t⁻¹ Gᵀ` (one
 //! tree solve per cut equation at factorization), `P = G Y` is positive definite when `C_q` has full
 //! rank; then `μ = P⁻¹ (G K_t⁻¹ b_t − b_c)` and `w = K_t⁻¹ b_t − Y μ`. The cost grows with the number
-//! of cut equations, so [`Backend::Auto`](super::Backend::Auto) chooses this back end only up to
-//! [`MAX_CUT_ROWS`].
+//! of cut equations; [`Backend::Auto`](super::Backend::Auto) chooses this back end only for systems
+//! without loops (loops are for an explicit [`Backend::Tree`](super::Backend::Tree)).
 //!
 //! **Singularity.** A Cholesky pivot below the tolerance relative to its block's diagonal, or a
 //! ratio of the multiplier blocks' pivots (the groups' and `P`'s, as for the Schur complement) whose
@@ -47,10 +47,6 @@ use crate::linalg::small_ldlt;
 use crate::{BlockDiagonal, ConstraintPattern, ConstraintValues};
 use kernels::Coupling;
 use std::collections::HashMap;
-
-/// Most equations cut from the tree to close loops for which [`Backend::Auto`](super::Backend::Auto)
-/// chooses the tree back end (each costs one tree solve per factorization).
-pub(crate) const MAX_CUT_ROWS: usize = 24;
 
 /// A node of the forest: a body or a group of equations.
 #[derive(Debug, Clone)]
@@ -319,7 +315,14 @@ impl TreeKkt {
             index,
             d: vec![0.0; d_len],
             z: vec![0.0; x_len],
-            jacobian: vec![0.0; pattern.entries().len()],
+            jacobian: vec![
+                0.0;
+                if cut_rows.is_empty() {
+                    0
+                } else {
+                    pattern.entries().len()
+                }
+            ],
             work: vec![0.0; nt],
             cut_rows,
             cut_segments,
@@ -337,8 +340,11 @@ impl TreeKkt {
         _pattern: &ConstraintPattern,
         vals: &ConstraintValues,
     ) -> Result<(), SingularKkt> {
-        self.jacobian.copy_from_slice(&vals.jacobian);
-        let jac = &self.jacobian;
+        // The solve reads the Jacobian only for the cut equations' rows.
+        if !self.cut_rows.is_empty() {
+            self.jacobian.copy_from_slice(&vals.jacobian);
+        }
+        let jac = &vals.jacobian;
         // Diagonal blocks: M_b for bodies, 0 for groups.
         for node in &self.nodes {
             let d = &mut self.d[node.d..node.d + node.size * node.size];
