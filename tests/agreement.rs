@@ -19,89 +19,35 @@ use dalembert_testkit::generator::{build, BodySpec, LoopSpec, Spec, SpringSpec};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 use proptest::prelude::*;
 
+/// The augmented formulation on `backend`.
+fn augmented(
+    m: &std::sync::Arc<dyn dalembert::constraints::MultibodySystem>,
+    backend: Backend,
+) -> Result<Augmented, dalembert::constraints::DynamicsError> {
+    Augmented::new(
+        m.clone(),
+        AugmentedOptions {
+            backend,
+            ..Default::default()
+        },
+    )
+}
+
+/// The augmented formulation on `backend`, or on the dense LU where that back end cannot run (the
+/// Schur complements and the tree need positive mass and inertia everywhere).
+fn augmented_or_dense(m: &std::sync::Arc<dyn dalembert::constraints::MultibodySystem>, backend: Backend) -> Augmented {
+    augmented(m, backend).or_else(|_| augmented(m, Backend::Dense)).unwrap()
+}
+
 fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
     let m = mech.model.clone();
+    let sys: std::sync::Arc<dyn dalembert::constraints::MultibodySystem> = m.clone();
     vec![
-        Box::new(
-            Augmented::new(
-                m.clone(),
-                AugmentedOptions {
-                    backend: Backend::Dense,
-                    ..Default::default()
-                },
-            )
-            .unwrap(),
-        ),
-        Box::new(
-            Augmented::new(
-                m.clone(),
-                AugmentedOptions {
-                    backend: Backend::Sparse,
-                    ..Default::default()
-                },
-            )
-            .unwrap(),
-        ),
-        // The Schur complement needs positive mass and inertia everywhere; where it cannot run, the
-        // dense LU stands in for it.
-        Box::new(
-            Augmented::new(
-                m.clone(),
-                AugmentedOptions {
-                    backend: Backend::Schur,
-                    ..Default::default()
-                },
-            )
-            .or_else(|_| {
-                Augmented::new(
-                    m.clone(),
-                    AugmentedOptions {
-                        backend: Backend::Dense,
-                        ..Default::default()
-                    },
-                )
-            })
-            .unwrap(),
-        ),
-        Box::new(
-            Augmented::new(
-                m.clone(),
-                AugmentedOptions {
-                    backend: Backend::SparseSchur,
-                    ..Default::default()
-                },
-            )
-            .or_else(|_| {
-                Augmented::new(
-                    m.clone(),
-                    AugmentedOptions {
-                        backend: Backend::Dense,
-                        ..Default::default()
-                    },
-                )
-            })
-            .unwrap(),
-        ),
-        // The tree factorization needs positive mass and inertia too.
-        Box::new(
-            Augmented::new(
-                m.clone(),
-                AugmentedOptions {
-                    backend: Backend::Tree,
-                    ..Default::default()
-                },
-            )
-            .or_else(|_| {
-                Augmented::new(
-                    m.clone(),
-                    AugmentedOptions {
-                        backend: Backend::Dense,
-                        ..Default::default()
-                    },
-                )
-            })
-            .unwrap(),
-        ),
+        Box::new(augmented(&sys, Backend::Dense).unwrap()),
+        Box::new(augmented(&sys, Backend::Sparse).unwrap()),
+        Box::new(augmented_or_dense(&sys, Backend::Schur)),
+        Box::new(augmented_or_dense(&sys, Backend::SparseSchur)),
+        Box::new(augmented_or_dense(&sys, Backend::Tree)),
         Box::new(Embedding::with_defaults(m.clone())),
         Box::new(Embedding::new(
             m.clone(),

@@ -130,11 +130,16 @@ impl Kind {
     }
 }
 
+/// True when every mass block is positive definite (the Schur complements and the tree need it).
+fn positive_definite(mass: &BlockDiagonal) -> bool {
+    mass.clone().invert_blocks(&mut mass.clone()).is_ok()
+}
+
 /// `Auto` resolved for a system with mass matrix `mass` and constraint pattern `pattern`: the back
 /// end [`SaddlePoint::new`] would build.
 pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPattern, dense_limit: usize) -> Backend {
     let (n, m) = (mass.dim(), pattern.rows());
-    let spd = mass.clone().invert_blocks(&mut mass.clone()).is_ok();
+    let spd = positive_definite(mass);
     let loop_free = || tree::cut_rows(pattern, mass.num_blocks()) == Some(0);
     match backend {
         Backend::Auto if spd && loop_free() => Backend::Tree,
@@ -187,7 +192,7 @@ impl SaddlePoint {
                 pivot_tolerance,
             ))),
             Backend::SparseSchur => {
-                if mass.clone().invert_blocks(&mut mass.clone()).is_err() {
+                if !positive_definite(mass) {
                     return Err(LinalgError::Singular(
                         "the sparse Schur back end needs every body's mass and inertia positive".into(),
                     ));
@@ -200,7 +205,7 @@ impl SaddlePoint {
                 )?))
             }
             Backend::Tree => {
-                if mass.clone().invert_blocks(&mut mass.clone()).is_err() {
+                if !positive_definite(mass) {
                     return Err(LinalgError::Singular(
                         "the tree back end needs every body's mass and inertia positive".into(),
                     ));
