@@ -337,6 +337,11 @@ impl TreeKkt {
         })
     }
 
+    /// True when equations were cut to close loops.
+    pub fn has_loops(&self) -> bool {
+        !self.cut_rows.is_empty()
+    }
+
     pub fn factor(
         &mut self,
         mass: &BlockDiagonal,
