@@ -103,35 +103,36 @@ fn eliminate_sized(
     Ok(pivots)
 }
 
-/// Children-first half of a tree solve at node `i`: `y_i = L_i⁻¹ w_i`, then `w_p −= W_iᵀ y_i`.
-pub(super) fn up(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &mut [f64]) {
-    sized!(up_sized, si, sp, l, z, wi, wp)
+/// Children-first half of a tree solve at node `i` (`wc`: `W_i` row by row): `y_i = L_i⁻¹ w_i`, then
+/// `w_p −= W_iᵀ y_i`.
+pub(super) fn up(si: usize, sp: usize, l: &[f64], wc: &[f64], wi: &mut [f64], wp: &mut [f64]) {
+    sized!(up_sized, si, sp, l, wc, wi, wp)
 }
 
 #[inline(always)]
-fn up_sized(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &mut [f64]) {
-    let (wi, wp, z) = (&mut wi[..si], &mut wp[..sp], &z[..si * sp]);
+fn up_sized(si: usize, sp: usize, l: &[f64], wc: &[f64], wi: &mut [f64], wp: &mut [f64]) {
+    let (wi, wp, wc) = (&mut wi[..si], &mut wp[..sp], &wc[..si * sp]);
     small_ldlt::forward(l, si, wi);
     for r in 0..si {
         let v = wi[r];
         for c in 0..sp {
-            wp[c] -= z[r * sp + c] * v;
+            wp[c] -= wc[r * sp + c] * v;
         }
     }
 }
 
 /// Parents-first half of a tree solve at node `i`: `w_i = L_i⁻ᵀ (Δ_i⁻¹ y_i − W_i w_p)`.
-pub(super) fn down(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &[f64]) {
-    sized!(down_sized, si, sp, l, z, wi, wp)
+pub(super) fn down(si: usize, sp: usize, l: &[f64], wc: &[f64], wi: &mut [f64], wp: &[f64]) {
+    sized!(down_sized, si, sp, l, wc, wi, wp)
 }
 
 #[inline(always)]
-fn down_sized(si: usize, sp: usize, l: &[f64], z: &[f64], wi: &mut [f64], wp: &[f64]) {
-    let (wi, wp, z) = (&mut wi[..si], &wp[..sp], &z[..si * sp]);
+fn down_sized(si: usize, sp: usize, l: &[f64], wc: &[f64], wi: &mut [f64], wp: &[f64]) {
+    let (wi, wp, wc) = (&mut wi[..si], &wp[..sp], &wc[..si * sp]);
     for r in 0..si {
         let mut v = wi[r] * l[r * si + r];
         for c in 0..sp {
-            v -= z[r * sp + c] * wp[c];
+            v -= wc[r * sp + c] * wp[c];
         }
         wi[r] = v;
     }

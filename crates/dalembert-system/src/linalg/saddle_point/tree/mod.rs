@@ -61,10 +61,12 @@ struct Node {
     parent: Option<usize>,
     /// The body (mass block) of a body node.
     body: usize,
-    /// Offsets of its diagonal block, of `W_i`, and of its unknowns in the packed vector.
+    /// Offset of its diagonal block in `TreeKkt::d`.
     d: usize,
-    x: usize,
-    w: usize,
+    /// Offset of `W_i` (`size × parent size`) in `TreeKkt::couplings`.
+    coupling: usize,
+    /// Offset of its unknowns in the packed vector.
+    at: usize,
     /// Edge to the parent: `edge_entries[edge..edge + rows]` are, for each equation of the group,
     /// the first Jacobian entry of its segment on the body (the body's coordinates follow).
     edge: usize,
@@ -100,8 +102,8 @@ impl Forest {
             parent: parent.map(|p| p.0),
             body,
             d: 0,
-            x: 0,
-            w: self.index.len(),
+            coupling: 0,
+            at: self.index.len(),
             edge,
             group_side,
         });
@@ -132,8 +134,10 @@ pub(crate) struct TreeKkt {
     edge_entries: Vec<usize>,
     /// Global index of each packed unknown (bodies' velocities, tree groups' multipliers).
     index: Vec<usize>,
+    /// The diagonal blocks' factors (`L_i` and `1 / d_k`), node by node.
     d: Vec<f64>,
-    z: Vec<f64>,
+    /// `W_i = Δ_i⁻¹ L_i⁻¹ K_ip`, node by node.
+    couplings: Vec<f64>,
     jacobian: Vec<f64>,
     work: Vec<f64>,
     /// Cut equations (global rows), their segments, `Y` (column by column) and `P`'s factor.
@@ -284,19 +288,19 @@ impl TreeKkt {
             index,
         } = f;
         // Storage offsets.
-        let (mut d_len, mut x_len) = (0, 0);
+        let (mut d_len, mut w_len) = (0, 0);
         for i in 0..nodes.len() {
             nodes[i].d = d_len;
             d_len += nodes[i].size * nodes[i].size;
             if let Some(p) = nodes[i].parent {
-                nodes[i].x = x_len;
-                x_len += nodes[i].size * nodes[p].size;
+                nodes[i].coupling = w_len;
+                w_len += nodes[i].size * nodes[p].size;
             }
         }
         // Cut equations and their segments in packed body offsets.
         let mut packed_body = vec![0; nb];
         for node in nodes.iter().filter(|nd| nd.sign > 0.0) {
-            packed_body[node.body] = node.w;
+            packed_body[node.body] = node.at;
         }
         let mut cut_rows: Vec<usize> = (0..groups.rows.len())
             .filter(|&g| !tree[g])
@@ -317,7 +321,7 @@ impl TreeKkt {
             edge_entries,
             index,
             d: vec![0.0; d_len],
-            z: vec![0.0; x_len],
+            couplings: vec![0.0; w_len],
             jacobian: vec![
                 0.0;
                 if cut_rows.is_empty() {
@@ -364,7 +368,7 @@ impl TreeKkt {
         }
         // Pivot range of the multiplier blocks (singularity test, as for the Schur complement) and
         // the worst scale-free pivot decay of any block (condition estimate).
-        let (mut lmin, mut lmax, mut decay) = (f64::INFINITY, 0.0f64, 1.0f64); // |d_k| range
+        let (mut dmin, mut dmax, mut decay) = (f64::INFINITY, 0.0f64, 1.0f64); // |d_k| range
         let mut loop_span = 1.0f64;
         for i in (0..self.nodes.len()).rev() {
             let node = &self.nodes[i];
@@ -380,7 +384,14 @@ impl TreeKkt {
                         group_side: node.group_side,
                     };
                     let dp = &mut head[self.nodes[p].d..self.nodes[p].d + sp * sp];
-                    (sp, Some((coupling, &mut self.z[node.x..node.x + si * sp], dp)))
+                    (
+                        sp,
+                        Some((
+                            coupling,
+                            &mut self.couplings[node.coupling..node.coupling + si * sp],
+                            dp,
+                        )),
+                    )
                 }
                 None => (0, None),
             };
@@ -392,8 +403,8 @@ impl TreeKkt {
             })?;
             decay = decay.min(pivots.decay);
             if node.sign < 0.0 {
-                lmin = lmin.min(pivots.min);
-                lmax = lmax.max(pivots.max);
+                dmin = dmin.min(pivots.min);
+                dmax = dmax.max(pivots.max);
             }
         }
         // Loops: Y = K_t⁻¹ Gᵀ, P = G Y.
@@ -420,14 +431,14 @@ impl TreeKkt {
             }
             let pivots = small_ldlt::factor(&mut self.p, mc, 1.0, self.pivot_tolerance)
                 .map_err(|d| SingularKkt(format!("loop-closure Schur complement pivot {d:.3e}")))?;
-            lmin = lmin.min(pivots.min);
-            lmax = lmax.max(pivots.max);
+            dmin = dmin.min(pivots.min);
+            dmax = dmax.max(pivots.max);
             decay = decay.min(pivots.decay);
             // P is a Schur complement over the loop closures: its pivot span, as for the Schur back
             // ends, is the estimate there.
             loop_span = pivots.max / pivots.min;
         }
-        let span = if lmin > 0.0 { lmax / lmin } else { 1.0 };
+        let span = if dmin > 0.0 { dmax / dmin } else { 1.0 };
         if span * self.pivot_tolerance > 1.0 {
             return Err(SingularKkt(format!(
                 "multiplier pivots span {span:.3e} (tree factorization)"
@@ -444,12 +455,12 @@ impl TreeKkt {
         for node in nodes.iter().rev() {
             let si = node.size;
             let l = &self.d[node.d..node.d + si * si];
-            let (head, tail) = w.split_at_mut(node.w);
+            let (head, tail) = w.split_at_mut(node.at);
             match node.parent {
                 Some(p) => {
                     let sp = nodes[p].size;
-                    let z = &self.z[node.x..node.x + si * sp];
-                    kernels::up(si, sp, l, z, tail, &mut head[nodes[p].w..]);
+                    let wc = &self.couplings[node.coupling..node.coupling + si * sp];
+                    kernels::up(si, sp, l, wc, tail, &mut head[nodes[p].at..]);
                 }
                 None => kernels::root(si, l, tail),
             }
@@ -459,9 +470,9 @@ impl TreeKkt {
             let si = node.size;
             let sp = nodes[p].size;
             let l = &self.d[node.d..node.d + si * si];
-            let z = &self.z[node.x..node.x + si * sp];
-            let (head, tail) = w.split_at_mut(node.w);
-            kernels::down(si, sp, l, z, tail, &head[nodes[p].w..]);
+            let wc = &self.couplings[node.coupling..node.coupling + si * sp];
+            let (head, tail) = w.split_at_mut(node.at);
+            kernels::down(si, sp, l, wc, tail, &head[nodes[p].at..]);
         }
     }
 
