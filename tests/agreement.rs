@@ -6,9 +6,16 @@
 //! springs, random geometry, masses from 0.01 to 100 kg, and random consistent velocities; any loop
 //! that would make `C_q` rank deficient or ill-conditioned (σ_min < 1e-4 σ_max) is dropped.
 //!
-//! Tolerance: 1e-9 relative to the problem's magnitude (`max(|q̈|∞, g)` for accelerations,
-//! `max(|λ|∞, g · total mass)` for multipliers and reactions). With `cond(C_q) ≤ 1e4` and mass
-//! ratios ≤ 1e4 the formulations' round-off stays below ≈ 1e-11; a modelling difference is O(1).
+//! Tolerance: relative to the problem's magnitude (`max(|q̈|∞, g)` for accelerations,
+//! `max(|λ|∞, g · total mass)` for multipliers and reactions), the larger of 1e-9 and `4 ε κ`, where
+//! `κ` is the 2-norm condition number of the saddle-point matrix after symmetric equilibration
+//! (velocities scaled by `M_ii^-1/2`, equations by the norm of their row of `C_q M^-1/2`). `ε κ` is the
+//! forward-error bound of a backward-stable solve, and the LU of the whole matrix reaches it: on a
+//! generated closed mechanism with `cond(C_q) = 8.7e3` and mass ratio 500 (`κ = 1.1e7`, kept in the
+//! regressions file) the dense and the sparse LU were both 1e-9 relative off a 50-digit solution
+//! (mpmath), with residuals at round-off, while the Schur complements and the tree were 3e-16 off
+//! and the embedding 2.5e-11. For most generated mechanisms `4 ε κ < 1e-9`; a modelling difference
+//! is O(1), far above either.
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
@@ -71,6 +78,34 @@ const NAMES: [&str; 8] = [
     "amalgamated",
 ];
 
+/// The 2-norm condition number of `D K D`, `K = [M C_qᵀ; C_q 0]`, `D` = `M_ii^-1/2` on the velocities
+/// and the inverse norm of each row of `C_q M^-1/2` on the equations (see the module doc).
+fn equilibrated_condition(mech: &Mechanism, vals: &dalembert::constraints::ConstraintValues) -> f64 {
+    let sys = mech.model.constraints();
+    let (n, m) = (mech.q.len(), mech.model.num_equations());
+    let mut mass = mech.model.mass_storage();
+    mech.model.mass(&mech.q, &mut mass);
+    let mut k = nalgebra::DMatrix::<f64>::zeros(n + m, n + m);
+    for (i, j, x) in mass.entries() {
+        k[(i, j)] += x;
+    }
+    for (&(r, c), &x) in sys.pattern().entries().iter().zip(&vals.jacobian) {
+        k[(n + r, c)] += x;
+        k[(c, n + r)] += x;
+    }
+    let mut d = vec![1.0; n + m];
+    for (i, di) in d.iter_mut().take(n).enumerate() {
+        *di = 1.0 / k[(i, i)].abs().sqrt().max(f64::MIN_POSITIVE);
+    }
+    for r in 0..m {
+        let norm = (0..n).map(|c| (k[(n + r, c)] * d[c]).powi(2)).sum::<f64>().sqrt();
+        d[n + r] = 1.0 / norm.max(f64::MIN_POSITIVE);
+    }
+    let scaled = nalgebra::DMatrix::from_fn(n + m, n + m, |i, j| d[i] * k[(i, j)] * d[j]);
+    let s = scaled.singular_values();
+    s.max() / s.min()
+}
+
 /// Returns the worst relative disagreement in q̈ and in λ/reactions against augmented/dense.
 fn disagreement(mech: &Mechanism, t: f64) -> Result<(f64, f64), String> {
     let n = mech.q.len();
@@ -88,6 +123,7 @@ fn disagreement(mech: &Mechanism, t: f64) -> Result<(f64, f64), String> {
         results.push((qdd, lam, r));
     }
     let total_mass: f64 = mech.model.bodies().iter().map(|b| b.mass).sum();
+    let tol = 1e-9f64.max(4.0 * f64::EPSILON * equilibrated_condition(mech, &vals));
     let (a0, l0, r0) = &results[0];
     let sa = a0.iter().fold(G, |a, v| a.max(v.abs()));
     let sl = l0.iter().fold(G * total_mass, |a, v| a.max(v.abs()));
@@ -100,9 +136,9 @@ fn disagreement(mech: &Mechanism, t: f64) -> Result<(f64, f64), String> {
                 .max((p.torque - q.torque).abs())
                 .max((p.effort.unwrap_or(0.0) - q.effort.unwrap_or(0.0)).abs())
         }) / sl;
-        if ea > 1e-9 || el > 1e-9 || er > 1e-9 {
+        if ea > tol || el > tol || er > tol {
             return Err(format!(
-                "{} disagrees: q̈ {ea:.2e}, λ {el:.2e}, reactions {er:.2e}",
+                "{} disagrees: q̈ {ea:.2e}, λ {el:.2e}, reactions {er:.2e} (tolerance {tol:.1e})",
                 NAMES[k]
             ));
         }
