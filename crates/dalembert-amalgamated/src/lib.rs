@@ -28,6 +28,7 @@
 //! its residual on the full system.
 
 use dalembert_system::linalg::DenseCholesky;
+use dalembert_system::minimum_norm::{scatter_minimum_norm, MinimumNorm};
 use dalembert_system::partition::VelocityTransform;
 use dalembert_system::{
     Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
@@ -46,6 +47,8 @@ pub struct Amalgamated {
     cdot: Vec<f64>,
     rhs: Vec<f64>,
     stats: FormulationStats,
+    /// The minimum-norm multipliers of a redundant system, for the current independent equations.
+    minimum_norm: Option<MinimumNorm>,
     work: Work,
 }
 
@@ -105,6 +108,7 @@ impl Amalgamated {
             redundancy,
             model,
             stats: FormulationStats::default(),
+            minimum_norm: None,
             work: Work::new(0, 0, 0),
         }
     }
@@ -208,6 +212,7 @@ impl Formulation for Amalgamated {
             redundancy,
             stats,
             rhs,
+            minimum_norm,
             ..
         } = self;
         let transformed = tracker.transform(t, sys, values, rhs).is_some();
@@ -256,7 +261,7 @@ impl Formulation for Amalgamated {
             *y = -work.sol[n + d];
         }
         vt.solve_dependent_transpose(&mut work.y);
-        sys.scatter_multipliers(t, values, &partition.rows, &work.y, lambda)?;
+        scatter_minimum_norm(minimum_norm, sys, t, values, &partition.rows, &work.y, lambda)?;
         Ok(())
     }
 

@@ -1,7 +1,7 @@
 //! The augmented formulation type and its [`Formulation`] implementation.
 
-use crate::diagnosis::{diagnose, minimum_norm_solve};
-use dalembert_system::linalg::saddle_point::{kkt_mul, kkt_scale};
+use crate::diagnosis::{diagnose, independent_rows};
+use crate::redundant::{checked_solve, Independent};
 use dalembert_system::linalg::SaddlePoint;
 use dalembert_system::{
     Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
@@ -57,6 +57,8 @@ pub struct Augmented {
     x: Vec<f64>,
     b: Vec<f64>,
     r: Vec<f64>,
+    /// The independent equations of a redundant system (minimum-norm treatment), once found.
+    independent: Option<Independent>,
     stats: FormulationStats,
 }
 
@@ -97,6 +99,7 @@ impl Augmented {
             x: vec![0.0; n + m],
             b: vec![0.0; n + m],
             r: vec![0.0; n + m],
+            independent: None,
             solver,
             options,
             model,
@@ -121,53 +124,59 @@ impl Augmented {
 
     /// Factors and solves `K x = b` (b in `self.b`), checking the residual. On success `self.x` holds
     /// the solution.
+    ///
+    /// With the minimum-norm treatment of redundant constraints, a singular matrix hands over to an
+    /// [`Independent`] row set, kept for the following evaluations while its rows stay independent
+    /// and the dropped ones dependent on them (`crate::redundant`).
     fn factor_and_solve(&mut self, t: f64) -> Result<(), DynamicsError> {
         let sys = self.model.constraints();
         self.stats.factorizations += 1;
-        let factored = self.solver.factor(&self.mass, sys.pattern(), &self.values);
-        if factored.is_ok() {
-            self.x.copy_from_slice(&self.b);
-            self.solver.solve(sys.pattern(), &mut self.x);
-            // Every back end checks its pivots (or a condition probe) when factoring, so a
-            // well-conditioned solve is accepted as is; an ill-conditioned Schur complement gets the
-            // residual check and one refinement step below.
-            if !self.solver.refines() && self.x.iter().all(|v| v.is_finite()) {
+        if let Some(ind) = &mut self.independent {
+            if ind.solve(
+                &self.mass,
+                &self.values,
+                &self.b,
+                &mut self.x,
+                self.options.residual_tolerance,
+            ) {
                 return Ok(());
             }
-            let scale = kkt_scale(&self.mass, &self.values);
-            let bn = self.b.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            // Check the residual; one step of iterative refinement when it is above round-off (the
-            // Schur complement squares the condition number of C_q M^-1/2).
-            for refinement in 0..2 {
-                kkt_mul(&self.mass, sys, &self.values, &self.x, &mut self.r);
-                let xn = self.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-                let mut res = 0.0f64;
-                for (r, b) in self.r.iter_mut().zip(&self.b) {
-                    *r = b - *r;
-                    res = res.max(r.abs());
-                }
-                let size = (bn + scale * xn).max(f64::MIN_POSITIVE);
-                if !(res.is_finite() && xn.is_finite()) {
-                    break;
-                }
-                let round_off = res <= 1e-13 * size && !(refinement == 0 && self.solver.refines());
-                if round_off || (refinement == 1 && res <= self.options.residual_tolerance * size) {
-                    return Ok(());
-                }
-                if refinement == 0 {
-                    self.solver.solve(sys.pattern(), &mut self.r);
-                    for (x, d) in self.x.iter_mut().zip(&self.r) {
-                        *x += d;
-                    }
-                } else {
-                    break;
-                }
-            }
+            self.independent = None;
+        }
+        if self.solver.factor(&self.mass, sys.pattern(), &self.values).is_ok()
+            && checked_solve(
+                &mut self.solver,
+                (&self.mass, sys.pattern(), &self.values),
+                &self.b,
+                (&mut self.x, &mut self.r),
+                self.options.residual_tolerance,
+            )
+        {
+            return Ok(());
         }
         match self.options.redundancy {
             RedundancyTreatment::MinimumNorm => {
                 let n = self.model.layout().n_v();
-                minimum_norm_solve(t, &*self.model, &self.mass, &self.values, &self.b, &mut self.x, n)
+                let rows = independent_rows(t, &*self.model, &self.mass, &self.values, &self.b, n)?;
+                let mut ind = Independent::new(&*self.model, &self.mass, rows, &self.options).map_err(|e| {
+                    DynamicsError::Factorization {
+                        time: t,
+                        what: e.to_string(),
+                    }
+                })?;
+                if !ind.solve(
+                    &self.mass,
+                    &self.values,
+                    &self.b,
+                    &mut self.x,
+                    self.options.residual_tolerance,
+                ) {
+                    return Err(self
+                        .model
+                        .singular_mass_error(t, "saddle-point matrix of the independent equations singular"));
+                }
+                self.independent = Some(ind);
+                Ok(())
             }
             RedundancyTreatment::Error => Err(diagnose(t, &*self.model, &self.values, self.options.pivot_tolerance)),
         }

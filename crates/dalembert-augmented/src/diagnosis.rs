@@ -30,21 +30,24 @@ pub(crate) fn diagnose(
     )
 }
 
-/// Solves with a maximal independent set of constraint rows, then returns in `x` the accelerations
-/// and the minimum-norm multipliers `λ = (C_qᵀ)⁺ (C_q,Rᵀ λ_R)`. Dense; allocates (a fallback path,
-/// taken only when the caller opted into it and the matrix is singular).
-pub(crate) fn minimum_norm_solve(
+/// A maximal independent set of constraint rows for the minimum-norm treatment of a singular
+/// saddle-point matrix (the structure analysis at rank tolerance
+/// [`MINIMUM_NORM_RANK_TOLERANCE`]), checked where it is found: the saddle-point matrix on those
+/// rows must be regular, and the dropped rows consistent, `C_q,d q̈ = b_d`, to the rank tolerance
+/// (otherwise the equations are contradictory, not redundant, and the error names them). Dense;
+/// allocates (run once where a redundancy is found; [`crate::redundant::Independent`] then keeps
+/// the rows).
+pub(crate) fn independent_rows(
     t: f64,
     model: &dyn MultibodySystem,
     mass: &BlockDiagonal,
     vals: &ConstraintValues,
     b: &[f64],
-    x: &mut [f64],
     n: usize,
-) -> Result<(), DynamicsError> {
+) -> Result<Vec<usize>, DynamicsError> {
     let sys = model.constraints();
     let s = sys.analyse_structure(vals, MINIMUM_NORM_RANK_TOLERANCE)?;
-    let rows = &s.independent_rows;
+    let rows = s.independent_rows;
     let r = rows.len();
     let jac = sys.jacobian_dense(vals);
     let mut k = Mat::<f64>::zeros(n + r, n + r);
@@ -74,12 +77,6 @@ pub(crate) fn minimum_norm_solve(
     }
     // Dropped rows must be consistent: C_q,dropped q̈ = rhs_dropped.
     let m = sys.num_equations();
-    let mut f = Mat::<f64>::zeros(n, 1);
-    for (ii, &row) in rows.iter().enumerate() {
-        for c in 0..n {
-            f[(c, 0)] += jac[(row, c)] * sol[(n + ii, 0)];
-        }
-    }
     for row in 0..m {
         let lhs: f64 = (0..n).map(|c| jac[(row, c)] * sol[(c, 0)]).sum();
         // Consistent to the rank tolerance: a row counted as dependent at singular values below
@@ -93,16 +90,5 @@ pub(crate) fn minimum_norm_solve(
             });
         }
     }
-    let f: Vec<f64> = (0..n).map(|c| f[(c, 0)]).collect();
-    let lambda = sys
-        .minimum_norm_multipliers(vals, &f)
-        .ok_or(DynamicsError::Factorization {
-            time: t,
-            what: "minimum-norm multipliers: the constraint force is not in the range of C_qᵀ".into(),
-        })?;
-    for i in 0..n {
-        x[i] = sol[(i, 0)];
-    }
-    x[n..n + m].copy_from_slice(&lambda);
-    Ok(())
+    Ok(rows)
 }

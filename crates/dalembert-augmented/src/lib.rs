@@ -24,6 +24,7 @@
 
 mod augmented;
 mod diagnosis;
+mod redundant;
 
 pub use augmented::{Augmented, AugmentedOptions, Backend};
 pub use dalembert_system::inverse::{InverseDynamics, InverseSolution};

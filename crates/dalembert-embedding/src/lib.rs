@@ -19,6 +19,7 @@
 //! the independent coordinates only, with the constraints held to the Newton tolerance.
 
 use dalembert_system::linalg::{DenseCholesky, DenseLu};
+use dalembert_system::minimum_norm::{scatter_minimum_norm, MinimumNorm};
 use dalembert_system::partition::{Partition, Repartition};
 use dalembert_system::{
     Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
@@ -73,6 +74,8 @@ pub struct Embedding {
     cdot: Vec<f64>,
     rhs: Vec<f64>,
     stats: FormulationStats,
+    /// The minimum-norm multipliers of a redundant system, for the current independent equations.
+    minimum_norm: Option<MinimumNorm>,
     work: Work,
 }
 
@@ -147,6 +150,7 @@ impl Embedding {
             options,
             model,
             stats: FormulationStats::default(),
+            minimum_norm: None,
             work: Work::new(0, &Partition::default(), 0, Multipliers::AfterTheFact),
         }
     }
@@ -217,6 +221,7 @@ impl Formulation for Embedding {
             options,
             stats,
             rhs,
+            minimum_norm,
             ..
         } = self;
         let transformed = tracker.transform(t, sys, values, rhs).is_some();
@@ -298,7 +303,7 @@ impl Formulation for Embedding {
             }
             vt.solve_dependent_transpose(&mut work.lam_r);
         }
-        sys.scatter_multipliers(t, values, &partition.rows, &work.lam_r, lambda)?;
+        scatter_minimum_norm(minimum_norm, sys, t, values, &partition.rows, &work.lam_r, lambda)?;
         if let Some(i) = qdd.iter().position(|v| !v.is_finite()) {
             return Err(model.non_finite_acceleration(t, i));
         }

@@ -55,6 +55,31 @@ impl ConstraintPattern {
         p
     }
 
+    /// The pattern of the equations `rows` alone (row `k` of the result is system row `rows[k]`),
+    /// with the index in this pattern's values of each of its entries.
+    pub fn subset(&self, rows: &[usize]) -> (ConstraintPattern, Vec<usize>) {
+        let mut slot = vec![usize::MAX; self.rows];
+        for (k, &row) in rows.iter().enumerate() {
+            slot[row] = k;
+        }
+        let mut p = ConstraintPattern {
+            rows: rows.len(),
+            cols: self.cols,
+            ..Default::default()
+        };
+        let mut map = Vec::new();
+        for s in self.segments.iter().filter(|s| slot[s.row] != usize::MAX) {
+            p.segments.push(Segment {
+                row: slot[s.row],
+                first: p.entries.len(),
+                ..*s
+            });
+            p.entries.extend((0..s.len).map(|k| (slot[s.row], s.col + k)));
+            map.extend(s.first..s.first + s.len);
+        }
+        (p, map)
+    }
+
     /// Number of equations `m`.
     #[inline]
     pub fn rows(&self) -> usize {

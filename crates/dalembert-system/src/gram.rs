@@ -50,8 +50,12 @@ impl std::fmt::Debug for SparseGram {
 impl SparseGram {
     /// The pattern of `G` for `sys` and its symbolic Cholesky analysis.
     pub fn new<S: ConstraintSet + ?Sized>(sys: &S) -> Result<Self, GramSingular> {
-        let m = sys.num_equations();
-        let pattern = sys.pattern();
+        Self::on_pattern(sys.pattern())
+    }
+
+    /// The pattern of `G` for the constraint pattern `pattern` and its symbolic Cholesky analysis.
+    pub fn on_pattern(pattern: &crate::ConstraintPattern) -> Result<Self, GramSingular> {
+        let m = pattern.rows();
         // Rows touching each body, with the first entry of their segment.
         let mut rows_of_body: Vec<Vec<(usize, usize)>> = vec![Vec::new(); pattern.bodies()];
         let mut len_of_body = vec![0; pattern.bodies()];

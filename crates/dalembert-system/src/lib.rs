@@ -22,6 +22,7 @@ pub mod inverse;
 pub mod kinematics;
 pub mod layout;
 pub mod linalg;
+pub mod minimum_norm;
 pub mod model_error;
 pub mod partition;
 pub mod sparse_pattern;

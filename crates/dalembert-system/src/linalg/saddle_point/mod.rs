@@ -164,8 +164,27 @@ impl SaddlePoint {
         dense_limit: usize,
         pivot_tolerance: f64,
     ) -> Result<Self, LinalgError> {
-        let m = sys.num_equations();
-        let pattern = sys.pattern();
+        Self::on_pattern(
+            backend,
+            mass,
+            mass_is_constant,
+            sys.pattern(),
+            dense_limit,
+            pivot_tolerance,
+        )
+    }
+
+    /// As [`SaddlePoint::new`], for the constraint pattern `pattern` (a system's, or a subset of its
+    /// rows).
+    pub fn on_pattern(
+        backend: Backend,
+        mass: &BlockDiagonal,
+        mass_is_constant: bool,
+        pattern: &ConstraintPattern,
+        dense_limit: usize,
+        pivot_tolerance: f64,
+    ) -> Result<Self, LinalgError> {
+        let m = pattern.rows();
         let resolved = resolve(backend, mass, pattern, dense_limit);
         let dense_lu = || Some(Kind::Dense(Box::new(DenseKkt::new(mass.dim(), m, pivot_tolerance))));
         let sparse_lu = || {
@@ -200,7 +219,7 @@ impl SaddlePoint {
                 Kind::SparseSchur(Box::new(SparseSchurKkt::new(
                     mass,
                     mass_is_constant,
-                    sys,
+                    pattern,
                     pivot_tolerance,
                 )?))
             }
@@ -297,21 +316,19 @@ impl SaddlePoint {
     }
 }
 
-/// `y = K x` computed from the blocks, without the assembled matrix (for residual checks).
-pub fn kkt_mul(
-    mass: &BlockDiagonal,
-    sys: &(impl ConstraintSet + ?Sized),
-    vals: &ConstraintValues,
-    x: &[f64],
-    y: &mut [f64],
-) {
-    let n = sys.num_coordinates();
+/// `y = K x` computed from the blocks, without the assembled matrix (for residual checks);
+/// `pattern` is the pattern `vals` was evaluated on (a system's, or a subset of its rows).
+pub fn kkt_mul(mass: &BlockDiagonal, pattern: &ConstraintPattern, vals: &ConstraintValues, x: &[f64], y: &mut [f64]) {
+    let n = mass.dim();
     let (xt, xb) = x.split_at(n);
     let (yt, yb) = y.split_at_mut(n);
     yt.iter_mut().for_each(|v| *v = 0.0);
+    yb.iter_mut().for_each(|v| *v = 0.0);
     mass.mul_add(1.0, xt, yt);
-    sys.jacobian_transpose_mul_add(vals, 1.0, xb, yt);
-    sys.jacobian_mul(vals, xt, yb);
+    for (&(r, c), &v) in pattern.entries().iter().zip(&vals.jacobian) {
+        yt[c] += v * xb[r];
+        yb[r] += v * xt[c];
+    }
 }
 
 /// Largest magnitude among the entries of `M` and `C_q` (scale of the residual check).

@@ -12,7 +12,7 @@
 use super::schur::InverseMass;
 use super::SingularKkt;
 use crate::gram::SparseGram;
-use crate::{BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues};
+use crate::{BlockDiagonal, ConstraintPattern, ConstraintValues};
 
 pub(crate) struct SparseSchurKkt {
     n: usize,
@@ -31,17 +31,16 @@ impl SparseSchurKkt {
     pub fn new(
         mass: &BlockDiagonal,
         mass_is_constant: bool,
-        sys: &(impl ConstraintSet + ?Sized),
+        pattern: &ConstraintPattern,
         pivot_tolerance: f64,
     ) -> Result<Self, SingularKkt> {
-        let n = sys.num_coordinates();
-        let m = sys.num_equations();
-        let gram = SparseGram::new(sys).map_err(|e| SingularKkt(e.0))?;
+        let (n, m) = (pattern.cols(), pattern.rows());
+        let gram = SparseGram::on_pattern(pattern).map_err(|e| SingularKkt(e.0))?;
         Ok(SparseSchurKkt {
             n,
             gram,
             minv: InverseMass::new(mass, mass_is_constant),
-            jacobian: vec![0.0; sys.pattern().entries().len()],
+            jacobian: vec![0.0; pattern.entries().len()],
             tmp_n: vec![0.0; n],
             tmp_m: vec![0.0; m],
             pivot_tolerance,
