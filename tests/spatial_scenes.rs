@@ -432,14 +432,15 @@ fn a_body_placed_by_a_reference_point_is_the_same_body_placed_by_its_centre_of_m
 }
 
 #[test]
-fn bricard_runs_with_dopri5_on_every_formulation() {
+fn bricard_runs_with_dopri5_and_generalized_alpha() {
     // Until 2026-11-25 the augmented formulation with dopri5 stopped Bricard's loop at t = 0.31 s
-    // ("rank 29 of 30"): the structure analysis, redone at every evaluation, met a stage state off
-    // the constraint manifold where the dropped equation looked inconsistent. The independent set
-    // is now kept (`dalembert_augmented`, module `redundant`). Reference: the same loop by RK4 at
-    // 1 ms with the augmented formulation; dopri5 (rtol 1e-6) agrees with it to 5e-12 m over 2 s
-    // (measured; RK4's own error at 1 ms is of that order), so 1e-8 m is a loose bound that a lost
-    // branch or an ignored joint (errors of centimetres) still fails.
+    // ("rank 29 of 30": the structure analysis, redone at every evaluation, met a stage state off
+    // the constraint manifold where the dropped equation looked inconsistent), and generalized-α
+    // at 0.011 s (its Newton matrix kept the redundant row). The independent set is now kept, and
+    // generalized-α masks the dropped row. Reference: the same loop by RK4 at 1 ms with the
+    // augmented formulation; dopri5 (rtol 1e-6) agrees with it to 5e-12 m over 2 s (measured;
+    // RK4's own error at 1 ms is of that order), so 1e-8 m is a loose bound that a lost branch or an
+    // ignored joint (errors of centimetres) still fails.
     let scene = Scene::from_path(root().join("scenes/bricard.toml")).unwrap();
     let reference = scene.record(&AtomicBool::new(false));
     reference.outcome.unwrap();
@@ -466,4 +467,32 @@ fn bricard_runs_with_dopri5_on_every_formulation() {
             assert!(d < 1e-8, "{}: {c} differs from RK4 by {d:e} m", f.name());
         }
     }
+    // Generalized-α (augmented) iterates on the independent equations: second order, so halving
+    // the step divides its distance from the RK4 run by about 4 (measured 1.35e-6 and 3.4e-7 m).
+    let mut errors = Vec::new();
+    for step in [1e-3, 5e-4] {
+        let s = scene
+            .with_values(&[
+                ("simulation.integrator", SceneValue::Text("generalized-alpha".into())),
+                ("simulation.step", step.into()),
+            ])
+            .unwrap();
+        let rec = s.record(&AtomicBool::new(false));
+        rec.outcome
+            .unwrap_or_else(|e| panic!("generalized-alpha, step {step}: {e}"));
+        let mut worst = 0.0f64;
+        for c in ["rod1", "rod2", "rod3", "rod4", "rod5"]
+            .iter()
+            .flat_map(|b| ["x", "y", "z"].map(|k| format!("{b}.{k}")))
+        {
+            let (a, b) = (reference.table.column(&c).unwrap(), rec.table.column(&c).unwrap());
+            worst = a.iter().zip(&b).fold(worst, |m, (x, y)| m.max((x - y).abs()));
+        }
+        errors.push(worst);
+    }
+    let ratio = errors[0] / errors[1];
+    assert!(
+        errors[0] < 1e-5 && (3.5..4.5).contains(&ratio),
+        "generalized-alpha: {errors:?}"
+    );
 }

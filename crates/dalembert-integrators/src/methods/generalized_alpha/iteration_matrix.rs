@@ -16,6 +16,13 @@
 //! and constraint Jacobian at the current state and the kept tangent, which is what changes
 //! fastest (`β' ∂r/∂q` and `γ' ∂r/∂v` are `O(h²)` and `O(h)` against `M`); a slow Newton
 //! contraction makes the caller differentiate again ([`IterationMatrix::differentiate`]).
+//!
+//! Redundant constraints (minimum-norm treatment, [`IterationMatrix::new`] given the dropped
+//! equations `D` of a maximal independent set `R`): the matrix above is singular, so each dropped
+//! row and column is replaced by the identity (its `C_q` row and `C_qᵀ` column zeroed, a 1 on the
+//! diagonal); with a zero residual there the Newton update leaves `λ_D = 0`, and the iteration is
+//! that of the independent equations, whose solution is the same motion. The saddle-point
+//! factorization without the tangent terms is set up on `R` alone.
 
 use super::residual;
 use dalembert_system::linalg::{Backend, LinalgError, PatternLu, SaddlePoint};
@@ -26,8 +33,8 @@ use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem, Tangent
 const KKT_LIMIT: f64 = 1e-2;
 /// The augmented formulation's defaults for the saddle-point back end
 /// (`dalembert_augmented::AugmentedOptions`).
-const KKT_DENSE_LIMIT: usize = 60;
-const KKT_PIVOT_TOLERANCE: f64 = 1e-13;
+pub(super) const KKT_DENSE_LIMIT: usize = 60;
+pub(super) const KKT_PIVOT_TOLERANCE: f64 = 1e-13;
 
 /// The tangent, the matrix's storage and its factors.
 pub(crate) struct IterationMatrix {
@@ -46,12 +53,27 @@ pub(crate) struct IterationMatrix {
     kkt: Option<SaddlePoint>,
     /// Whether the last factorization is `kkt`'s.
     uses_kkt: bool,
+    /// Redundant constraints: the independent equations `R` (the pattern `kkt` is set up on, with
+    /// the index of each of its entries in the system's values, and its values), the entries of
+    /// the dropped rows, and `(n + |R|)` scratch for `kkt`'s solves. `None` without redundancy.
+    reduced: Option<Reduced>,
     /// Work vectors for the differences.
     step: Vec<f64>,
     q: Vec<f64>,
     v: Vec<f64>,
     plus: Vec<f64>,
     minus: Vec<f64>,
+}
+
+/// The independent equations of a redundant system (see the module documentation).
+struct Reduced {
+    rows: Vec<usize>,
+    dropped: Vec<usize>,
+    pattern: dalembert_system::ConstraintPattern,
+    entries: Vec<usize>,
+    values: ConstraintValues,
+    dropped_entries: Vec<usize>,
+    x: Vec<f64>,
 }
 
 /// The trial state a matrix is built at.
@@ -64,22 +86,52 @@ pub(crate) struct Trial<'a> {
 }
 
 impl IterationMatrix {
-    /// Storage for `system`'s iteration matrix; `Err` when the sparse symbolic analysis fails.
-    pub fn new(system: &dyn MultibodySystem, mass: &BlockDiagonal) -> Result<Self, LinalgError> {
+    /// Storage for `system`'s iteration matrix; `independent`: the independent equations of a
+    /// redundant system (the others are masked), `None` for all. `Err` when the sparse symbolic
+    /// analysis fails.
+    pub fn new(
+        system: &dyn MultibodySystem,
+        mass: &BlockDiagonal,
+        independent: Option<Vec<usize>>,
+    ) -> Result<Self, LinalgError> {
         let tangent = TangentPattern::new(system);
         let n = tangent.dim();
         let pattern = system.constraints().pattern();
+        let m = pattern.rows();
         let mut entries: Vec<(usize, usize)> = tangent.entries().collect();
         entries.extend(mass.entries().map(|(r, c, _)| (r, c)));
         entries.extend(pattern.entries().iter().map(|&(r, c)| (n + r, c)));
         entries.extend(pattern.entries().iter().map(|&(r, c)| (c, n + r)));
-        let k = n + pattern.rows();
+        let reduced = independent.map(|rows| {
+            let mut kept = vec![false; m];
+            rows.iter().for_each(|&r| kept[r] = true);
+            let dropped: Vec<usize> = (0..m).filter(|&r| !kept[r]).collect();
+            let dropped_entries = (pattern.entries().iter().enumerate())
+                .filter(|(_, &(r, _))| !kept[r])
+                .map(|(e, _)| e)
+                .collect();
+            let (sub, map) = pattern.subset(&rows);
+            Reduced {
+                x: vec![0.0; n + rows.len()],
+                values: ConstraintValues::new(&sub, 0),
+                pattern: sub,
+                entries: map,
+                rows,
+                dropped,
+                dropped_entries,
+            }
+        });
+        if let Some(r) = &reduced {
+            entries.extend(r.dropped.iter().map(|&d| (n + d, n + d)));
+        }
+        let k = n + m;
         let lu = PatternLu::new(k, entries, PatternLu::DENSE_LIMIT)?;
-        let kkt = SaddlePoint::new(
+        let kkt_pattern = reduced.as_ref().map_or(pattern, |r| &r.pattern);
+        let kkt = SaddlePoint::on_pattern(
             Backend::Auto,
             mass,
             system.mass_is_constant(),
-            system.constraints(),
+            kkt_pattern,
             KKT_DENSE_LIMIT,
             KKT_PIVOT_TOLERANCE,
         )
@@ -94,6 +146,7 @@ impl IterationMatrix {
             lu,
             kkt,
             uses_kkt: false,
+            reduced,
             step: vec![0.0; n],
             q: vec![0.0; n_q],
             v: vec![0.0; n],
@@ -218,7 +271,16 @@ impl IterationMatrix {
         let ratio = (beta * self.norms.0 + gamma * self.norms.1) / mass_norm;
         if !full && ratio <= KKT_LIMIT {
             if let Some(kkt) = &mut self.kkt {
-                if kkt.factor(mass, sys.pattern(), values).is_ok() {
+                let factored = match &mut self.reduced {
+                    Some(r) => {
+                        for (v, &e) in r.values.jacobian.iter_mut().zip(&r.entries) {
+                            *v = values.jacobian[e];
+                        }
+                        kkt.factor(mass, &r.pattern, &r.values)
+                    }
+                    None => kkt.factor(mass, sys.pattern(), values),
+                };
+                if factored.is_ok() {
                     self.uses_kkt = true;
                     return Ok(());
                 }
@@ -231,22 +293,51 @@ impl IterationMatrix {
         for ((o, dq), dv) in tangent.iter_mut().zip(&self.dr_dq).zip(&self.dr_dv) {
             *o = beta * dq + gamma * dv;
         }
-        let (m, rest) = rest.split_at_mut(rest.len() - 2 * values.jacobian.len());
+        let masked = self.reduced.as_ref().map_or(0, |r| r.dropped.len());
+        let (m, rest) = rest.split_at_mut(rest.len() - 2 * values.jacobian.len() - masked);
         for (o, (_, _, v)) in m.iter_mut().zip(mass.entries()) {
             *o = v;
         }
-        let (cq, cqt) = rest.split_at_mut(values.jacobian.len());
+        let (cq, rest) = rest.split_at_mut(values.jacobian.len());
+        let (cqt, diagonal) = rest.split_at_mut(values.jacobian.len());
         cq.copy_from_slice(&values.jacobian);
         cqt.copy_from_slice(&values.jacobian);
+        if let Some(r) = &self.reduced {
+            for &e in &r.dropped_entries {
+                cq[e] = 0.0;
+                cqt[e] = 0.0;
+            }
+            diagonal.fill(1.0);
+        }
         self.lu.factor()
     }
 
-    /// `x ← A⁻¹ x` with the last factors.
+    /// `x ← A⁻¹ x` with the last factors (the masked rows of a redundant system give zero).
     pub fn solve(&mut self, system: &dyn MultibodySystem, x: &mut [f64]) {
-        match &mut self.kkt {
-            Some(kkt) if self.uses_kkt => kkt.solve(system.constraints().pattern(), x),
+        let n = self.step.len();
+        match (&mut self.kkt, &mut self.reduced) {
+            (Some(kkt), Some(r)) if self.uses_kkt => {
+                r.x[..n].copy_from_slice(&x[..n]);
+                for (k, &row) in r.rows.iter().enumerate() {
+                    r.x[n + k] = x[n + row];
+                }
+                kkt.solve(&r.pattern, &mut r.x);
+                x[..n].copy_from_slice(&r.x[..n]);
+                for (k, &row) in r.rows.iter().enumerate() {
+                    x[n + row] = r.x[n + k];
+                }
+                for &d in &r.dropped {
+                    x[n + d] = 0.0;
+                }
+            }
+            (Some(kkt), None) if self.uses_kkt => kkt.solve(system.constraints().pattern(), x),
             _ => self.lu.solve_in_place(x),
         }
+    }
+
+    /// The dropped equations of a redundant system (empty without redundancy).
+    pub fn dropped(&self) -> &[usize] {
+        self.reduced.as_ref().map_or(&[], |r| &r.dropped)
     }
 }
 
@@ -373,7 +464,7 @@ mod tests {
             let mut mass = system.mass_storage();
             system.mass(&q, &mut mass);
             let mut values = system.constraints().values();
-            let mut matrix = IterationMatrix::new(&*system, &mass).unwrap();
+            let mut matrix = IterationMatrix::new(&*system, &mass, None).unwrap();
             // More than one body: some columns share a pass.
             let passes = matrix.tangent.passes().len();
             assert!(

@@ -42,7 +42,7 @@ mod iteration_matrix;
 use crate::registry::{unit_interval, Applies, MethodEntry, Parameter, TradeAxis};
 use crate::stepper::{Setup, StepControl, StepOutcome, Stepper};
 use crate::{IntegrationError, Method};
-use dalembert_system::linalg::LinalgError;
+use dalembert_system::linalg::{LinalgError, SaddlePoint};
 use dalembert_system::{
     BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
 };
@@ -105,11 +105,42 @@ fn build(m: &Method, s: Setup<'_>) -> Result<Box<dyn Stepper>, IntegrationError>
     }
     let (mut qdd, mut lambda) = (vec![0.0; n_v], vec![0.0; m_eq]);
     f.accelerations(s.t0, q0, qd0, None, &mut qdd, &mut lambda)?;
-    let ga = GeneralizedAlpha::new(f.system(), m.value(0), &qdd, &lambda, q0).map_err(|e| DynamicsError::Singular {
-        time: s.t0,
-        what: format!("generalized-alpha's iteration matrix: {e}"),
+    // The formulation accepted the start, so a singular saddle-point matrix here means redundant
+    // constraints under the minimum-norm treatment: iterate on an independent set of equations.
+    let independent = independent_equations(f.system(), s.t0, q0, qd0);
+    let ga = GeneralizedAlpha::new(f.system(), m.value(0), &qdd, &lambda, q0, independent).map_err(|e| {
+        DynamicsError::Singular {
+            time: s.t0,
+            what: format!("generalized-alpha's iteration matrix: {e}"),
+        }
     })?;
     Ok(Box::new(ga))
+}
+
+/// `None` when `[M C_qᵀ; C_q 0]` factors at `(t, q, v)` (as the augmented formulation factors it);
+/// otherwise the independent equations of the structure analysis at the minimum-norm rank
+/// tolerance (`None` too when that finds full rank, or the analysis cannot run). Setup only.
+fn independent_equations(model: &dyn MultibodySystem, t: f64, q: &[f64], v: &[f64]) -> Option<Vec<usize>> {
+    let sys = model.constraints();
+    let mut values = sys.values();
+    sys.evaluate(t, q, v, &mut values);
+    let mut mass = model.mass_storage();
+    model.mass(q, &mut mass);
+    let kkt = SaddlePoint::new(
+        dalembert_system::linalg::Backend::Auto,
+        &mass,
+        model.mass_is_constant(),
+        sys,
+        iteration_matrix::KKT_DENSE_LIMIT,
+        iteration_matrix::KKT_PIVOT_TOLERANCE,
+    );
+    if kkt.is_ok_and(|mut k| k.factor(&mass, sys.pattern(), &values).is_ok()) {
+        return None;
+    }
+    let s = sys
+        .analyse_structure(&values, dalembert_system::structure::MINIMUM_NORM_RANK_TOLERANCE)
+        .ok()?;
+    (s.rank < s.equations).then_some(s.independent_rows)
 }
 
 impl Stepper for GeneralizedAlpha {
@@ -276,22 +307,30 @@ impl GeneralizedAlpha {
         qdd0: &[f64],
         lambda0: &[f64],
         q0: &[f64],
+        independent: Option<Vec<usize>>,
     ) -> Result<Self, LinalgError> {
         let mut mass = model.mass_storage();
         model.mass(q0, &mut mass);
+        let matrix = IterationMatrix::new(model, &mass, independent)?;
+        // Masked (dropped) equations carry no multiplier in the iteration.
+        let m = lambda0.len();
+        let mut lambda0 = lambda0.to_vec();
+        for &d in matrix.dropped() {
+            lambda0[d] = 0.0;
+        }
         Ok(GeneralizedAlpha {
             coef: Coefficients::new(rho_inf),
             rho_inf,
             a: qdd0.to_vec(),
             qdd: qdd0.to_vec(),
-            lambda: lambda0.to_vec(),
+            lambda: lambda0.clone(),
             qdd_prev: qdd0.to_vec(),
-            lambda_prev: lambda0.to_vec(),
+            lambda_prev: lambda0,
             h_prev: f64::NAN,
-            matrix: IterationMatrix::new(model, &mass)?,
+            matrix,
             mass,
             values: model.constraints().values(),
-            work: Work::new(q0.len(), qdd0.len(), lambda0.len()),
+            work: Work::new(q0.len(), qdd0.len(), m),
             tolerance: 1e-10,
             iterations: 0,
             factorizations: 0,
@@ -379,6 +418,9 @@ impl GeneralizedAlpha {
                 &mut w.res,
             );
             self.evaluations += 1;
+            for &d in self.matrix.dropped() {
+                w.res[n + d] = 0.0;
+            }
             if w.res.iter().any(|v| !v.is_finite()) {
                 return Err(self.fail());
             }
