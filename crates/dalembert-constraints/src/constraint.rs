@@ -68,6 +68,21 @@ pub trait Constraint: Send + Sync + std::fmt::Debug {
     /// The global point about which the reaction torque is reported.
     fn reaction_point(&self, first: &BodyState, second: &BodyState) -> Vec2;
 
+    /// `Σ_k λ_k ∂²C_k/∂p²` over the two bodies' coordinates `p = [x_i, y_i, θ_i, x_j, y_j, θ_j]`
+    /// (row-major; the ground's rows and columns are ignored), for the multipliers `lambda` of this
+    /// constraint's equations: its part of `∂(C_qᵀ λ)/∂q`, which implicit integrators need.
+    /// `None` (the default, as for a user-written constraint) when not provided: they then
+    /// difference the residual.
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        _first: &BodyState,
+        _second: &BodyState,
+        _lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        None
+    }
+
     /// Checks the constraint's own parameters (finite geometry, non-zero axes, …).
     fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
         Ok(())
@@ -96,6 +111,15 @@ impl<C: Constraint + ?Sized> Constraint for std::sync::Arc<C> {
     }
     fn reaction_point(&self, first: &BodyState, second: &BodyState) -> Vec2 {
         (**self).reaction_point(first, second)
+    }
+    fn weighted_hessian(
+        &self,
+        t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        (**self).weighted_hessian(t, first, second, lambda)
     }
     fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
         (**self).validate()

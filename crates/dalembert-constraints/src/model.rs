@@ -3,7 +3,7 @@
 
 use crate::system::PLANAR_LABELS;
 use crate::{Constraint, ConstraintError, ConstraintSet, ConstraintSystem};
-use dalembert_kinematics::{Body, ForceElement, MassMatrix};
+use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 
 /// Bodies, applied force elements and the assembled constraint system of one mechanism.
@@ -99,6 +99,40 @@ impl MultibodySystem for Model {
             .iter()
             .map(|f| Some(f.bodies()?.iter().filter_map(|b| b.id().map(|id| id.0)).collect()))
             .collect()
+    }
+
+    /// `∂(C_qᵀ λ)/∂q` from each constraint's [`crate::Constraint::weighted_hessian`] and `−∂Q/∂q`,
+    /// `−∂Q/∂q̇` from each force element's [`dalembert_kinematics::ForceElement::add_tangent`];
+    /// `M` is constant here (`false` for a model with an offset centre of mass, whose `M(θ)` and
+    /// quadratic-velocity force are left to finite differences, and for any element without
+    /// analytic derivatives).
+    fn residual_tangent(
+        &self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        (_qdd, lambda): (&[f64], &[f64]),
+        out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        use dalembert_kinematics::second_derivatives::add_pair;
+        let n = self.layout.n_v();
+        if !self.mass_is_constant || q.len() != n || v.len() != n || lambda.len() != self.num_equations() {
+            return false;
+        }
+        for (k, c) in self.constraints.constraints().iter().enumerate() {
+            let [a, b] = c.bodies();
+            let (sa, sb) = (BodyState::of(a, q, v), BodyState::of(b, q, v));
+            let r0 = self.constraints.row_offset(k);
+            let Some(h) = c.weighted_hessian(t, &sa, &sb, &lambda[r0..r0 + c.num_equations()]) else {
+                return false;
+            };
+            add_pair(out, [a, b], &h, 1.0, false);
+        }
+        for f in &self.forces {
+            if !f.add_tangent(t, &self.bodies, q, v, out) {
+                return false;
+            }
+        }
+        !out.outside()
     }
 
     /// `Q_e`: all applied generalized forces plus the quadratic-velocity force of offset centres of

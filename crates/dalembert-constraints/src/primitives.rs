@@ -6,6 +6,7 @@
 //! contain `q̈`, plus the driver's `f''(t)`.
 
 use dalembert_kinematics::rotation::perp;
+use dalembert_kinematics::second_derivatives::Pair6;
 use dalembert_kinematics::{rotation, BodyState, PointState, Vec2};
 
 /// One scalar constraint equation evaluated at a state.
@@ -140,4 +141,88 @@ pub fn distance(first: &BodyState, u_i: Vec2, second: &BodyState, u_j: Vec2) -> 
 pub fn unit(v: Vec2) -> Option<Vec2> {
     let n = v.norm();
     (n.is_finite() && n > 0.0).then(|| v / n)
+}
+
+/// Second derivatives of the primitives, weighted by a multiplier each, over
+/// `[x_i, y_i, θ_i, x_j, y_j, θ_j]` of the primitive's `first` and `second` body
+/// (`dalembert_kinematics::second_derivatives`). They give `∂(C_qᵀ λ)/∂q` for implicit integrators.
+pub mod hessian {
+    use super::*;
+
+    /// `λ_x ∂²C_x + λ_y ∂²C_y` of [`point_coincidence`]: `−λ·(A_i u_i)` at `(θ_i, θ_i)`,
+    /// `λ·(A_j u_j)` at `(θ_j, θ_j)`.
+    pub fn point_coincidence(first: &BodyState, u_i: Vec2, second: &BodyState, u_j: Vec2, lambda: [f64; 2]) -> Pair6 {
+        let l = Vec2::new(lambda[0], lambda[1]);
+        let mut h = [[0.0; 6]; 6];
+        h[2][2] = -l.dot(&PointState::new(first, u_i).arm);
+        h[5][5] = l.dot(&PointState::new(second, u_j).arm);
+        h
+    }
+
+    /// `λ ∂²s` of [`line_coordinate`] (`first` = the line body `l`, `second` = the other `o`):
+    ///
+    /// ```text
+    /// ∂²s/∂R_l∂θ_l = −perp(w)   ∂²s/∂R_o∂θ_l = perp(w)   ∂²s/∂θ_l² = −w·d − w·a_l
+    /// ∂²s/∂θ_l∂θ_o = w·a_o      ∂²s/∂θ_o² = −w·a_o        (a = A u, d = p_o − p_l)
+    /// ```
+    pub fn line_coordinate(
+        line: &BodyState,
+        u_l: Vec2,
+        w_local: Vec2,
+        other: &BodyState,
+        u_o: Vec2,
+        lambda: f64,
+    ) -> Pair6 {
+        let pl = PointState::new(line, u_l);
+        let po = PointState::new(other, u_o);
+        let w = rotation(line.angle) * w_local;
+        let wp = perp(w);
+        let d = po.position - pl.position;
+        let mut h = [[0.0; 6]; 6];
+        for k in 0..2 {
+            h[k][2] = -wp[k];
+            h[2][k] = -wp[k];
+            h[3 + k][2] = wp[k];
+            h[2][3 + k] = wp[k];
+        }
+        h[2][2] = -w.dot(&d) - w.dot(&pl.arm);
+        h[2][5] = w.dot(&po.arm);
+        h[5][2] = h[2][5];
+        h[5][5] = -w.dot(&po.arm);
+        scaled(h, lambda)
+    }
+
+    /// `λ ∂²s` of [`distance`] (`None` where the points coincide).
+    pub fn distance(first: &BodyState, u_i: Vec2, second: &BodyState, u_j: Vec2, lambda: f64) -> Option<Pair6> {
+        let pi = PointState::new(first, u_i);
+        let pj = PointState::new(second, u_j);
+        let (_, h) = dalembert_kinematics::second_derivatives::distance_derivatives(&pi, &pj)?;
+        Some(scaled(h, lambda))
+    }
+
+    /// `h` with the two bodies' roles exchanged (for a row built with [`Row::swapped`]).
+    pub fn swapped(h: Pair6) -> Pair6 {
+        let mut out = [[0.0; 6]; 6];
+        for (r, row) in h.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                out[(r + 3) % 6][(c + 3) % 6] = *v;
+            }
+        }
+        out
+    }
+
+    /// `a + b`.
+    pub fn sum(mut a: Pair6, b: &Pair6) -> Pair6 {
+        for (ra, rb) in a.iter_mut().zip(b) {
+            for (x, y) in ra.iter_mut().zip(rb) {
+                *x += y;
+            }
+        }
+        a
+    }
+
+    fn scaled(mut h: Pair6, s: f64) -> Pair6 {
+        h.iter_mut().flatten().for_each(|v| *v *= s);
+        h
+    }
 }

@@ -207,6 +207,83 @@ proptest! {
     }
 }
 
+/// `Σ_k λ_k ∂²C_k/∂q²` from [`Constraint::weighted_hessian`] against central differences of
+/// `C_qᵀ λ` (h = 1e-6: truncation O(h²) ≈ 1e-12, round-off ≈ 1e-16 |λ| / h ≈ 1e-9 for multipliers
+/// up to 10): tolerance 1e-6. `first` is the ground or body 0, the second body is body 1.
+fn check_hessian(sys: &ConstraintSystem, t: f64, q: &[f64], lambda: &[f64]) -> Result<(), TestCaseError> {
+    let c = &sys.constraints()[0];
+    let [a, b] = c.bodies();
+    let (sa, sb) = (
+        dalembert_kinematics::BodyState::of(a, q, &[]),
+        dalembert_kinematics::BodyState::of(b, q, &[]),
+    );
+    let lam = &lambda[..c.num_equations()];
+    let h = c
+        .weighted_hessian(t, &sa, &sb, lam)
+        .ok_or_else(|| TestCaseError::fail(format!("{}: no second derivatives", c.name())))?;
+    let coordinate = |side: usize, k: usize| [a, b][side].id().map(|id| 3 * id.0 + k);
+    let mut dense = [[0.0; 6]; 6];
+    for (r, row) in h.iter().enumerate() {
+        for (col, v) in row.iter().enumerate() {
+            if let (Some(i), Some(j)) = (coordinate(r / 3, r % 3), coordinate(col / 3, col % 3)) {
+                dense[i][j] += v;
+            }
+        }
+    }
+    let force = |qs: &[f64]| {
+        let mut vals = sys.values();
+        sys.evaluate(t, qs, &[], &mut vals);
+        let mut f = vec![0.0; 6];
+        sys.jacobian_transpose_mul_add(&vals, 1.0, lam, &mut f);
+        f
+    };
+    let step = 1e-6;
+    for j in 0..6 {
+        let (mut qp, mut qm) = (q.to_vec(), q.to_vec());
+        qp[j] += step;
+        qm[j] -= step;
+        let (fp, fm) = (force(&qp), force(&qm));
+        for i in 0..6 {
+            let fd = (fp[i] - fm[i]) / (2.0 * step);
+            prop_assert!(
+                (fd - dense[i][j]).abs() < 1e-6,
+                "{}: ∂(C_qᵀλ)_{i}/∂q_{j}: fd {fd} vs {}",
+                c.name(),
+                dense[i][j]
+            );
+        }
+    }
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    #[test]
+    fn weighted_hessians_match_finite_differences(
+        q in vec_strategy(6, 2.0),
+        lambda in vec_strategy(3, 10.0),
+        p in prop::array::uniform8(-1.5f64..1.5),
+        t in 0.0f64..2.0,
+        grounded in any::<bool>(),
+    ) {
+        let first = if grounded { BodyRef::Ground } else { b(0) };
+        for c in constraints(first, &p) {
+            // As above: distance elements where |d| ≥ 0.3.
+            if c.name().ends_with("dist") {
+                let [a_ref, b_ref] = c.bodies();
+                let pa = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(a_ref, &q, &[]), Vec2::new(p[0], p[1]));
+                let pb = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(b_ref, &q, &[]), Vec2::new(p[2], p[3]));
+                if (pb.position - pa.position).norm() < 0.3 {
+                    continue;
+                }
+            }
+            let sys = ConstraintSystem::new(2, vec![c]).unwrap();
+            check_hessian(&sys, t, &q, &lambda)?;
+        }
+    }
+}
+
 #[test]
 fn bad_constraints_are_rejected_by_name() {
     let same = Revolute::new("self-pin", [b(0), b(0)], [Vec2::zeros(), Vec2::zeros()]);

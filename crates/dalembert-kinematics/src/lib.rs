@@ -20,6 +20,7 @@ pub mod forces;
 pub mod mass;
 pub mod point;
 pub mod rotation;
+pub mod second_derivatives;
 pub use dalembert_system::time_function;
 
 pub use body::{Body, BodyId, BodyRef};

@@ -41,5 +41,5 @@ pub use model_error::ModelError;
 pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use structure::StructureReport;
 pub use system::MultibodySystem;
-pub use tangent::TangentPattern;
+pub use tangent::{TangentPattern, TangentValues};
 pub use time_function::TimeFunction;

@@ -75,6 +75,21 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         None
     }
 
+    /// Adds the analytic tangent of the dynamic residual `r = M(q) q̈ + C_qᵀ λ − Q(t, q, v)` at
+    /// `(t, q, v, q̈, λ)` to `out`: `∂r/∂q` (along the velocity coordinates, `q ⊕ ε e_j`) and
+    /// `∂r/∂v`, on the pattern of [`crate::TangentPattern`]. Returns `false` when some element has
+    /// no analytic derivatives (a user-written force or constraint): implicit integrators then
+    /// difference the residual instead. Default `false`.
+    fn residual_tangent(
+        &self,
+        _t: f64,
+        (_q, _v): (&[f64], &[f64]),
+        (_qdd, _lambda): (&[f64], &[f64]),
+        _out: &mut crate::TangentValues<'_>,
+    ) -> bool {
+        false
+    }
+
     /// Kinetic energy at `(q, v)`.
     fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64;
 

@@ -145,3 +145,55 @@ impl TangentPattern {
         &self.passes
     }
 }
+
+/// The tangent's values on a [`TangentPattern`], as a system's analytic derivatives fill them
+/// ([`MultibodySystem::residual_tangent`]): `∂r/∂q` (along the velocity coordinates) and `∂r/∂v`,
+/// in the pattern's entry order.
+pub struct TangentValues<'a> {
+    pattern: &'a TangentPattern,
+    dq: &'a mut [f64],
+    dv: &'a mut [f64],
+    outside: bool,
+}
+
+impl<'a> TangentValues<'a> {
+    /// Zeroes `dq` and `dv` (each of the pattern's length) for the derivatives to be added.
+    pub fn new(pattern: &'a TangentPattern, dq: &'a mut [f64], dv: &'a mut [f64]) -> Self {
+        dq.fill(0.0);
+        dv.fill(0.0);
+        TangentValues {
+            pattern,
+            dq,
+            dv,
+            outside: false,
+        }
+    }
+
+    fn entry(&mut self, i: usize, j: usize) -> Option<usize> {
+        let found = self.pattern.rows(j).binary_search(&i).ok();
+        self.outside |= found.is_none();
+        found.map(|k| self.pattern.col_ptr[j] + k)
+    }
+
+    /// Adds `value` to `∂r_i/∂q_j` (velocity coordinates `i`, `j`).
+    #[inline]
+    pub fn add_q(&mut self, i: usize, j: usize, value: f64) {
+        if let Some(e) = self.entry(i, j) {
+            self.dq[e] += value;
+        }
+    }
+
+    /// Adds `value` to `∂r_i/∂v_j`.
+    #[inline]
+    pub fn add_v(&mut self, i: usize, j: usize, value: f64) {
+        if let Some(e) = self.entry(i, j) {
+            self.dv[e] += value;
+        }
+    }
+
+    /// True when some derivative fell outside the pattern (an element coupling bodies it did not
+    /// declare): the values are then incomplete and must not be used.
+    pub fn outside(&self) -> bool {
+        self.outside
+    }
+}

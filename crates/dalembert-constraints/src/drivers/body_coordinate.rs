@@ -70,6 +70,17 @@ impl Constraint for BodyCoordinate {
         };
         out.set_row(0, &row.drive(self.function.eval(t)));
     }
+    /// Linear in the coordinates: no second derivative.
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let _ = (first, second, lambda);
+        Some([[0.0; 6]; 6])
+    }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         second.position
     }

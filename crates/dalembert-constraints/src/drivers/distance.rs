@@ -1,4 +1,5 @@
 use crate::primitives::distance;
+use crate::primitives::hessian;
 use crate::{Constraint, ConstraintEval, ConstraintRole};
 use dalembert_kinematics::{BodyRef, BodyState, PointState, TimeFunction, Vec2};
 
@@ -35,6 +36,15 @@ impl Constraint for DistanceDriver {
     fn evaluate(&self, t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
         let row = distance(first, self.points[0], second, self.points[1]).unwrap_or_default();
         out.set_row(0, &row.drive(self.function.eval(t)));
+    }
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        hessian::distance(first, self.points[0], second, self.points[1], lambda[0])
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position

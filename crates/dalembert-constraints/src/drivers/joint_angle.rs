@@ -47,6 +47,17 @@ impl Constraint for JointAngle {
     fn evaluate(&self, t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
         out.set_row(0, &relative_angle(first, second, 1.0).drive(self.function.eval(t)));
     }
+    /// Linear in the coordinates: no second derivative.
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let _ = (first, second, lambda);
+        Some([[0.0; 6]; 6])
+    }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         dalembert_kinematics::PointState::new(first, self.pin).position
     }

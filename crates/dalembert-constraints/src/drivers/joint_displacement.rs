@@ -1,3 +1,4 @@
+use crate::primitives::hessian;
 use crate::primitives::{line_coordinate, unit};
 use crate::{Constraint, ConstraintEval, ConstraintRole, Prismatic};
 use dalembert_kinematics::{BodyRef, BodyState, PointState, TimeFunction, Vec2};
@@ -51,6 +52,23 @@ impl Constraint for JointDisplacement {
         let a = unit(self.axis).unwrap_or(Vec2::x());
         let row = line_coordinate(first, self.points[0], a, second, self.points[1]);
         out.set_row(0, &row.drive(self.function.eval(t)));
+    }
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let a = unit(self.axis).unwrap_or(Vec2::x());
+        Some(hessian::line_coordinate(
+            first,
+            self.points[0],
+            a,
+            second,
+            self.points[1],
+            lambda[0],
+        ))
     }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position

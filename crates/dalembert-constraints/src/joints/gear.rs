@@ -51,6 +51,17 @@ impl Constraint for Gear {
         let offset = self.reference_angles[1] - self.ratio * self.reference_angles[0];
         out.set_row(0, &relative_angle(first, second, self.ratio).drive([offset, 0.0, 0.0]));
     }
+    /// Linear in the coordinates: no second derivative.
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let _ = (first, second, lambda);
+        Some([[0.0; 6]; 6])
+    }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         first.position
     }

@@ -1,3 +1,4 @@
+use crate::primitives::hessian;
 use crate::primitives::{line_coordinate, unit};
 use crate::{Constraint, ConstraintEval, ConstraintRole};
 use dalembert_kinematics::rotation::perp;
@@ -52,6 +53,23 @@ impl Constraint for PointOnLine {
     fn evaluate(&self, _t: f64, first: &BodyState, second: &BodyState, out: &mut ConstraintEval) {
         let n = perp(unit(self.direction).unwrap_or(Vec2::x()));
         out.set_row(0, &line_coordinate(first, self.points[0], n, second, self.points[1]));
+    }
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let n = perp(unit(self.direction).unwrap_or(Vec2::x()));
+        Some(hessian::line_coordinate(
+            first,
+            self.points[0],
+            n,
+            second,
+            self.points[1],
+            lambda[0],
+        ))
     }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position

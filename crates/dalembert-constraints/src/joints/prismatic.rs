@@ -1,3 +1,4 @@
+use crate::primitives::hessian;
 use crate::primitives::{line_coordinate, relative_angle, unit};
 use crate::{Constraint, ConstraintEval, ConstraintRole};
 use dalembert_kinematics::rotation::perp;
@@ -69,6 +70,23 @@ impl Constraint for Prismatic {
         let n = perp(self.unit_axis());
         out.set_row(0, &line_coordinate(first, self.points[0], n, second, self.points[1]));
         out.set_row(1, &relative_angle(first, second, 1.0).drive([self.angle, 0.0, 0.0]));
+    }
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let n = perp(self.unit_axis());
+        Some(hessian::line_coordinate(
+            first,
+            self.points[0],
+            n,
+            second,
+            self.points[1],
+            lambda[0],
+        ))
     }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position

@@ -1,3 +1,4 @@
+use crate::primitives::hessian;
 use crate::primitives::{line_coordinate, unit};
 use crate::{Constraint, ConstraintEval, ConstraintRole};
 use dalembert_kinematics::{BodyRef, BodyState, PointState, Vec2};
@@ -77,6 +78,23 @@ impl Constraint for RackPinion {
         row.first[2] += rho;
         row.second[2] -= rho;
         out.set_row(0, &row);
+    }
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        let a = unit(self.axis).unwrap_or(Vec2::x());
+        Some(hessian::swapped(hessian::line_coordinate(
+            second,
+            self.points[1],
+            a,
+            first,
+            self.points[0],
+            lambda[0],
+        )))
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position

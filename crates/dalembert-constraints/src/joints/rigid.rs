@@ -1,3 +1,4 @@
+use crate::primitives::hessian;
 use crate::primitives::{point_coincidence, relative_angle};
 use crate::{Constraint, ConstraintEval, ConstraintRole};
 use dalembert_kinematics::{BodyId, BodyRef, BodyState, PointState, Vec2};
@@ -65,6 +66,21 @@ impl Constraint for Rigid {
         out.set_row(0, &rows[0]);
         out.set_row(1, &rows[1]);
         out.set_row(2, &relative_angle(first, second, 1.0).drive([self.angle, 0.0, 0.0]));
+    }
+    fn weighted_hessian(
+        &self,
+        _t: f64,
+        first: &BodyState,
+        second: &BodyState,
+        lambda: &[f64],
+    ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
+        Some(hessian::point_coincidence(
+            first,
+            self.points[0],
+            second,
+            self.points[1],
+            [lambda[0], lambda[1]],
+        ))
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position

@@ -26,6 +26,24 @@ impl ForceElement for Gravity {
         "gravity"
     }
 
+    /// `Q_θ = (A c) × f` for a centre of mass `c` off the reference point: `−∂Q_θ/∂θ = (A c)·f`.
+    fn add_tangent(
+        &self,
+        _t: f64,
+        bodies: &[Body],
+        q: &[f64],
+        _qd: &[f64],
+        out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        for (i, b) in bodies.iter().enumerate() {
+            if b.center_of_mass != Vec2::zeros() {
+                let arm = rotation(q[3 * i + 2]) * b.center_of_mass;
+                out.add_q(3 * i + 2, 3 * i + 2, arm.dot(&(self.g * b.mass)));
+            }
+        }
+        true
+    }
+
     fn add_generalized_force(&self, _t: f64, bodies: &[Body], q: &[f64], _qd: &[f64], q_e: &mut [f64]) {
         for (i, b) in bodies.iter().enumerate() {
             let f = self.g * b.mass;

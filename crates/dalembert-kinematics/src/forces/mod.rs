@@ -19,6 +19,7 @@ pub use spring_damper::SpringDamper;
 pub use torque::Torque;
 
 use crate::{Body, BodyRef, PointState, Vec2};
+use dalembert_system::TangentValues;
 
 /// An applied force element.
 ///
@@ -53,6 +54,14 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
     /// but makes the iteration matrix dense.
     fn bodies(&self) -> Option<Vec<BodyRef>> {
         None
+    }
+
+    /// Adds this element's part of the analytic tangent of the dynamic residual
+    /// `r = M q̈ + C_qᵀ λ − Q`: `−∂Q/∂q` and `−∂Q/∂q̇` (coordinate `3 i + c` of body `i`, `c` in
+    /// `x, y, θ`). Returns `false` when the element has no analytic derivatives (the default, as
+    /// for a user-written force): implicit integrators then difference the residual.
+    fn add_tangent(&self, _t: f64, _bodies: &[Body], _q: &[f64], _qd: &[f64], _out: &mut TangentValues<'_>) -> bool {
+        false
     }
 }
 

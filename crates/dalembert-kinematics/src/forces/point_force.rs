@@ -45,6 +45,23 @@ impl ForceElement for PointForce {
         add_point_force(self.body, &p, Vec2::new(self.fx.value(t), self.fy.value(t)), q_e);
     }
 
+    /// `Q_θ = perp(A u)·F` for a global force `F(t)`: `−∂Q_θ/∂θ = (A u)·F`.
+    fn add_tangent(
+        &self,
+        t: f64,
+        _bodies: &[Body],
+        q: &[f64],
+        qd: &[f64],
+        out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        if let Some(id) = self.body.id() {
+            let p = PointState::new(&BodyState::of(self.body, q, qd), self.point);
+            let f = Vec2::new(self.fx.value(t), self.fy.value(t));
+            out.add_q(3 * id.0 + 2, 3 * id.0 + 2, p.arm.dot(&f));
+        }
+        true
+    }
+
     fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
         check_body(&self.name, self.body, bodies)?;
         self.fx.validate(&format!("force '{}'", self.name))?;

@@ -41,6 +41,28 @@ impl ForceElement for RotationalSpringDamper {
         add_torque(self.bodies.0, -tau, q_e);
     }
 
+    /// `τ = −(k φ + c φ̇)`, `φ = θ_j − θ_i − φ₀`, on `θ_j` and `−τ` on `θ_i`: `−∂Q/∂q` is `k` on the
+    /// diagonal and `−k` off it (over `θ_i, θ_j`), `−∂Q/∂q̇` the same with `c`.
+    fn add_tangent(
+        &self,
+        _t: f64,
+        _bodies: &[Body],
+        _q: &[f64],
+        _qd: &[f64],
+        out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        use crate::second_derivatives::{add_pair, Pair6};
+        let mut block: Pair6 = [[0.0; 6]; 6];
+        block[2][2] = 1.0;
+        block[5][5] = 1.0;
+        block[2][5] = -1.0;
+        block[5][2] = -1.0;
+        let bodies = [self.bodies.0, self.bodies.1];
+        add_pair(out, bodies, &block, self.stiffness, false);
+        add_pair(out, bodies, &block, self.damping, true);
+        true
+    }
+
     fn is_conservative(&self) -> bool {
         self.damping == 0.0
     }

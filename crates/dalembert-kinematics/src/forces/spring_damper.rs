@@ -62,6 +62,47 @@ impl ForceElement for SpringDamper {
         add_point_force(self.bodies.1, &pj, -e * f, q_e);
     }
 
+    /// `Q = −f g` with `g = ∂L/∂p` over the two bodies' coordinates `p`, `f = k (L − L₀) + c L̇ +
+    /// f_a`, `L̇ = g·ṗ`: `−∂Q/∂q = g (k g + c H ṗ)ᵀ + f H`, `−∂Q/∂q̇ = c g gᵀ`, `H = ∂²L/∂p²`
+    /// ([`crate::second_derivatives::distance_derivatives`]). `false` where the points coincide.
+    fn add_tangent(
+        &self,
+        t: f64,
+        _bodies: &[Body],
+        q: &[f64],
+        qd: &[f64],
+        out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        use crate::second_derivatives::{add_pair, distance_derivatives, Pair6};
+        let (pi, pj, len, _, len_dot) = self.geometry(q, qd);
+        let Some((g, h)) = distance_derivatives(&pi, &pj) else {
+            return false;
+        };
+        let fa = self.actuator.as_ref().map_or(0.0, |f| f.value(t));
+        let f = self.stiffness * (len - self.free_length) + self.damping * len_dot + fa;
+        let mut pdot = [0.0; 6];
+        for (side, body) in [self.bodies.0, self.bodies.1].into_iter().enumerate() {
+            if let Some(id) = body.id() {
+                pdot[3 * side..3 * side + 3].copy_from_slice(&qd[3 * id.0..3 * id.0 + 3]);
+            }
+        }
+        let mut df = [0.0; 6];
+        for (a, d) in df.iter_mut().enumerate() {
+            *d = self.stiffness * g[a] + self.damping * (0..6).map(|b| h[a][b] * pdot[b]).sum::<f64>();
+        }
+        let (mut dq, mut dv): (Pair6, Pair6) = ([[0.0; 6]; 6], [[0.0; 6]; 6]);
+        for a in 0..6 {
+            for b in 0..6 {
+                dq[a][b] = g[a] * df[b] + f * h[a][b];
+                dv[a][b] = self.damping * g[a] * g[b];
+            }
+        }
+        let bodies = [self.bodies.0, self.bodies.1];
+        add_pair(out, bodies, &dq, 1.0, false);
+        add_pair(out, bodies, &dv, 1.0, true);
+        true
+    }
+
     fn is_conservative(&self) -> bool {
         self.damping == 0.0 && self.actuator.is_none()
     }

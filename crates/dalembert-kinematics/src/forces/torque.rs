@@ -42,6 +42,18 @@ impl ForceElement for Torque {
         add_torque(self.reaction_body, -tau, q_e);
     }
 
+    /// A torque that depends on time only: no derivative.
+    fn add_tangent(
+        &self,
+        _t: f64,
+        _bodies: &[Body],
+        _q: &[f64],
+        _qd: &[f64],
+        _out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        true
+    }
+
     fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
         check_body(&self.name, self.body, bodies)?;
         check_body(&self.name, self.reaction_body, bodies)?;

@@ -437,9 +437,9 @@ impl GeneralizedAlpha {
                     lambda: &w.lam,
                 };
                 if !self.matrix.is_differentiated() || escalation == 2 {
-                    self.matrix
+                    self.evaluations += self
+                        .matrix
                         .differentiate(model, &mut self.mass, &mut self.values, &trial);
-                    self.evaluations += self.matrix.differentiation_cost();
                 }
                 if self
                     .matrix
