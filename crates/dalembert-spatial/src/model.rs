@@ -345,6 +345,80 @@ impl MultibodySystem for Model {
         q
     }
 
+    /// Analytic for models without force elements (gravity and the gyroscopic term only; a force
+    /// element makes the integrator difference the residual): `−∂Q/∂ω'` of the gyroscopic
+    /// `−ω' × J ω'` is `[ω']× J − [J ω']×`, and each constraint primitive's wrench derivatives
+    /// ([`crate::joints::second_derivatives::WrenchDerivative`]) are mapped to the velocity
+    /// coordinates: a body-frame rotation `δ'` of body `k` is the global `A_k δ'`, and a body-frame
+    /// torque `A_bᵀ T` changes by `A_bᵀ dT + [A_bᵀ T]× δ'_b`.
+    fn residual_tangent(
+        &self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        (_qdd, lambda): (&[f64], &[f64]),
+        out: &mut dalembert_system::TangentValues<'_>,
+    ) -> bool {
+        use crate::joints::second_derivatives::WrenchDerivative;
+        let n = self.layout.n_v();
+        if !self.forces.is_empty()
+            || v.len() != n
+            || q.len() != self.layout.n_q()
+            || lambda.len() != self.pattern.rows()
+        {
+            return false;
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            let (_, w) = frame::velocity(i, v);
+            let g = w.cross_matrix() * b.inertia - (b.inertia * w).cross_matrix();
+            for r in 0..3 {
+                for c in 0..3 {
+                    out.add_v(NV * i + 3 + r, NV * i + 3 + c, g[(r, c)]);
+                }
+            }
+        }
+        let mut row = 0;
+        for j in self.constraint_data() {
+            let ends = [
+                (j.body_i, self.frame(j.body_i, q, v)),
+                (j.body_j, self.frame(j.body_j, q, v)),
+            ];
+            for prim in &j.primitives {
+                let len = prim.len();
+                let wd = WrenchDerivative::of(prim, t, &ends[0].1, &ends[1].1, &lambda[row..row + len]);
+                row += len;
+                for (e, (body_e, frame_e)) in ends.iter().enumerate() {
+                    let Some(b) = *body_e else { continue };
+                    let at = frame_e.a.transpose();
+                    for (k, (body_k, frame_k)) in ends.iter().enumerate() {
+                        let Some(c) = *body_k else { continue };
+                        let blocks = [
+                            wd.d[2 * e][2 * k],
+                            wd.d[2 * e][2 * k + 1] * frame_k.a,
+                            at * wd.d[2 * e + 1][2 * k],
+                            at * wd.d[2 * e + 1][2 * k + 1] * frame_k.a
+                                + if e == k {
+                                    (at * wd.torque[e]).cross_matrix()
+                                } else {
+                                    nalgebra::Matrix3::zeros()
+                                },
+                        ];
+                        for (blk, (ro, co)) in blocks.iter().zip([(0, 0), (0, 3), (3, 0), (3, 3)]) {
+                            for r in 0..3 {
+                                for cc in 0..3 {
+                                    let x = blk[(r, cc)];
+                                    if x != 0.0 {
+                                        out.add_q(NV * b + ro + r, NV * c + co + cc, x);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        !out.outside()
+    }
+
     fn applied_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         for (i, b) in self.bodies.iter().enumerate() {
             let (_, w) = frame::velocity(i, v);

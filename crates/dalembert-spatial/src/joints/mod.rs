@@ -23,6 +23,7 @@
 //! `d = P_j − P_i`.
 
 pub(crate) mod primitives;
+pub(crate) mod second_derivatives;
 
 use crate::frame::Frame;
 use crate::BodyRef;
