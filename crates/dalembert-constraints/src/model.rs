@@ -102,21 +102,37 @@ impl MultibodySystem for Model {
     }
 
     /// `∂(C_qᵀ λ)/∂q` from each constraint's [`crate::Constraint::weighted_hessian`] and `−∂Q/∂q`,
-    /// `−∂Q/∂q̇` from each force element's [`dalembert_kinematics::ForceElement::add_tangent`];
-    /// `M` is constant here (`false` for a model with an offset centre of mass, whose `M(θ)` and
-    /// quadratic-velocity force are left to finite differences, and for any element without
-    /// analytic derivatives).
+    /// `−∂Q/∂q̇` from each force element's [`dalembert_kinematics::ForceElement::add_tangent`], and
+    /// the terms of offset centres of mass (`∂(M(θ) q̈)/∂θ`, the quadratic-velocity force); `false`
+    /// when some element has no analytic derivatives.
     fn residual_tangent(
         &self,
         t: f64,
         (q, v): (&[f64], &[f64]),
-        (_qdd, lambda): (&[f64], &[f64]),
+        (qdd, lambda): (&[f64], &[f64]),
         out: &mut dalembert_system::TangentValues<'_>,
     ) -> bool {
         use dalembert_kinematics::second_derivatives::add_pair;
         let n = self.layout.n_v();
-        if !self.mass_is_constant || q.len() != n || v.len() != n || lambda.len() != self.num_equations() {
+        if q.len() != n || v.len() != n || qdd.len() != n || lambda.len() != self.num_equations() {
             return false;
+        }
+        // Offset centres of mass (`dalembert_kinematics::mass`): with `a = A c`, the block's
+        // `m perp(a)` has `∂/∂θ = −m a`, and `Q_v = m a θ̇²` has `∂/∂θ = m perp(a) θ̇²`,
+        // `∂/∂θ̇ = 2 m a θ̇`.
+        for (i, body) in self.bodies.iter().enumerate() {
+            if body.center_of_mass == dalembert_kinematics::Vec2::zeros() {
+                continue;
+            }
+            let (k, m) = (3 * i, body.mass);
+            let a = dalembert_kinematics::rotation(q[k + 2]) * body.center_of_mass;
+            let w = v[k + 2];
+            let pa = dalembert_kinematics::perp(a);
+            for r in 0..2 {
+                out.add_q(k + r, k + 2, -m * a[r] * qdd[k + 2] - m * pa[r] * w * w);
+                out.add_v(k + r, k + 2, -2.0 * m * a[r] * w);
+            }
+            out.add_q(k + 2, k + 2, -m * (a.x * qdd[k] + a.y * qdd[k + 1]));
         }
         for (k, c) in self.constraints.constraints().iter().enumerate() {
             let [a, b] = c.bodies();

@@ -1,6 +1,7 @@
 //! The planar model's analytic tangent of the dynamic residual `r = M q̈ + C_qᵀ λ − Q(t, q, q̇)`
-//! (`MultibodySystem::residual_tangent`: constraint second derivatives weighted by `λ`, and every
-//! built-in force element's Jacobians) against central differences of `r` (property test).
+//! (`MultibodySystem::residual_tangent`: constraint second derivatives weighted by `λ`, every
+//! built-in force element's Jacobians, offset centres of mass) against central differences of `r`
+//! (property test).
 //!
 //! Step 1e-6: truncation O(h²) ≈ 1e-12 times the third derivatives, round-off ≈ 1e-16 |r| / h ≈
 //! 1e-8 for residuals of order 100; tolerance 1e-6 relative to the largest entry (at least 1).
@@ -18,12 +19,19 @@ fn b(i: usize) -> BodyRef {
 }
 
 /// Three rods: a pendulum pinned to the ground, a second body on a distance joint and a third on a
-/// prismatic joint, with every built-in force element.
+/// prismatic joint (the last two with their centres of mass off their reference points: `M(θ)`
+/// and the quadratic-velocity force), with every built-in force element.
 fn model(q: &[f64], p: &[f64; 6]) -> Model {
     let bodies = vec![
         Body::rod("a", 1.5, 1.0).unwrap(),
-        Body::rod("b", 0.7, 0.8).unwrap(),
-        Body::rod("c", 2.0, 1.2).unwrap(),
+        Body::rod("b", 0.7, 0.8)
+            .unwrap()
+            .with_center_of_mass(Vec2::new(0.2, -0.1))
+            .unwrap(),
+        Body::rod("c", 2.0, 1.2)
+            .unwrap()
+            .with_center_of_mass(Vec2::new(-0.15, 0.3))
+            .unwrap(),
     ];
     let forces: Vec<Box<dyn ForceElement>> = vec![
         Box::new(Gravity::new(Vec2::new(0.3, -9.81))),

@@ -345,12 +345,11 @@ impl MultibodySystem for Model {
         q
     }
 
-    /// Analytic for models without force elements (gravity and the gyroscopic term only; a force
-    /// element makes the integrator difference the residual): `−∂Q/∂ω'` of the gyroscopic
+    /// Analytic unless a force element is user-written (which makes the integrator difference the
+    /// residual): `−∂Q/∂ω'` of the gyroscopic
     /// `−ω' × J ω'` is `[ω']× J − [J ω']×`, and each constraint primitive's wrench derivatives
-    /// ([`crate::joints::second_derivatives::WrenchDerivative`]) are mapped to the velocity
-    /// coordinates: a body-frame rotation `δ'` of body `k` is the global `A_k δ'`, and a body-frame
-    /// torque `A_bᵀ T` changes by `A_bᵀ dT + [A_bᵀ T]× δ'_b`.
+    /// and each force element's ([`crate::joints::second_derivatives::WrenchDerivative`]) are
+    /// mapped to the velocity coordinates by [`crate::joints::second_derivatives::add_wrench`].
     fn residual_tangent(
         &self,
         t: f64,
@@ -358,13 +357,9 @@ impl MultibodySystem for Model {
         (_qdd, lambda): (&[f64], &[f64]),
         out: &mut dalembert_system::TangentValues<'_>,
     ) -> bool {
-        use crate::joints::second_derivatives::WrenchDerivative;
+        use crate::joints::second_derivatives::{add_wrench, WrenchDerivative};
         let n = self.layout.n_v();
-        if !self.forces.is_empty()
-            || v.len() != n
-            || q.len() != self.layout.n_q()
-            || lambda.len() != self.pattern.rows()
-        {
+        if v.len() != n || q.len() != self.layout.n_q() || lambda.len() != self.pattern.rows() {
             return false;
         }
         for (i, b) in self.bodies.iter().enumerate() {
@@ -386,34 +381,17 @@ impl MultibodySystem for Model {
                 let len = prim.len();
                 let wd = WrenchDerivative::of(prim, t, &ends[0].1, &ends[1].1, &lambda[row..row + len]);
                 row += len;
-                for (e, (body_e, frame_e)) in ends.iter().enumerate() {
-                    let Some(b) = *body_e else { continue };
-                    let at = frame_e.a.transpose();
-                    for (k, (body_k, frame_k)) in ends.iter().enumerate() {
-                        let Some(c) = *body_k else { continue };
-                        let blocks = [
-                            wd.d[2 * e][2 * k],
-                            wd.d[2 * e][2 * k + 1] * frame_k.a,
-                            at * wd.d[2 * e + 1][2 * k],
-                            at * wd.d[2 * e + 1][2 * k + 1] * frame_k.a
-                                + if e == k {
-                                    (at * wd.torque[e]).cross_matrix()
-                                } else {
-                                    nalgebra::Matrix3::zeros()
-                                },
-                        ];
-                        for (blk, (ro, co)) in blocks.iter().zip([(0, 0), (0, 3), (3, 0), (3, 3)]) {
-                            for r in 0..3 {
-                                for cc in 0..3 {
-                                    let x = blk[(r, cc)];
-                                    if x != 0.0 {
-                                        out.add_q(NV * b + ro + r, NV * c + co + cc, x);
-                                    }
-                                }
-                            }
-                        }
-                    }
+                add_wrench(out, [(ends[0].0, &ends[0].1), (ends[1].0, &ends[1].1)], &wd, 1.0);
+            }
+        }
+        let frame = |b: Option<usize>| self.frame(b, q, v);
+        for f in &self.forces {
+            match f.wrench_derivative(t, &frame) {
+                Some((bodies, wd)) => {
+                    let frames = [frame(bodies[0]), frame(bodies[1])];
+                    add_wrench(out, [(bodies[0], &frames[0]), (bodies[1], &frames[1])], &wd, -1.0);
                 }
+                None => return false,
             }
         }
         !out.outside()

@@ -162,7 +162,78 @@ fn joints_are_satisfied_where_they_are_placed() {
     }
 }
 
-/// `r = M v̇ + C_qᵀ λ − Q` at `(t, q, v)` (gravity and the gyroscopic term in `Q`).
+/// Two moving bodies on a revolute joint with the force elements the forced double pendulum of the
+/// other tests lacks: a global point force, a body-axes torque, a spring–damper–actuator between
+/// the two bodies, and the joint's torque and rotational spring–damper.
+fn model_with_forces() -> Model {
+    use dalembert_spatial::forces::ForceFrame;
+    use dalembert_spatial::Force;
+    let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
+    let first = b.body(
+        Body::new("first", 2.0, [0.3, 0.4, 0.5])
+            .at([0.2, -0.1, 0.4])
+            .oriented(from_axis_angle(&Vector3::new(0.3, 1.0, -0.4), 0.7)),
+    );
+    let second = b.body(
+        Body::new("second", 1.0, [0.2, 0.25, 0.3])
+            .at([0.9, 0.3, -0.2])
+            .oriented(from_axis_angle(&Vector3::new(-0.6, 0.2, 1.0), -1.1)),
+    );
+    b.joint(Joint::revolute("j", first, second, [0.5, 0.1, 0.1], [0.2, -0.5, 0.8]));
+    let harmonic = TimeFunction::Harmonic {
+        offset: 0.2,
+        amplitude: 0.7,
+        frequency: 0.9,
+        phase: 0.1,
+    };
+    b.force(Force::PointForce {
+        name: "push".into(),
+        body: first,
+        point: [0.3, -0.2, 0.5],
+        force: [
+            harmonic.clone(),
+            TimeFunction::Constant(-1.5),
+            TimeFunction::Constant(0.8),
+        ],
+        frame: ForceFrame::Global,
+    });
+    b.force(Force::Torque {
+        name: "twist".into(),
+        body: second,
+        torque: [
+            TimeFunction::Constant(0.4),
+            harmonic.clone(),
+            TimeFunction::Constant(-0.6),
+        ],
+        frame: ForceFrame::Body,
+    });
+    b.force(Force::SpringDamper {
+        name: "link".into(),
+        body_i: first,
+        point_i: [-0.4, 0.2, 0.1],
+        body_j: second,
+        point_j: [0.3, 0.5, -0.2],
+        stiffness: 30.0,
+        damping: 2.0,
+        free_length: 0.4,
+        actuator: Some(harmonic.clone()),
+    });
+    b.force(Force::JointTorque {
+        name: "motor".into(),
+        joint: "j".into(),
+        torque: harmonic,
+    });
+    b.force(Force::RotationalSpringDamper {
+        name: "torsion".into(),
+        joint: "j".into(),
+        stiffness: 8.0,
+        damping: 0.6,
+        free_angle: -0.3,
+    });
+    b.build().unwrap()
+}
+
+/// `r = M v̇ + C_qᵀ λ − Q` at `(t, q, v)`.
 fn residual(m: &Model, t: f64, q: &[f64], v: &[f64], vdot: &[f64], lambda: &[f64]) -> Vec<f64> {
     let n = v.len();
     let mut r = vec![0.0; n];
@@ -177,11 +248,12 @@ fn residual(m: &Model, t: f64, q: &[f64], v: &[f64], vdot: &[f64], lambda: &[f64
     r
 }
 
-/// The analytic tangent of the residual (`MultibodySystem::residual_tangent`: each primitive's
-/// wrench derivatives mapped to the body-frame rotation coordinates, and the gyroscopic term)
-/// against central differences of `r` along `q ⊕ ε e_j` and `v + ε e_j`, for every joint kind (to
-/// another body and to the ground) and every driver, at a state off the constraint manifold with
-/// multipliers on every equation. Step 1e-6: truncation ≈ 1e-12, round-off ≈ 1e-16 |r| / h ≈ 1e-9;
+/// The analytic tangent of the residual (`MultibodySystem::residual_tangent`: each primitive's and
+/// force element's wrench derivatives mapped to the body-frame rotation coordinates, and the
+/// gyroscopic term) against central differences of `r` along `q ⊕ ε e_j` and `v + ε e_j`, for every
+/// joint kind (to another body and to the ground), every driver, and the force elements of
+/// [`model_with_forces`], at a state off the constraint manifold with multipliers on every
+/// equation. Step 1e-6: truncation ≈ 1e-12, round-off ≈ 1e-16 |r| / h ≈ 1e-9;
 /// tolerance 1e-6 of the largest entry (at least 1).
 #[test]
 fn residual_tangent_matches_finite_differences() {
@@ -208,6 +280,7 @@ fn residual_tangent_matches_finite_differences() {
             models.push((name, model_with_driver(kind, to_ground, Some(target.clone()))));
         }
     }
+    models.push(("forces on two moving bodies".into(), model_with_forces()));
     let t = 0.3;
     for (name, m) in models {
         let (q, v) = state(&m);

@@ -10,8 +10,10 @@
 
 use super::add_torque;
 use crate::frame::Frame;
+use crate::joints::second_derivatives::{skew, WrenchDerivative};
 use crate::joints::JointData;
 use dalembert_system::TimeFunction;
+use nalgebra::Matrix3;
 use nalgebra::Vector3;
 use std::f64::consts::{PI, TAU};
 
@@ -107,5 +109,47 @@ impl AxisForce {
             ));
         }
         Ok(())
+    }
+}
+
+impl AxisForce {
+    /// `T_j = τ z = −T_i`, `τ = −k (θ − θ₀) − c θ̇ + f(t)`, `z = A_i z'`: with `a = x_j·x_i`,
+    /// `b = x_j·y_i`, `∂θ/∂θ_j = (a x_j×y_i − b x_j×x_i)/(a² + b²) = −∂θ/∂θ_i`; `θ̇ = z·(ω_j − ω_i)`
+    /// has `∂θ̇/∂θ_i = z × ω_j`, `∂θ̇/∂θ_j = ω_j × z`, `∂θ̇/∂ω_j = z = −∂θ̇/∂ω_i`; `∂z/∂θ_i = −[z]×`.
+    pub(crate) fn wrench_derivative(
+        &self,
+        t: f64,
+        frame: &dyn Fn(Option<usize>) -> Frame,
+    ) -> ([Option<usize>; 2], WrenchDerivative) {
+        let (fi, fj) = (frame(self.body_i), frame(self.body_j));
+        let (z, deflection, rate) = self.state(&fi, &fj);
+        let (k, c) = (self.stiffness, self.damping);
+        let tau = -k * deflection - c * rate + self.torque.as_ref().map_or(0.0, |f| f.value(t));
+        let xj = fj.a * self.x_j;
+        let (xi, yi) = (fi.a * self.x_i, fi.a * self.y_i);
+        let (a, b) = (xj.dot(&xi), xj.dot(&yi));
+        let g_theta_j: V3 = (xj.cross(&yi) * a - xj.cross(&xi) * b) / (a * a + b * b);
+        // Rows ∂τ/∂x for the columns r_i, θ_i, r_j, θ_j.
+        let zero = V3::zeros();
+        let dtau = [
+            zero,
+            -(-g_theta_j) * k - z.cross(&fj.w) * c,
+            zero,
+            -g_theta_j * k - fj.w.cross(&z) * c,
+        ];
+        let dtau_v = [zero, z * c, zero, -z * c];
+        let tj = z * tau;
+        let mut w = WrenchDerivative::zero();
+        w.torque = [-tj, tj];
+        for col in 0..4 {
+            let dz = if col == 1 { -skew(&z) } else { Matrix3::zeros() };
+            let dtj = z * dtau[col].transpose() + dz * tau;
+            w.d[3][col] = dtj;
+            w.d[1][col] = -dtj;
+            let dtj_v = z * dtau_v[col].transpose();
+            w.dv[3][col] = dtj_v;
+            w.dv[1][col] = -dtj_v;
+        }
+        ([self.body_i, self.body_j], w)
     }
 }

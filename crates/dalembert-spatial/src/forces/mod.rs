@@ -11,6 +11,7 @@
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
+mod jacobians;
 pub mod user;
 
 use crate::frame::{Frame, NV};

@@ -17,22 +17,27 @@ type M3 = nalgebra::Matrix3<f64>;
 ///
 /// `d[row][col]`: rows `F_i, T_i, F_j, T_j`, columns `r_i, θ_i, r_j, θ_j`. The caller maps the
 /// rotations to body-frame perturbations and the torques to body-frame components.
+/// Force elements use the same form (`crate::forces`), with `dv`: the derivatives with respect to
+/// the ends' global velocities `v` and angular velocities `ω` (columns `v_i, ω_i, v_j, ω_j`; zero for
+/// constraints).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct WrenchDerivative {
     pub d: [[M3; 4]; 4],
+    pub dv: [[M3; 4]; 4],
     /// `T_i`, `T_j` (global).
     pub torque: [V3; 2],
 }
 
 /// `[v]×`.
-fn skew(v: &V3) -> M3 {
+pub(crate) fn skew(v: &V3) -> M3 {
     v.cross_matrix()
 }
 
 impl WrenchDerivative {
-    fn zero() -> Self {
+    pub(crate) fn zero() -> Self {
         WrenchDerivative {
             d: [[M3::zeros(); 4]; 4],
+            dv: [[M3::zeros(); 4]; 4],
             torque: [V3::zeros(); 2],
         }
     }
@@ -115,6 +120,55 @@ impl WrenchDerivative {
                 Self::dot1(&u, &fj.global(&xj), lambda[0])
             }
             Primitive::Coordinate { .. } => Self::zero(),
+        }
+    }
+}
+
+/// Adds `sign` times the wrench derivative `wd` of an element between `ends` (body and frame; the
+/// ground's rows and columns are skipped) to the tangent, in the velocity coordinates `(v, ω')`:
+/// a body-frame rotation `δ'` of body `k` is the global `A_k δ'`, `ω = A_k ω'`, and a body-frame
+/// torque `A_bᵀ T` changes by `A_bᵀ dT + [A_bᵀ T]× δ'_b`. `sign` is `+1` for `C_qᵀ λ`, `−1` for an
+/// applied force (the residual holds `−Q`).
+pub(crate) fn add_wrench(
+    out: &mut dalembert_system::TangentValues<'_>,
+    ends: [(Option<usize>, &Frame); 2],
+    wd: &WrenchDerivative,
+    sign: f64,
+) {
+    use crate::frame::NV;
+    for (e, (body_e, frame_e)) in ends.iter().enumerate() {
+        let Some(b) = *body_e else { continue };
+        let at = frame_e.a.transpose();
+        for (k, (body_k, frame_k)) in ends.iter().enumerate() {
+            let Some(c) = *body_k else { continue };
+            let own = if e == k {
+                skew(&(at * wd.torque[e]))
+            } else {
+                M3::zeros()
+            };
+            for (velocity, d) in [(false, &wd.d), (true, &wd.dv)] {
+                let blocks = [
+                    d[2 * e][2 * k],
+                    d[2 * e][2 * k + 1] * frame_k.a,
+                    at * d[2 * e + 1][2 * k],
+                    at * d[2 * e + 1][2 * k + 1] * frame_k.a + if velocity { M3::zeros() } else { own },
+                ];
+                for (blk, (ro, co)) in blocks.iter().zip([(0, 0), (0, 3), (3, 0), (3, 3)]) {
+                    for r in 0..3 {
+                        for cc in 0..3 {
+                            let x = sign * blk[(r, cc)];
+                            if x != 0.0 {
+                                let (i, j) = (NV * b + ro + r, NV * c + co + cc);
+                                if velocity {
+                                    out.add_v(i, j, x);
+                                } else {
+                                    out.add_q(i, j, x);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
         }
     }
 }
