@@ -364,8 +364,11 @@ pub(crate) fn assembled(
             .map_err(|e| ctx.err(None, e.to_string()))?
             .degrees_of_freedom;
         if independent.len() != dof {
+            // The key's line in the `[simulation]` table (the TOML spans are no longer at hand).
+            let table = (ctx.text.match_indices("[simulation]").map(|(i, _)| i))
+                .find(|&i| i == 0 || ctx.text.as_bytes()[i - 1] == b'\n');
             return Err(ctx.err(
-                None,
+                table.and_then(|t| key_span(ctx.text, &(t..t), "independent")),
                 format!(
                     "[simulation] independent names {} coordinate(s); the mechanism has {dof} degree(s) of freedom",
                     independent.len()
