@@ -200,6 +200,12 @@ pub mod hessian {
         Some(scaled(h, lambda))
     }
 
+    /// The second derivatives of an equation linear in the coordinates (relative angle, body
+    /// coordinate): none.
+    pub fn linear() -> Pair6 {
+        [[0.0; 6]; 6]
+    }
+
     /// `h` with the two bodies' roles exchanged (for a row built with [`Row::swapped`]).
     pub fn swapped(h: Pair6) -> Pair6 {
         let mut out = [[0.0; 6]; 6];

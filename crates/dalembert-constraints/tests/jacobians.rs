@@ -171,6 +171,20 @@ fn check(sys: &ConstraintSystem, t: f64, q: &[f64], v: &[f64], a: &[f64]) -> Res
     Ok(())
 }
 
+/// True for a distance element whose points are closer than 0.3: the distance `|p_j − p_i|` has
+/// derivatives growing like `1/|d|^k`, so near coincident points the finite differences (not the
+/// analytic terms) lose their accuracy; the coincident case is a documented singularity of the
+/// element.
+fn too_close(c: &dyn Constraint, q: &[f64], p: &[f64; 8]) -> bool {
+    if !c.name().ends_with("dist") {
+        return false;
+    }
+    let point = |body, u| dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(body, q, &[]), u);
+    let [a, b] = c.bodies();
+    let (pa, pb) = (point(a, Vec2::new(p[0], p[1])), point(b, Vec2::new(p[2], p[3])));
+    (pb.position - pa.position).norm() < 0.3
+}
+
 fn vec_strategy(len: usize, r: f64) -> impl Strategy<Value = Vec<f64>> {
     prop::collection::vec(-r..r, len)
 }
@@ -189,17 +203,8 @@ proptest! {
     ) {
         let first = if grounded { BodyRef::Ground } else { b(0) };
         for c in constraints(first, &p) {
-            // The distance |p_j − p_i| has derivatives growing like 1/|d|^k: near coincident
-            // points the finite differences (not the analytic terms) lose their accuracy, so
-            // distance elements are checked where |d| ≥ 0.3 (the coincident case is a documented
-            // singularity of the element).
-            if c.name().ends_with("dist") {
-                let [a_ref, b_ref] = c.bodies();
-                let pa = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(a_ref, &q, &[]), Vec2::new(p[0], p[1]));
-                let pb = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(b_ref, &q, &[]), Vec2::new(p[2], p[3]));
-                if (pb.position - pa.position).norm() < 0.3 {
-                    continue;
-                }
+            if too_close(c.as_ref(), &q, &p) {
+                continue;
             }
             let sys = ConstraintSystem::new(2, vec![c]).unwrap();
             check(&sys, t, &q, &v, &a)?;
@@ -269,14 +274,8 @@ proptest! {
     ) {
         let first = if grounded { BodyRef::Ground } else { b(0) };
         for c in constraints(first, &p) {
-            // As above: distance elements where |d| ≥ 0.3.
-            if c.name().ends_with("dist") {
-                let [a_ref, b_ref] = c.bodies();
-                let pa = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(a_ref, &q, &[]), Vec2::new(p[0], p[1]));
-                let pb = dalembert_kinematics::PointState::new(&dalembert_kinematics::BodyState::of(b_ref, &q, &[]), Vec2::new(p[2], p[3]));
-                if (pb.position - pa.position).norm() < 0.3 {
-                    continue;
-                }
+            if too_close(c.as_ref(), &q, &p) {
+                continue;
             }
             let sys = ConstraintSystem::new(2, vec![c]).unwrap();
             check_hessian(&sys, t, &q, &lambda)?;

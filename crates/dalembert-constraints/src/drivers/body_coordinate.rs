@@ -74,12 +74,11 @@ impl Constraint for BodyCoordinate {
     fn weighted_hessian(
         &self,
         _t: f64,
-        first: &BodyState,
-        second: &BodyState,
-        lambda: &[f64],
+        _first: &BodyState,
+        _second: &BodyState,
+        _lambda: &[f64],
     ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
-        let _ = (first, second, lambda);
-        Some([[0.0; 6]; 6])
+        Some(crate::primitives::hessian::linear())
     }
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         second.position

@@ -51,12 +51,11 @@ impl Constraint for JointAngle {
     fn weighted_hessian(
         &self,
         _t: f64,
-        first: &BodyState,
-        second: &BodyState,
-        lambda: &[f64],
+        _first: &BodyState,
+        _second: &BodyState,
+        _lambda: &[f64],
     ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
-        let _ = (first, second, lambda);
-        Some([[0.0; 6]; 6])
+        Some(crate::primitives::hessian::linear())
     }
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         dalembert_kinematics::PointState::new(first, self.pin).position
