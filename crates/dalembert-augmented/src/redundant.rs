@@ -75,16 +75,9 @@ pub(crate) fn checked_solve(
 }
 
 /// The saddle-point factorization on a maximal independent set of equations, and the minimum-norm
-/// multipliers (see the module documentation).
+/// multipliers (see the module documentation). The pattern and values of `C_R` are the
+/// [`MinimumNorm`]'s.
 pub(crate) struct Independent {
-    /// `R`: the kept equations, ascending.
-    rows: Vec<usize>,
-    /// For each entry of `pattern`, its index in the system's values.
-    entries: Vec<usize>,
-    /// The pattern of `C_R`.
-    pattern: ConstraintPattern,
-    /// `C_R`, `γ_R`, … copied from the system's values.
-    values: ConstraintValues,
     solver: SaddlePoint,
     /// Right-hand side, solution and residual of the reduced system (`n + |R|`).
     b: Vec<f64>,
@@ -103,27 +96,21 @@ impl Independent {
         options: &AugmentedOptions,
     ) -> Result<Self, LinalgError> {
         let full = model.constraints().pattern();
-        let n = full.cols();
-        let (pattern, entries) = full.subset(&rows);
+        let minimum_norm = MinimumNorm::new(full, &rows).map_err(|e| LinalgError::Singular(e.0))?;
         let solver = SaddlePoint::on_pattern(
             options.backend,
             mass,
             model.mass_is_constant(),
-            &pattern,
+            minimum_norm.pattern(),
             options.dense_limit,
             options.pivot_tolerance,
         )?;
-        let minimum_norm = MinimumNorm::new(full, &rows).map_err(|e| LinalgError::Singular(e.0))?;
-        let r = rows.len();
+        let k = full.cols() + rows.len();
         Ok(Independent {
-            values: ConstraintValues::new(&pattern, 0),
-            rows,
-            entries,
-            pattern,
             solver,
-            b: vec![0.0; n + r],
-            x: vec![0.0; n + r],
-            r: vec![0.0; n + r],
+            b: vec![0.0; k],
+            x: vec![0.0; k],
+            r: vec![0.0; k],
             minimum_norm,
         })
     }
@@ -141,22 +128,16 @@ impl Independent {
     ) -> bool {
         let n = mass.dim();
         let m = full.c.len();
-        for (k, &row) in self.rows.iter().enumerate() {
-            self.values.c[k] = full.c[row];
-            self.values.c_t[k] = full.c_t[row];
-            self.values.gamma[k] = full.gamma[row];
-        }
-        for (v, &e) in self.values.jacobian.iter_mut().zip(&self.entries) {
-            *v = full.jacobian[e];
-        }
-        if self.solver.factor(mass, &self.pattern, &self.values).is_err() {
+        let mn = &mut self.minimum_norm;
+        mn.load(full);
+        if self.solver.factor(mass, mn.pattern(), mn.values()).is_err() {
             return false;
         }
         self.b[..n].copy_from_slice(&b[..n]);
-        for (j, &row) in self.rows.iter().enumerate() {
+        for (j, &row) in mn.rows().iter().enumerate() {
             self.b[n + j] = b[n + row];
         }
-        let matrix = (mass, &self.pattern, &self.values);
+        let matrix = (mass, mn.pattern(), mn.values());
         if !checked_solve(
             &mut self.solver,
             matrix,
@@ -168,9 +149,9 @@ impl Independent {
         }
         x[..n].copy_from_slice(&self.x[..n]);
         let lambda = &mut x[n..n + m];
-        for (j, &row) in self.rows.iter().enumerate() {
+        for (j, &row) in mn.rows().iter().enumerate() {
             lambda[row] = self.x[n + j];
         }
-        self.minimum_norm.apply(full, lambda).is_ok()
+        mn.apply_loaded(full, lambda).is_ok()
     }
 }

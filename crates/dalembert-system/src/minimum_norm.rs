@@ -63,10 +63,11 @@ pub struct MinimumNorm {
     rows: Vec<usize>,
     /// The dropped equations, each with its entries `(index in the values, column)`.
     dropped: Vec<(usize, Vec<(usize, usize)>)>,
-    /// For each entry of the pattern of `C_R`, its index in the system's values.
+    /// The pattern of `C_R`, and for each of its entries the index in the system's values.
+    pattern: ConstraintPattern,
     entries: Vec<usize>,
-    /// `C_R` values, in the order of its pattern.
-    jacobian: Vec<f64>,
+    /// `C_R` (in `jacobian`; the other fields unused), loaded by [`MinimumNorm::load`].
+    values: ConstraintValues,
     /// Row `k` of `C_R` as `(index in jacobian, column)`.
     row_entries: Vec<Vec<(usize, usize)>>,
     gram: SparseGram,
@@ -115,7 +116,8 @@ impl MinimumNorm {
         let d = dropped.len();
         Ok(MinimumNorm {
             gram: SparseGram::on_pattern(&reduced)?,
-            jacobian: vec![0.0; entries.len()],
+            values: ConstraintValues::new(&reduced, 0),
+            pattern: reduced,
             entries,
             row_entries,
             rows: rows.to_vec(),
@@ -133,10 +135,34 @@ impl MinimumNorm {
         &self.rows
     }
 
+    /// The pattern of `C_R` (row `k` is system row `rows()[k]`).
+    pub fn pattern(&self) -> &ConstraintPattern {
+        &self.pattern
+    }
+
+    /// `C_R` as last loaded (only `jacobian` is filled), for a formulation that factors the
+    /// saddle-point matrix of the kept equations.
+    pub fn values(&self) -> &ConstraintValues {
+        &self.values
+    }
+
+    /// Copies `C_R` from the system's values.
+    pub fn load(&mut self, values: &ConstraintValues) {
+        for (v, &e) in self.values.jacobian.iter_mut().zip(&self.entries) {
+            *v = values.jacobian[e];
+        }
+    }
+
     /// Replaces `lambda` (length `m`: the multipliers solved on the kept rows, anything on the
     /// dropped ones) by the minimum-norm multipliers of the same constraint force, from the
     /// Jacobian in `values`.
     pub fn apply(&mut self, values: &ConstraintValues, lambda: &mut [f64]) -> Result<(), DependenceLost> {
+        self.load(values);
+        self.apply_loaded(values, lambda)
+    }
+
+    /// [`MinimumNorm::apply`] with `C_R` already loaded from `values` ([`MinimumNorm::load`]).
+    pub fn apply_loaded(&mut self, values: &ConstraintValues, lambda: &mut [f64]) -> Result<(), DependenceLost> {
         let m = lambda.len();
         let d = self.dropped.len();
         for &(row, _) in &self.dropped {
@@ -145,11 +171,8 @@ impl MinimumNorm {
         if d == 0 {
             return Ok(());
         }
-        for (v, &e) in self.jacobian.iter_mut().zip(&self.entries) {
-            *v = values.jacobian[e];
-        }
         let unit = |_: usize, r: usize, c: usize| if r == c { 1.0 } else { 0.0 };
-        if self.gram.factor(&self.jacobian, unit, 1e12).is_err() {
+        if self.gram.factor(&self.values.jacobian, unit, 1e12).is_err() {
             return Err(DependenceLost::KeptRowsDependent);
         }
         for k in 0..d {
@@ -162,13 +185,16 @@ impl MinimumNorm {
             }
             // α = (C_R C_Rᵀ)⁻¹ C_R C_dᵀ.
             for (a, row_k) in self.alpha.iter_mut().zip(&self.row_entries) {
-                *a = row_k.iter().map(|&(e, c)| self.jacobian[e] * self.column[c]).sum();
+                *a = row_k
+                    .iter()
+                    .map(|&(e, c)| self.values.jacobian[e] * self.column[c])
+                    .sum();
             }
             self.gram.solve_in_place(&mut self.alpha);
             // Defect C_dᵀ − C_Rᵀ α.
             for (a, row_k) in self.alpha.iter().zip(&self.row_entries) {
                 for &(e, c) in row_k {
-                    self.column[c] -= self.jacobian[e] * a;
+                    self.column[c] -= self.values.jacobian[e] * a;
                 }
             }
             let defect = self.column.iter().fold(0.0f64, |a, v| a.max(v.abs())) / size.max(f64::MIN_POSITIVE);
@@ -218,10 +244,7 @@ pub fn scatter_minimum_norm<S: ConstraintSet + ?Sized>(
     lam_rows: &[f64],
     lambda: &mut [f64],
 ) -> Result<(), DynamicsError> {
-    lambda.iter_mut().for_each(|l| *l = 0.0);
-    for (&row, &l) in rows.iter().zip(lam_rows) {
-        lambda[row] = l;
-    }
+    crate::structure::scatter_rows(rows, lam_rows, lambda);
     if rows.len() == lambda.len() {
         return Ok(());
     }

@@ -240,6 +240,14 @@ pub fn redundancy_error<S: ConstraintSet + ?Sized>(sys: &S, t: f64, values: &Con
     }
 }
 
+/// `lambda[rows[k]] = lam_rows[k]`, zero elsewhere.
+pub fn scatter_rows(rows: &[usize], lam_rows: &[f64], lambda: &mut [f64]) {
+    lambda.iter_mut().for_each(|l| *l = 0.0);
+    for (&row, &l) in rows.iter().zip(lam_rows) {
+        lambda[row] = l;
+    }
+}
+
 /// Writes multipliers `lam_rows` solved on the independent `rows` into `lambda` (zero elsewhere);
 /// when some rows were left out (redundant constraints), replaces them by the minimum-norm
 /// multipliers of the same generalized constraint force `C_qᵀ λ`.
@@ -251,10 +259,7 @@ pub fn scatter_multipliers<S: ConstraintSet + ?Sized>(
     lam_rows: &[f64],
     lambda: &mut [f64],
 ) -> Result<(), crate::DynamicsError> {
-    lambda.iter_mut().for_each(|l| *l = 0.0);
-    for (&row, &l) in rows.iter().zip(lam_rows) {
-        lambda[row] = l;
-    }
+    scatter_rows(rows, lam_rows, lambda);
     if rows.len() < sys.num_equations() {
         let mut f = vec![0.0; sys.num_coordinates()];
         sys.jacobian_transpose_mul_add(values, 1.0, lambda, &mut f);
