@@ -4,8 +4,8 @@ use crate::diagnosis::{diagnose, independent_rows};
 use crate::redundant::{checked_solve, Independent};
 use dalembert_system::linalg::SaddlePoint;
 use dalembert_system::{
-    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
-    RedundancyTreatment,
+    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
+    MultibodySystem, RedundancyTreatment,
 };
 use std::sync::Arc;
 
@@ -52,6 +52,8 @@ pub struct Augmented {
     mass: BlockDiagonal,
     mass_loaded: bool,
     values: ConstraintValues,
+    /// The state `values` hold (the monitor's evaluation reused by the next step's first stage).
+    evaluated_at: EvaluatedAt,
     q_e: Vec<f64>,
     cdot: Vec<f64>,
     x: Vec<f64>,
@@ -94,6 +96,7 @@ impl Augmented {
             mass,
             mass_loaded: false,
             values: model.constraints().values(),
+            evaluated_at: EvaluatedAt::new(model.layout().n_q(), model.layout().n_v()),
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
             x: vec![0.0; n + m],
@@ -191,7 +194,8 @@ impl Augmented {
         }
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.check_forces(t, q, qd, &self.q_e)?;
-        self.model.constraints().evaluate(t, q, qd, &mut self.values);
+        self.evaluated_at
+            .evaluate(self.model.constraints(), t, q, qd, &mut self.values);
         self.model.constraints().check_values(t, &self.values)?;
         Ok(())
     }
@@ -236,7 +240,8 @@ impl Formulation for Augmented {
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
-        self.model.constraints().residuals(t, q, qd, &mut self.values, c, cdot);
+        self.evaluated_at
+            .residuals(self.model.constraints(), (t, q, qd), &mut self.values, c, cdot);
     }
 
     /// Mass-weighted projection with the same saddle-point matrix:

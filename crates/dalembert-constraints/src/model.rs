@@ -165,7 +165,7 @@ impl MultibodySystem for Model {
     /// force overflows or is not a number (found by evaluating each element alone: only on this
     /// failure path).
     fn check_forces(&self, t: f64, q: &[f64], qd: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
-        if q_e.iter().all(|x| x.is_finite()) {
+        if dalembert_system::all_finite(q_e) {
             return Ok(());
         }
         let mut one = vec![0.0; q_e.len()];

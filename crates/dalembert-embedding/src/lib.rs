@@ -22,8 +22,8 @@ use dalembert_system::linalg::{DenseCholesky, DenseLu};
 use dalembert_system::minimum_norm::{scatter_minimum_norm, MinimumNorm};
 use dalembert_system::partition::{Partition, Repartition};
 use dalembert_system::{
-    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, Formulation, FormulationStats, MultibodySystem,
-    PartitionTracker, RedundancyTreatment,
+    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
+    MultibodySystem, PartitionTracker, RedundancyTreatment,
 };
 use std::sync::Arc;
 
@@ -70,6 +70,8 @@ pub struct Embedding {
     tracker: PartitionTracker,
     mass: BlockDiagonal,
     values: ConstraintValues,
+    /// The state `values` hold (the monitor's evaluation reused by the next step's first stage).
+    evaluated_at: EvaluatedAt,
     q_e: Vec<f64>,
     cdot: Vec<f64>,
     rhs: Vec<f64>,
@@ -143,6 +145,7 @@ impl Embedding {
         Embedding {
             mass: model.mass_storage(),
             values: model.constraints().values(),
+            evaluated_at: EvaluatedAt::new(model.layout().n_q(), model.layout().n_v()),
             q_e: vec![0.0; n],
             cdot: vec![0.0; m],
             rhs: vec![0.0; m],
@@ -175,7 +178,8 @@ impl Embedding {
         self.model.mass(q, &mut self.mass);
         self.model.applied_forces(t, q, qd, &mut self.q_e);
         self.model.check_forces(t, q, qd, &self.q_e)?;
-        self.model.constraints().evaluate(t, q, qd, &mut self.values);
+        self.evaluated_at
+            .evaluate(self.model.constraints(), t, q, qd, &mut self.values);
         self.model.constraints().check_values(t, &self.values)?;
         Ok(())
     }
@@ -311,7 +315,8 @@ impl Formulation for Embedding {
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
-        self.model.constraints().residuals(t, q, qd, &mut self.values, c, cdot);
+        self.evaluated_at
+            .residuals(self.model.constraints(), (t, q, qd), &mut self.values, c, cdot);
     }
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
@@ -319,6 +324,7 @@ impl Formulation for Embedding {
     /// singular positions, where no partition is well conditioned, the mass-orthogonal projection
     /// (`PartitionTracker::project_or_hand_over`, counted in `FormulationStats::handovers`).
     fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
+        self.evaluated_at.invalidate();
         self.tracker
             .project_or_hand_over(t, &*self.model, &mut self.values, (q, qd), tolerance, &mut self.stats)
     }

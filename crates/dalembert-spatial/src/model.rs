@@ -24,7 +24,7 @@ use dalembert_system::{
     BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, Layout, ModelError,
     MultibodySystem,
 };
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// Collects bodies, joints and forces; [`ModelBuilder::build`] checks them and makes the model.
 #[derive(Debug, Clone, Default)]
@@ -172,6 +172,25 @@ pub struct Model {
 /// Most rows a joint primitive has.
 const MAX_PRIMITIVE_ROWS: usize = 3;
 
+/// Values of one cached [`Frame`]: `r`, `A` (column-major), `v`, `ω`.
+const FRAME_LEN: usize = 18;
+
+fn store_frame(f: &Frame, s: &mut [f64]) {
+    s[..3].copy_from_slice(f.r.as_slice());
+    s[3..12].copy_from_slice(f.a.as_slice());
+    s[12..15].copy_from_slice(f.v.as_slice());
+    s[15..18].copy_from_slice(f.w.as_slice());
+}
+
+fn load_frame(s: &[f64]) -> Frame {
+    Frame {
+        r: Vector3::from_column_slice(&s[..3]),
+        a: Matrix3::from_column_slice(&s[3..12]),
+        v: Vector3::from_column_slice(&s[12..15]),
+        w: Vector3::from_column_slice(&s[15..18]),
+    }
+}
+
 impl Model {
     /// The bodies, in layout order.
     pub fn bodies(&self) -> &[Body] {
@@ -265,16 +284,35 @@ impl ConstraintSet for Model {
         }
     }
 
+    /// Storage sized for this system; the scratch holds each body's [`Frame`] (`FRAME_LEN` values).
     fn values(&self) -> ConstraintValues {
-        ConstraintValues::new(&self.pattern, 0)
+        ConstraintValues::new(&self.pattern, FRAME_LEN * self.bodies.len())
     }
 
+    /// Evaluates every constraint, each body's frame computed once (into `out.scratch` when it has
+    /// room, as [`Self::values`] gives it) rather than once per joint side. Allocates nothing.
     fn evaluate(&self, t: f64, q: &[f64], v: &[f64], out: &mut ConstraintValues) {
         let mut row = 0;
         let mut entry = 0;
         let mut rows = [Row::default(); MAX_PRIMITIVE_ROWS];
+        let cached = out.scratch.len() >= FRAME_LEN * self.bodies.len();
+        if cached {
+            for (b, s) in out
+                .scratch
+                .chunks_exact_mut(FRAME_LEN)
+                .take(self.bodies.len())
+                .enumerate()
+            {
+                store_frame(&Frame::of(b, q, v), s);
+            }
+        }
+        let scratch = std::mem::take(&mut out.scratch);
+        let frame = |b: Option<usize>| match b {
+            Some(b) if cached => load_frame(&scratch[FRAME_LEN * b..FRAME_LEN * (b + 1)]),
+            _ => self.frame(b, q, v),
+        };
         for j in self.constraint_data() {
-            let (fi, fj) = (self.frame(j.body_i, q, v), self.frame(j.body_j, q, v));
+            let (fi, fj) = (frame(j.body_i), frame(j.body_j));
             for prim in &j.primitives {
                 let n = prim.len();
                 prim.evaluate(t, &fi, &fj, &mut rows[..n]);
@@ -295,6 +333,7 @@ impl ConstraintSet for Model {
                 }
             }
         }
+        out.scratch = scratch;
     }
 
     fn correct_positions(&self, q: &mut [f64], delta: &[f64]) {
@@ -421,6 +460,9 @@ impl MultibodySystem for Model {
                 element: format!("force '{name}'"),
                 what,
             })?;
+        }
+        if dalembert_system::all_finite(q_e) {
+            return Ok(());
         }
         match q_e.iter().position(|x| !x.is_finite()) {
             None => Ok(()),

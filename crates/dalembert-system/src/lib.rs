@@ -16,6 +16,8 @@
 pub mod blocks;
 pub mod constraint_set;
 pub mod error;
+pub mod evaluated_at;
+pub mod finite;
 pub mod formulation;
 pub mod gram;
 pub mod inverse;
@@ -34,6 +36,8 @@ pub mod time_function;
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
 pub use error::{ConstraintError, EquationRef};
+pub use evaluated_at::EvaluatedAt;
+pub use finite::all_finite;
 pub use formulation::{Baumgarte, DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment};
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use layout::{BodyBlock, Layout};

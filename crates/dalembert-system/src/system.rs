@@ -130,6 +130,9 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
                 return Err(DynamicsError::WrongLength { what, expected, got });
             }
         }
+        if crate::all_finite(q) && crate::all_finite(v) {
+            return Ok(());
+        }
         if let Some(i) = q.iter().position(|x| !x.is_finite()) {
             return Err(DynamicsError::NonFinite {
                 time: t,

@@ -58,7 +58,8 @@ pub enum Backend {
     SparseSchur,
     /// Block `L D Lᵀ` of the whole matrix along the body–joint tree (no fill-in: linear cost with
     /// small dense blocks), loops closed by the Schur complement of the cut equations (needs
-    /// positive definite mass blocks).
+    /// positive definite mass blocks of 3 or 6 velocities, the planar and spatial bodies, and at
+    /// most as many equations between two bodies as a body has velocities).
     Tree,
 }
 
@@ -140,7 +141,7 @@ fn positive_definite(mass: &BlockDiagonal) -> bool {
 pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPattern, dense_limit: usize) -> Backend {
     let (n, m) = (mass.dim(), pattern.rows());
     let spd = positive_definite(mass);
-    let loop_free = || tree::cut_rows(pattern, mass.num_blocks()) == Some(0);
+    let loop_free = || tree::cut_rows(pattern, mass) == Some(0);
     match backend {
         Backend::Auto if spd && loop_free() => Backend::Tree,
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
@@ -232,7 +233,7 @@ impl SaddlePoint {
                 Kind::Tree(Box::new(TreeKkt::new(mass, pattern, pivot_tolerance).ok_or_else(
                     || {
                         LinalgError::Singular(
-                            "the tree back end needs every equation on one or more distinct bodies".into(),
+                            "the tree back end needs every equation on one or more distinct bodies, bodies of 3 or 6 velocities, and at most as many equations between two bodies (or a body and the ground) as a body has velocities".into(),
                         )
                     },
                 )?))

@@ -201,10 +201,22 @@ fn find(parent: &mut [usize], mut a: usize) -> usize {
 }
 
 /// Number of equations the tree back end would cut to close loops, or `None` when it cannot run
-/// on this pattern (an equation on no body, or listing a body twice).
-pub(crate) fn cut_rows(pattern: &ConstraintPattern, bodies: usize) -> Option<usize> {
+/// on this pattern (an equation on no body, or listing a body twice, or blocks of sizes its
+/// kernels are not made for: [`kernels::supported`]).
+pub(crate) fn cut_rows(pattern: &ConstraintPattern, mass: &BlockDiagonal) -> Option<usize> {
     let groups = group_equations(pattern)?;
-    let tree = spanning_forest(&groups, bodies);
+    let tree = spanning_forest(&groups, mass.num_blocks());
+    let sizes_fit = (0..mass.num_blocks()).all(|b| kernels::supported(mass.size(b), 0))
+        && (0..groups.rows.len()).filter(|&g| tree[g]).all(|g| {
+            let rows = groups.rows[g].len();
+            (groups.bodies[g].len() == 2 || kernels::supported(rows, 0))
+                && groups.bodies[g]
+                    .iter()
+                    .all(|&b| kernels::supported(rows, mass.size(b)) && kernels::supported(mass.size(b), rows))
+        });
+    if !sizes_fit {
+        return None;
+    }
     Some(
         (0..groups.rows.len())
             .filter(|&g| !tree[g])
@@ -287,6 +299,10 @@ impl TreeKkt {
             edge_entries,
             index,
         } = f;
+        let parent_size = |nd: &Node| nd.parent.map_or(0, |p| nodes[p].size);
+        if !nodes.iter().all(|nd| kernels::supported(nd.size, parent_size(nd))) {
+            return None;
+        }
         // Storage offsets.
         let (mut d_len, mut w_len) = (0, 0);
         for i in 0..nodes.len() {
