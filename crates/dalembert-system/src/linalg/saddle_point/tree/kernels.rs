@@ -89,7 +89,7 @@ fn eliminate_sized<const SI: usize, const SP: usize>(
 ) -> Result<small_ldlt::Pivots, f64> {
     let mut d = [[0.0f64; SI]; SI];
     d.as_flattened_mut().copy_from_slice(&di[..SI * SI]);
-    let pivots = small_ldlt::factor(d.as_flattened_mut(), SI, sign, tolerance)?;
+    let pivots = small_ldlt::factor_fixed(&mut d, sign, tolerance)?;
     di[..SI * SI].copy_from_slice(d.as_flattened());
     let Some((k, w, dp)) = parent else { return Ok(pivots) };
     // Z = L⁻¹ K (unit L), row by row.
