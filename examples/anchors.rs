@@ -9,7 +9,15 @@
 //! ANCHORS_EXTRA="cargo run --release --manifest-path $PROJECT/Cargo.toml --example anchors" python run_all.py
 //! ```
 //!
-//! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once.
+//! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once;
+//! `ANCHORS_FRONT=1` runs the work–precision variants instead (RK4 at steps of 2 to 50 ms,
+//! Dormand–Prince with projection at tolerances 1e-3 to 1e-9): with the same error measure and
+//! timing as the engines, they give dalembert's front against the engines' points at 1 ms. Run it
+//! as a second `ANCHORS_EXTRA` command:
+//!
+//! ```sh
+//! ANCHORS_EXTRA="$BIN; ANCHORS_FRONT=1 $BIN" python run_all.py   # BIN=<project>/target/release/examples/anchors
+//! ```
 
 use dalembert::augmented::Augmented;
 use dalembert::constraints::Formulation;
@@ -86,6 +94,39 @@ fn variants() -> Vec<Variant> {
     ]
 }
 
+/// The work–precision variants (`ANCHORS_FRONT`): explicit methods at larger steps and an adaptive
+/// method at several tolerances, output every 10 ms (or every step, above 10 ms) so that t = 1 s
+/// is a sample.
+fn front_variants() -> Vec<Variant> {
+    let proj = Stabilization::Projection { tolerance: 1e-10 };
+    let rk4 = |name: &'static str, h: f64| Variant {
+        name,
+        integrator: "RK4",
+        options: IntegratorOptions::fixed(Method::rk4(), h, h.max(0.01)),
+    };
+    let dopri = |name: &'static str, tol: f64| {
+        let mut options = IntegratorOptions::fixed(Method::dopri5(tol, tol), 1e-3, 0.01).with_stabilization(proj);
+        // Steps as long as the error allows (dense output gives the 10 ms samples).
+        options.max_step = 0.1;
+        Variant {
+            name,
+            integrator: "DOPRI5",
+            options,
+        }
+    };
+    vec![
+        rk4("augmented RK4 h=2ms", 2e-3),
+        rk4("augmented RK4 h=5ms", 5e-3),
+        rk4("augmented RK4 h=10ms", 1e-2),
+        rk4("augmented RK4 h=20ms", 2e-2),
+        rk4("augmented RK4 h=50ms", 5e-2),
+        dopri("augmented DOPRI5+proj tol=1e-3", 1e-3),
+        dopri("augmented DOPRI5+proj tol=1e-5", 1e-5),
+        dopri("augmented DOPRI5+proj tol=1e-7", 1e-7),
+        dopri("augmented DOPRI5+proj tol=1e-9", 1e-9),
+    ]
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -120,6 +161,8 @@ struct RunResult {
     de_10s: f64,
     de_max: f64,
     cviol: f64,
+    /// Steps taken over the 10 s.
+    steps: u64,
 }
 
 fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
@@ -146,6 +189,7 @@ fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
         de_10s: de_last,
         de_max,
         cviol: stats.max_constraint_violation,
+        steps: stats.steps,
     }
 }
 
@@ -211,7 +255,8 @@ fn main() {
     for (scene, n, mech) in &scenes {
         let key = format!("{scene}/{n}");
         let fd = fd_us(mech);
-        for v in variants() {
+        let front = std::env::var("ANCHORS_FRONT").is_ok();
+        for v in if front { front_variants() } else { variants() } {
             let repeats = if quick { 1 } else { 3 };
             let runs: Vec<RunResult> = (0..repeats).map(|_| simulate(mech, &v.options)).collect();
             let sim_s = median(runs.iter().map(|r| r.sim_s).collect());
@@ -233,6 +278,8 @@ fn main() {
                 "dE_10s": r.de_10s,
                 "dE_max": r.de_max,
                 "cviol_max": r.cviol,
+                "dt": v.options.step,
+                "steps": r.steps,
             });
             if let Some(msg) = &r.failure {
                 // A failed run has no meaningful time or accuracy: report the cause instead.
