@@ -153,7 +153,9 @@ pub trait ConstraintSet: Send + Sync + std::fmt::Debug {
     fn values(&self) -> ConstraintValues;
 
     /// Evaluates `C`, `C_q`, `C_t` and `Q_d` at `(t, q, v)` into `out` (`v` may be empty for zero
-    /// velocity, in which case `Q_d` holds only the `C_tt` part). Must not allocate.
+    /// velocity, in which case `Q_d` holds only the `C_tt` part). Must not allocate. The values must
+    /// depend on `(t, q, v)` alone: the formulations reuse them at an unchanged state
+    /// ([`crate::EvaluatedAt`]).
     fn evaluate(&self, t: f64, q: &[f64], v: &[f64], out: &mut ConstraintValues);
 
     /// `q ← q ⊕ Δ` for a correction `Δ` in velocity coordinates (default `q + Δ`).
