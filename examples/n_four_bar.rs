@@ -49,11 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
     ]);
     println!("N-four-bar, N = {n}, {end} s; error = largest |B0 - exact| over 400 output steps");
-    for kind in [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ] {
+    for kind in FormulationKind::ALL {
         for (name, options) in &settings {
             if only.as_deref().is_some_and(|o| !name.contains(o)) {
                 continue;

@@ -24,6 +24,13 @@ pub enum FormulationKind {
 }
 
 impl FormulationKind {
+    /// Every formulation, in the order of `FORMULATIONS.md`.
+    pub const ALL: [FormulationKind; 3] = [
+        FormulationKind::Augmented,
+        FormulationKind::Embedding,
+        FormulationKind::Amalgamated,
+    ];
+
     /// Name used in reports and scene files.
     pub fn name(&self) -> &'static str {
         match self {

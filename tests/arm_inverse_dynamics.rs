@@ -214,11 +214,7 @@ fn every_formulation_runs_the_driven_arm_to_the_same_loads() {
     // With every joint driven the forward run is kinematic; its output rows carry the same
     // efforts and reactions, from each formulation's own multipliers.
     let links = arm();
-    for f in [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ] {
+    for f in FormulationKind::ALL {
         let s = scene()
             .with_values(&[
                 ("simulation.end", 1.0.into()),

@@ -78,11 +78,7 @@ fn closed_form_is_the_scene() {
 #[test]
 fn fixed_step_methods_keep_the_smooth_branch_through_five_turns() {
     let end = 5.0 * PI;
-    for kind in [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ] {
+    for kind in FormulationKind::ALL {
         for (method, treatment) in [(Method::rk4(), PROJECTION), (Method::symplectic_euler(), PROJECTION)] {
             let err = run(kind, method, treatment, end).unwrap_or_else(|e| panic!("{kind:?} {method:?}: {e}"));
             println!("{kind:?} {method:?}: largest angle error {err:.2e}");
@@ -111,11 +107,7 @@ fn dopri5_bridges_the_change_points_on_the_branch() {
     // checked one step against two half steps (integrators/src/driver/bridge.rs). Measured
     // 2026-11-25: 1.8e-10 rad with every formulation over the ten change points of five turns, as
     // RK4 at 1 ms (the fixed-step test above); the bound is the rows' 1e-6 of the other tests here.
-    for kind in [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ] {
+    for kind in FormulationKind::ALL {
         let err = run(kind, Method::dopri5(1e-8, 1e-10), PROJECTION, 5.0 * PI);
         let err = err.unwrap_or_else(|e| panic!("{kind:?}: {e}"));
         assert!(err < 1e-6, "{kind:?}: angle error {err:.2e}");

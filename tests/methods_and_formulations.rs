@@ -24,11 +24,7 @@ fn every_method_runs_on_every_formulation() {
             opts = opts.with_stabilization(Stabilization::Baumgarte);
         }
         let mut finals = Vec::new();
-        for kind in [
-            FormulationKind::Augmented,
-            FormulationKind::Embedding,
-            FormulationKind::Amalgamated,
-        ] {
+        for kind in FormulationKind::ALL {
             let sim = Simulation {
                 model: mech.model.clone().into(),
                 q: mech.q.clone(),

@@ -60,12 +60,6 @@ fn b0_error_with(n: usize, kind: FormulationKind, options: IntegratorOptions) ->
     (worst, result.map(|_| ()))
 }
 
-const KINDS: [FormulationKind; 3] = [
-    FormulationKind::Augmented,
-    FormulationKind::Embedding,
-    FormulationKind::Amalgamated,
-];
-
 #[test]
 fn the_scene_starts_on_the_reduction() {
     // Assembled start: cranks vertical, B₀ at (0, 1) moving at ẋ = 1 m/s exactly (the given crank
@@ -109,7 +103,7 @@ fn reference_conserves_the_reduced_energy() {
 fn two_windows_within_the_target_with_every_formulation() {
     // Target 1e-6 (issue 12). Measured at h = 1 ms (2026-11-25): augmented 1.1e-8, embedding and
     // amalgamated 3.5e-9 (1.6e-8 before the hand-over to the mass-orthogonal projection).
-    for kind in KINDS {
+    for kind in FormulationKind::ALL {
         let e = b0_error(2, kind, 1e-3).unwrap();
         assert!(e < 1e-6, "{}: B0 error {e:e}", kind.name());
     }
@@ -122,7 +116,7 @@ fn one_and_four_windows() {
     // hand-over, the embedding and amalgamated gave 2.2e-8 and 3.3e-8; the augmented 1.9e-7 before
     // its Schur complement fell back to LU when ill-conditioned). Asserted: 1e-6 for N = 1,
     // and the benchmark's 1e-3 for N = 4.
-    for kind in KINDS {
+    for kind in FormulationKind::ALL {
         let e = b0_error(1, kind, 1e-3).unwrap();
         assert!(e < 1e-6, "N = 1, {}: B0 error {e:e}", kind.name());
         let e = b0_error(4, kind, 1e-3).unwrap();
@@ -139,7 +133,7 @@ fn forty_windows_within_the_benchmark_with_every_formulation() {
     // 4 s, since their projection hands over to the mass-orthogonal one at the passes
     // (`dalembert_system::partition::MassOrthogonalProjection`; coordinate partitioning alone gave
     // 1.7e-3).
-    for kind in KINDS {
+    for kind in FormulationKind::ALL {
         let e = b0_error(40, kind, 1e-3).unwrap();
         assert!(e < 1e-3, "{}: B0 error {e:e}", kind.name());
     }
@@ -176,7 +170,7 @@ fn a_branch_switch_stops_the_run() {
     // example). Runs that kept the branch do not stop (N = 1, 2,
     // 4 and 40 at h = 2, 1 ms, and those in `smaller_steps_keep_the_branch_or_stop`).
     keeps_the_branch_or_stops(40, FormulationKind::Augmented, 5e-4);
-    for kind in KINDS {
+    for kind in FormulationKind::ALL {
         keeps_the_branch_or_stops(2, kind, 1e-4);
     }
     keeps_the_branch_or_stops(4, FormulationKind::Augmented, 2.5e-4);
@@ -212,7 +206,7 @@ fn smaller_steps_keep_the_branch_or_stop() {
     // position: measured 1.7e-9 / 2.4e-8 (augmented, h = 0.5 / 0.25 ms) and 1.1e-7 / 2.4e-8
     // (embedding, amalgamated); at h = 0.1 ms every formulation now stops with `BranchSwitch`
     // (before: 0.14 and 2.7e-2 off, silently).
-    for kind in KINDS {
+    for kind in FormulationKind::ALL {
         for h in [5e-4, 2.5e-4, 1e-4] {
             match b0_error(2, kind, h) {
                 Ok(e) => assert!(e < 1e-6, "{} h = {h}: B0 error {e:e}", kind.name()),

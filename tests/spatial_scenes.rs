@@ -98,11 +98,7 @@ fn spatial_scene_files_match_the_anchors_reference() {
         let bodies = scene.model.body_names();
         let rows = reference(name);
         assert_eq!(rows.len(), bodies.len(), "{name}");
-        for f in [
-            FormulationKind::Augmented,
-            FormulationKind::Embedding,
-            FormulationKind::Amalgamated,
-        ] {
+        for f in FormulationKind::ALL {
             let (pos, vel) = errors(&run_to_one_second(scene, f), &bodies, &rows);
             assert!(
                 pos < 1e-7 && vel < 1e-6,
@@ -249,11 +245,7 @@ fn bricard_moves_with_the_degree_of_freedom_grubler_does_not_count() {
         assert!((ma - external).abs() < 1e-10, "{axis}: Σ m a = {ma}, forces {external}");
     }
     let mut runs = Vec::new();
-    for f in [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ] {
+    for f in FormulationKind::ALL {
         let s = scene
             .with_values(&[
                 ("simulation.end", 1.0.into()),
@@ -444,11 +436,7 @@ fn bricard_runs_with_dopri5_and_generalized_alpha() {
     let scene = Scene::from_path(root().join("scenes/bricard.toml")).unwrap();
     let reference = scene.record(&AtomicBool::new(false));
     reference.outcome.unwrap();
-    for f in [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ] {
+    for f in FormulationKind::ALL {
         let s = scene
             .with_values(&[
                 ("simulation.integrator", SceneValue::Text("dopri5".into())),

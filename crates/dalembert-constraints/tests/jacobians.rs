@@ -185,6 +185,17 @@ fn too_close(c: &dyn Constraint, q: &[f64], p: &[f64; 8]) -> bool {
     (pb.position - pa.position).norm() < 0.3
 }
 
+/// Each constraint of [`constraints`] (from the ground or body 0 to body 1) alone in a system,
+/// except those [`too_close`] at `q`.
+fn systems(grounded: bool, q: &[f64], p: &[f64; 8]) -> Vec<ConstraintSystem> {
+    let first = if grounded { BodyRef::Ground } else { b(0) };
+    constraints(first, p)
+        .into_iter()
+        .filter(|c| !too_close(c.as_ref(), q, p))
+        .map(|c| ConstraintSystem::new(2, vec![c]).unwrap())
+        .collect()
+}
+
 fn vec_strategy(len: usize, r: f64) -> impl Strategy<Value = Vec<f64>> {
     prop::collection::vec(-r..r, len)
 }
@@ -201,12 +212,7 @@ proptest! {
         t in 0.0f64..2.0,
         grounded in any::<bool>(),
     ) {
-        let first = if grounded { BodyRef::Ground } else { b(0) };
-        for c in constraints(first, &p) {
-            if too_close(c.as_ref(), &q, &p) {
-                continue;
-            }
-            let sys = ConstraintSystem::new(2, vec![c]).unwrap();
+        for sys in systems(grounded, &q, &p) {
             check(&sys, t, &q, &v, &a)?;
         }
     }
@@ -272,12 +278,7 @@ proptest! {
         t in 0.0f64..2.0,
         grounded in any::<bool>(),
     ) {
-        let first = if grounded { BodyRef::Ground } else { b(0) };
-        for c in constraints(first, &p) {
-            if too_close(c.as_ref(), &q, &p) {
-                continue;
-            }
-            let sys = ConstraintSystem::new(2, vec![c]).unwrap();
+        for sys in systems(grounded, &q, &p) {
             check_hessian(&sys, t, &q, &lambda)?;
         }
     }

@@ -88,18 +88,11 @@ fn model(q: &[f64], p: &[f64; 6]) -> Model {
     Model::new(bodies, forces, constraints).unwrap()
 }
 
+/// `r = M q̈ + C_qᵀ λ − Q` at `(t, q, v)` (the seam's `dynamics_residual`, fresh storage).
 fn residual(m: &Model, t: f64, q: &[f64], v: &[f64], qdd: &[f64], lambda: &[f64]) -> Vec<f64> {
-    let n = v.len();
-    let mut r = vec![0.0; n];
-    m.applied_forces(t, q, v, &mut r);
-    r.iter_mut().for_each(|x| *x = -*x);
-    let mut mass = m.mass_storage();
-    m.mass(q, &mut mass);
-    mass.mul_add(1.0, qdd, &mut r);
-    let sys = m.constraints();
-    let mut vals = sys.values();
-    sys.evaluate(t, q, v, &mut vals);
-    sys.jacobian_transpose_mul_add(&vals, 1.0, lambda, &mut r);
+    let mut r = vec![0.0; v.len()];
+    let (mut mass, mut values) = (m.mass_storage(), m.constraints().values());
+    m.dynamics_residual(t, (q, v), (qdd, lambda), (&mut mass, &mut values), &mut r);
     r
 }
 

@@ -17,14 +17,8 @@ use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, M
 use dalembert_system::{ConstraintSet, MultibodySystem, TimeFunction};
 use nalgebra::Vector3;
 
-/// Two bodies in general poses, joined by `kind` (or the second joined to the ground).
-fn model(kind: JointKind, to_ground: bool) -> Model {
-    model_with_driver(kind, to_ground, None)
-}
-
-/// [`model`] with a driver of the joint (named "j") or of a body coordinate.
-fn model_with_driver(kind: JointKind, to_ground: bool, driver: Option<DriverTarget>) -> Model {
-    let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
+/// The two bodies of every model here, in general poses.
+fn two_bodies(b: &mut ModelBuilder) -> (BodyRef, BodyRef) {
     let first = b.body(
         Body::new("first", 2.0, [0.3, 0.4, 0.5])
             .at([0.2, -0.1, 0.4])
@@ -35,6 +29,18 @@ fn model_with_driver(kind: JointKind, to_ground: bool, driver: Option<DriverTarg
             .at([0.9, 0.3, -0.2])
             .oriented(from_axis_angle(&Vector3::new(-0.6, 0.2, 1.0), -1.1)),
     );
+    (first, second)
+}
+
+/// Two bodies in general poses, joined by `kind` (or the second joined to the ground).
+fn model(kind: JointKind, to_ground: bool) -> Model {
+    model_with_driver(kind, to_ground, None)
+}
+
+/// [`model`] with a driver of the joint (named "j") or of a body coordinate.
+fn model_with_driver(kind: JointKind, to_ground: bool, driver: Option<DriverTarget>) -> Model {
+    let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
+    let (first, second) = two_bodies(&mut b);
     let i = if to_ground { BodyRef::Ground } else { first };
     let (point, axis, axis_j) = ([0.5, 0.1, 0.1], [0.2, -0.5, 0.8], [0.8, 0.4, 0.05]);
     // The second axis perpendicular to the first (universal and perpendicular joints).
@@ -169,16 +175,7 @@ fn model_with_forces() -> Model {
     use dalembert_spatial::forces::ForceFrame;
     use dalembert_spatial::Force;
     let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
-    let first = b.body(
-        Body::new("first", 2.0, [0.3, 0.4, 0.5])
-            .at([0.2, -0.1, 0.4])
-            .oriented(from_axis_angle(&Vector3::new(0.3, 1.0, -0.4), 0.7)),
-    );
-    let second = b.body(
-        Body::new("second", 1.0, [0.2, 0.25, 0.3])
-            .at([0.9, 0.3, -0.2])
-            .oriented(from_axis_angle(&Vector3::new(-0.6, 0.2, 1.0), -1.1)),
-    );
+    let (first, second) = two_bodies(&mut b);
     b.joint(Joint::revolute("j", first, second, [0.5, 0.1, 0.1], [0.2, -0.5, 0.8]));
     let harmonic = TimeFunction::Harmonic {
         offset: 0.2,
@@ -233,18 +230,11 @@ fn model_with_forces() -> Model {
     b.build().unwrap()
 }
 
-/// `r = M v̇ + C_qᵀ λ − Q` at `(t, q, v)`.
+/// `r = M v̇ + C_qᵀ λ − Q` at `(t, q, v)` (the seam's `dynamics_residual`, fresh storage).
 fn residual(m: &Model, t: f64, q: &[f64], v: &[f64], vdot: &[f64], lambda: &[f64]) -> Vec<f64> {
-    let n = v.len();
-    let mut r = vec![0.0; n];
-    m.applied_forces(t, q, v, &mut r);
-    r.iter_mut().for_each(|x| *x = -*x);
-    let mut mass = m.mass_storage();
-    m.mass(q, &mut mass);
-    mass.mul_add(1.0, vdot, &mut r);
-    let mut values = m.values();
-    m.evaluate(t, q, v, &mut values);
-    m.jacobian_transpose_mul_add(&values, 1.0, lambda, &mut r);
+    let mut r = vec![0.0; v.len()];
+    let (mut mass, mut values) = (m.mass_storage(), m.constraints().values());
+    m.dynamics_residual(t, (q, v), (vdot, lambda), (&mut mass, &mut values), &mut r);
     r
 }
 

@@ -75,6 +75,26 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         None
     }
 
+    /// The dynamic residual `r = M(q) q̈ + C_qᵀ λ − Q(t, q, v)` into `r` (length `n_v`), with `mass`
+    /// and `values` (from [`Self::mass_storage`] and the constraint set's `values()`) refreshed at
+    /// `(t, q, v)`. Allocates nothing: implicit integrators call it in their Newton iterations.
+    fn dynamics_residual(
+        &self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        (qdd, lambda): (&[f64], &[f64]),
+        (mass, values): (&mut BlockDiagonal, &mut crate::ConstraintValues),
+        r: &mut [f64],
+    ) {
+        self.applied_forces(t, q, v, r);
+        r.iter_mut().for_each(|x| *x = -*x);
+        self.mass(q, mass);
+        mass.mul_add(1.0, qdd, r);
+        let sys = self.constraints();
+        sys.evaluate(t, q, v, values);
+        sys.jacobian_transpose_mul_add(values, 1.0, lambda, r);
+    }
+
     /// Adds the analytic tangent of the dynamic residual `r = M(q) q̈ + C_qᵀ λ − Q(t, q, v)` at
     /// `(t, q, v, q̈, λ)` to `out`: `∂r/∂q` (along the velocity coordinates, `q ⊕ ε e_j`) and
     /// `∂r/∂v`, on the pattern of [`crate::TangentPattern`]. Returns `false` when some element has

@@ -283,13 +283,7 @@ fn residual(
     out: &mut [f64],
 ) {
     let (r, c) = out.split_at_mut(qd.len());
-    model.applied_forces(t, q, qd, r);
-    r.iter_mut().for_each(|v| *v = -*v);
-    model.mass(q, mass);
-    mass.mul_add(1.0, qdd, r);
-    let sys = model.constraints();
-    sys.evaluate(t, q, qd, values);
-    sys.jacobian_transpose_mul_add(values, 1.0, lambda, r);
+    model.dynamics_residual(t, (q, qd), (qdd, lambda), (mass, values), r);
     for (ci, v) in c.iter_mut().zip(&values.c) {
         *ci = v / bp;
     }
