@@ -180,23 +180,18 @@ pub trait ConstraintSet: Send + Sync + std::fmt::Debug {
         self.pattern().cols()
     }
 
-    /// `y ← C_q x`, segment by segment: each segment's dot product is summed on its own and then
-    /// added to its row (one dependent addition per segment rather than per entry).
+    /// `y ← C_q x`.
     fn jacobian_mul(&self, values: &ConstraintValues, x: &[f64], y: &mut [f64]) {
         y.iter_mut().for_each(|v| *v = 0.0);
-        for s in self.pattern().segments() {
-            y[s.row] += dot(&values.jacobian[s.first..s.first + s.len], &x[s.col..s.col + s.len]);
+        for (&(r, c), &v) in self.pattern().entries().iter().zip(&values.jacobian) {
+            y[r] += v * x[c];
         }
     }
 
     /// `y ← y + α C_qᵀ λ`.
     fn jacobian_transpose_mul_add(&self, values: &ConstraintValues, alpha: f64, lambda: &[f64], y: &mut [f64]) {
-        for s in self.pattern().segments() {
-            let a = alpha * lambda[s.row];
-            let ys = &mut y[s.col..s.col + s.len];
-            for (yi, v) in ys.iter_mut().zip(&values.jacobian[s.first..s.first + s.len]) {
-                *yi += a * v;
-            }
+        for (&(r, c), &v) in self.pattern().entries().iter().zip(&values.jacobian) {
+            y[c] += alpha * v * lambda[r];
         }
     }
 
@@ -345,93 +340,5 @@ pub trait ConstraintSet: Send + Sync + std::fmt::Debug {
         opts: &crate::KinematicOptions,
     ) -> Result<(), ConstraintError> {
         crate::kinematics::solve_accelerations(self, t, q, v, vdot, opts)
-    }
-}
-
-/// `aᵀ b` of two slices of equal length, with two partial sums (a body segment has 3 or 6 entries).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let (mut s0, mut s1) = (0.0, 0.0);
-    let mut pairs = a.chunks_exact(2).zip(b.chunks_exact(2));
-    for (x, y) in &mut pairs {
-        s0 += x[0] * y[0];
-        s1 += x[1] * y[1];
-    }
-    if a.len() % 2 == 1 {
-        s0 += a[a.len() - 1] * b[b.len() - 1];
-    }
-    s0 + s1
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Three equations over bodies of 1, 3 and 6 velocities, with fixed values.
-    #[derive(Debug)]
-    struct Fixed {
-        pattern: ConstraintPattern,
-    }
-
-    impl ConstraintSet for Fixed {
-        fn pattern(&self) -> &ConstraintPattern {
-            &self.pattern
-        }
-        fn equation(&self, row: usize) -> EquationRef {
-            EquationRef {
-                constraint: row,
-                name: "fixed".into(),
-                equation: 0,
-                label: "c",
-            }
-        }
-        fn values(&self) -> ConstraintValues {
-            ConstraintValues::new(&self.pattern, 0)
-        }
-        fn evaluate(&self, _t: f64, _q: &[f64], _v: &[f64], out: &mut ConstraintValues) {
-            for (k, j) in out.jacobian.iter_mut().enumerate() {
-                *j = ((k * 7 + 3) % 11) as f64 - 5.0 + 0.25 * k as f64;
-            }
-        }
-    }
-
-    /// The segment-wise products equal the entry-wise definitions `(C_q x)_r = Σ J_rc x_c` and
-    /// `(C_qᵀ λ)_c = Σ J_rc λ_r` (summed one entry at a time here), on segments of odd and even
-    /// length, rows with several segments and a row order unlike the segment order.
-    #[test]
-    fn segment_products_match_entry_sums() {
-        let layout = Layout::new([
-            ("a", &["x"][..], &["vx"][..]),
-            ("b", &["x", "y", "th"][..], &["vx", "vy", "w"][..]),
-            (
-                "c",
-                &["1", "2", "3", "4", "5", "6", "7"][..],
-                &["1", "2", "3", "4", "5", "6"][..],
-            ),
-        ]);
-        let segments = [(2, 1), (2, 2), (0, 0), (0, 2), (1, 1), (0, 1)];
-        let sys = Fixed {
-            pattern: ConstraintPattern::from_segments(3, &layout, segments),
-        };
-        let mut values = sys.values();
-        sys.evaluate(0.0, &[], &[], &mut values);
-        let x: Vec<f64> = (0..10).map(|k| 1.0 + 0.5 * k as f64).collect();
-        let lambda = [0.5, -2.0, 3.0];
-        let (mut y_ref, mut f_ref) = (vec![0.0; 3], vec![1.0; 10]);
-        for (&(r, c), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
-            y_ref[r] += v * x[c];
-            f_ref[c] += -2.0 * v * lambda[r];
-        }
-        let (mut y, mut f) = (vec![9.0; 3], vec![1.0; 10]);
-        sys.jacobian_mul(&values, &x, &mut y);
-        sys.jacobian_transpose_mul_add(&values, -2.0, &lambda, &mut f);
-        // Only the order of the additions differs: a few ulps of the largest partial sum (≈ 1e2).
-        for (a, b) in y.iter().zip(&y_ref).chain(f.iter().zip(&f_ref)) {
-            assert!((a - b).abs() <= 1e-12, "{a} vs {b}");
-        }
-        assert!(
-            y_ref.iter().all(|v| v.abs() > 1.0),
-            "a product that vanishes would test nothing"
-        );
     }
 }
