@@ -8,7 +8,7 @@
 //! chain3d-64 from the same machine's anchors run) it also prints what a factorization and solve
 //! would have to cost for the run to take no longer than MuJoCo's.
 //!
-//! `cargo bench --bench chain3d_budget` (about 15 s); `ANCHORS_MUJOCO_RK4_S=0.645 cargo bench …`.
+//! `cargo bench --bench chain3d_budget` (about 10 s); `ANCHORS_MUJOCO_RK4_S=0.645 cargo bench …`.
 
 use dalembert::augmented::Augmented;
 use dalembert::constraints::Formulation;
