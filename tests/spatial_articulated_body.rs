@@ -1,0 +1,262 @@
+//! The spatial chain of `shared/anchors` (`chain3d`: boxes joined by revolute joints about
+//! alternating y and z axes) against Featherstone's articulated-body algorithm written here from its
+//! textbook form (*Rigid Body Dynamics Algorithms*, 2008, table 7.1), in joint coordinates and link
+//! frames: an independent derivation of the accelerations from the chain's data alone (link length,
+//! mass, inertia, joint axes), at states where every joint has a random angle and rate. The
+//! recursion never forms a constraint; the formulations solve the constrained equations in
+//! absolute coordinates.
+//!
+//! Asserted: the joint-space state mapped to absolute coordinates satisfies the model's
+//! constraints to 1e-12 (positions) and 1e-11 (velocities), so the kinematics here is the model's;
+//! every formulation's `v̇` (centre-of-mass acceleration, body-frame angular acceleration) equals the
+//! recursion's to 1e-9 of the largest, the tolerance of the formulations' agreement test (their
+//! eliminations differ by round-off amplified by the conditioning of these systems; measured
+//! 2026-11-25: at most 1.0e-14 relative). This recursion is also the core of the joint-coordinate
+//! formulation the spatial issue's speed target needs (`docs/performance.md`, gap 3).
+
+use dalembert::amalgamated::Amalgamated;
+use dalembert::augmented::Augmented;
+use dalembert::embedding::Embedding;
+use dalembert::spatial::euler_parameters::from_rotation;
+use dalembert::system::{Formulation, MultibodySystem};
+use nalgebra::{Matrix3, Matrix6, Rotation3, Unit, Vector3, Vector6};
+use std::sync::Arc;
+
+type V3 = Vector3<f64>;
+type V6 = Vector6<f64>;
+
+/// Gravity of the anchors' spatial scenes (−z).
+const G: f64 = 9.81;
+
+fn skew(d: &V3) -> Matrix3<f64> {
+    Matrix3::new(0.0, -d.z, d.y, d.z, 0.0, -d.x, -d.y, d.x, 0.0)
+}
+
+fn split(v: &V6) -> (V3, V3) {
+    (v.fixed_rows::<3>(0).into_owned(), v.fixed_rows::<3>(3).into_owned())
+}
+
+fn join(a: V3, b: V3) -> V6 {
+    V6::new(a.x, a.y, a.z, b.x, b.y, b.z)
+}
+
+/// Motion cross product `v ×ₘ m` of spatial vectors `[ω; v_O]`.
+fn crm(v: &V6, m: &V6) -> V6 {
+    let ((w, vo), (mw, mv)) = (split(v), split(m));
+    join(w.cross(&mw), w.cross(&mv) + vo.cross(&mw))
+}
+
+/// Force cross product `v ×* f` of a motion `[ω; v_O]` and a force `[n_O; f]`.
+fn crf(v: &V6, f: &V6) -> V6 {
+    let ((w, vo), (n, ff)) = (split(v), split(f));
+    join(w.cross(&n) + vo.cross(&ff), w.cross(&ff))
+}
+
+/// chain3d-N from its definition in `shared/anchors/README.md`: link i's frame has its origin at
+/// joint i and coincides with the world frame at zero angles; joint 0 at the origin, joint i ≥ 1
+/// at (1, 0, 0) of link i − 1; joint i about y (even i) or z (odd i); each link 1 kg, centre of
+/// mass (0.5, 0, 0), inertia diag(1/600, 1.01/12, 1.01/12) about it.
+struct Chain {
+    n: usize,
+    /// Spatial inertia of a link about its frame origin.
+    inertia: Matrix6<f64>,
+    com: V3,
+}
+
+/// Per link, in its own frame: `X` (parent to link), the velocity, and the velocity-product
+/// acceleration `c = v ×ₘ S θ̇`.
+struct Pass {
+    x: Vec<Matrix6<f64>>,
+    v: Vec<V6>,
+    c: Vec<V6>,
+}
+
+impl Chain {
+    fn new(n: usize) -> Self {
+        let com = V3::new(0.5, 0.0, 0.0);
+        let ic = Matrix3::from_diagonal(&V3::new(1.0 / 600.0, 1.01 / 12.0, 1.01 / 12.0));
+        let cx = skew(&com);
+        let mut inertia = Matrix6::zeros();
+        inertia
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(ic + cx * cx.transpose()));
+        inertia.fixed_view_mut::<3, 3>(0, 3).copy_from(&cx);
+        inertia.fixed_view_mut::<3, 3>(3, 0).copy_from(&cx.transpose());
+        inertia.fixed_view_mut::<3, 3>(3, 3).copy_from(&Matrix3::identity());
+        Chain { n, inertia, com }
+    }
+
+    fn axis(i: usize) -> V3 {
+        if i.is_multiple_of(2) {
+            V3::y()
+        } else {
+            V3::z()
+        }
+    }
+
+    /// Motion subspace of joint i in link i's frame.
+    fn s(i: usize) -> V6 {
+        join(Self::axis(i), V3::zeros())
+    }
+
+    /// Rotation of link i relative to its parent (link frame to parent frame).
+    fn rotation(i: usize, angle: f64) -> Matrix3<f64> {
+        Rotation3::from_axis_angle(&Unit::new_normalize(Self::axis(i)), angle).into_inner()
+    }
+
+    /// Joint i's position in the parent's frame.
+    fn offset(i: usize) -> V3 {
+        if i == 0 {
+            V3::zeros()
+        } else {
+            V3::x()
+        }
+    }
+
+    /// Plücker transform from the parent's frame to link i's: `[[E, 0], [−E [r]×, E]]`.
+    fn transform(i: usize, angle: f64) -> Matrix6<f64> {
+        let e = Self::rotation(i, angle).transpose();
+        let mut x = Matrix6::zeros();
+        x.fixed_view_mut::<3, 3>(0, 0).copy_from(&e);
+        x.fixed_view_mut::<3, 3>(3, 3).copy_from(&e);
+        x.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-e * skew(&Self::offset(i))));
+        x
+    }
+
+    /// Pass 1: transforms, velocities and velocity-product accelerations.
+    fn velocities(&self, th: &[f64], thd: &[f64]) -> Pass {
+        let mut p = Pass {
+            x: Vec::new(),
+            v: Vec::new(),
+            c: Vec::new(),
+        };
+        for i in 0..self.n {
+            let x = Self::transform(i, th[i]);
+            let vj = Self::s(i) * thd[i];
+            let v = if i == 0 { vj } else { x * p.v[i - 1] + vj };
+            p.c.push(crm(&v, &vj));
+            p.x.push(x);
+            p.v.push(v);
+        }
+        p
+    }
+
+    /// Joint accelerations (table 7.1), gravity as a base acceleration `−g`.
+    fn joint_accelerations(&self, th: &[f64], thd: &[f64]) -> Vec<f64> {
+        let n = self.n;
+        let p = self.velocities(th, thd);
+        let mut ia: Vec<Matrix6<f64>> = vec![self.inertia; n];
+        let mut pa: Vec<V6> = (0..n).map(|i| crf(&p.v[i], &(self.inertia * p.v[i]))).collect();
+        let (mut uu, mut dd, mut tau) = (vec![V6::zeros(); n], vec![0.0; n], vec![0.0; n]);
+        for i in (0..n).rev() {
+            let s = Self::s(i);
+            uu[i] = ia[i] * s;
+            dd[i] = s.dot(&uu[i]);
+            tau[i] = -s.dot(&pa[i]);
+            if i > 0 {
+                let ia_i = ia[i] - uu[i] * uu[i].transpose() / dd[i];
+                let pa_i = pa[i] + ia_i * p.c[i] + uu[i] * (tau[i] / dd[i]);
+                ia[i - 1] += p.x[i].transpose() * ia_i * p.x[i];
+                pa[i - 1] += p.x[i].transpose() * pa_i;
+            }
+        }
+        let mut a_parent = join(V3::zeros(), V3::new(0.0, 0.0, G));
+        let mut thdd = vec![0.0; n];
+        for i in 0..n {
+            let a = p.x[i] * a_parent + p.c[i];
+            thdd[i] = (tau[i] - uu[i].dot(&a)) / dd[i];
+            a_parent = a + Self::s(i) * thdd[i];
+        }
+        thdd
+    }
+
+    /// The state in dalembert's spatial coordinates (per body: centre of mass, Euler parameters;
+    /// centre-of-mass velocity, body-frame angular velocity), and with `thdd` the accelerations
+    /// `v̇` (centre-of-mass acceleration, body-frame angular acceleration), from the spatial
+    /// accelerations with a base at rest.
+    fn absolute(&self, th: &[f64], thd: &[f64], thdd: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let p = self.velocities(th, thd);
+        let (mut q, mut v, mut vdot) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut w, mut o) = (Matrix3::identity(), V3::zeros());
+        let mut a_parent = V6::zeros();
+        for i in 0..self.n {
+            o += w * Self::offset(i);
+            w *= Self::rotation(i, th[i]);
+            let a = p.x[i] * a_parent + p.c[i] + Self::s(i) * thdd[i];
+            a_parent = a;
+            let ((om, vo), (al, ao)) = (split(&p.v[i]), split(&a));
+            let c = self.com;
+            let com = o + w * c;
+            let e = from_rotation(&w);
+            q.extend_from_slice(&[com.x, com.y, com.z, e[0], e[1], e[2], e[3]]);
+            let vc = w * (vo + om.cross(&c));
+            v.extend_from_slice(&[vc.x, vc.y, vc.z, om.x, om.y, om.z]);
+            // Classical acceleration of the body point c from the spatial one: a_O + α × c +
+            // ω × (v_O + ω × c), in link components.
+            let ac = w * (ao + al.cross(&c) + om.cross(&(vo + om.cross(&c))));
+            vdot.extend_from_slice(&[ac.x, ac.y, ac.z, al.x, al.y, al.z]);
+        }
+        (q, v, vdot)
+    }
+}
+
+/// A small deterministic generator (64-bit LCG, Knuth's constants).
+struct Lcg(u64);
+
+impl Lcg {
+    fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+#[test]
+fn every_formulation_gives_the_articulated_body_accelerations() {
+    let mut worst = 0.0f64;
+    for (n, seeds) in [(1usize, 0..3u64), (3, 3..6), (8, 6..9), (16, 9..11)] {
+        let model = dalembert_testkit::spatial::chain3d(n);
+        let chain = Chain::new(n);
+        for seed in seeds {
+            let mut rng = Lcg(seed);
+            let th: Vec<f64> = (0..n).map(|_| rng.range(-1.5, 1.5)).collect();
+            let thd: Vec<f64> = (0..n).map(|_| rng.range(-3.0, 3.0)).collect();
+            let thdd = chain.joint_accelerations(&th, &thd);
+            let (q, v, vdot) = chain.absolute(&th, &thd, &thdd);
+            // The kinematics is the model's: its constraints hold at the mapped state.
+            let sys = model.constraints();
+            let (mut c, mut cdot) = (vec![0.0; sys.num_equations()], vec![0.0; sys.num_equations()]);
+            sys.residuals(0.0, &q, &v, &mut sys.values(), &mut c, &mut cdot);
+            let (c_max, cdot_max) = (
+                c.iter().fold(0.0f64, |a, x| a.max(x.abs())),
+                cdot.iter().fold(0.0f64, |a, x| a.max(x.abs())),
+            );
+            assert!(
+                c_max < 1e-12 && cdot_max < 1e-11,
+                "N = {n}, seed {seed}: |C| {c_max:e}, |Ċ| {cdot_max:e}"
+            );
+            let m: Arc<dyn MultibodySystem> = model.clone();
+            let formulations: Vec<Box<dyn Formulation>> = vec![
+                Box::new(Augmented::with_defaults(m.clone()).expect("augmented")),
+                Box::new(Embedding::with_defaults(m.clone())),
+                Box::new(Amalgamated::with_defaults(m.clone())),
+            ];
+            let scale = vdot.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            for mut f in formulations {
+                let (mut qdd, mut lam) = (vec![0.0; v.len()], vec![0.0; sys.num_equations()]);
+                f.accelerations(0.0, &q, &v, None, &mut qdd, &mut lam)
+                    .expect("evaluation");
+                let diff = qdd.iter().zip(&vdot).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+                worst = worst.max(diff / scale);
+                assert!(
+                    diff <= 1e-9 * scale,
+                    "N = {n}, seed {seed}, {}: max |Δv̇| {diff:e} of {scale:e}",
+                    f.name()
+                );
+            }
+        }
+    }
+    println!("largest difference from the recursion, relative to the largest acceleration: {worst:e}");
+}
