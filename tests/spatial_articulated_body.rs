@@ -11,7 +11,7 @@
 //! every formulation's `v̇` (centre-of-mass acceleration, body-frame angular acceleration) equals the
 //! recursion's to 1e-9 of the largest, the tolerance of the formulations' agreement test (their
 //! eliminations differ by round-off amplified by the conditioning of these systems; measured
-//! 2026-11-25: at most 1.0e-14 relative). This recursion is also the core of the joint-coordinate
+//! 2026-11-25: at most 6.4e-15 relative). This recursion is also the core of the joint-coordinate
 //! formulation the spatial issue's speed target needs (`docs/performance.md`, gap 3).
 
 use dalembert::amalgamated::Amalgamated;
@@ -19,6 +19,7 @@ use dalembert::augmented::Augmented;
 use dalembert::embedding::Embedding;
 use dalembert::spatial::euler_parameters::from_rotation;
 use dalembert::system::{Formulation, MultibodySystem};
+use dalembert_testkit::fuzz::Rng;
 use nalgebra::{Matrix3, Matrix6, Rotation3, Unit, Vector3, Vector6};
 use std::sync::Arc;
 
@@ -200,17 +201,9 @@ impl Chain {
     }
 }
 
-/// A small deterministic generator (64-bit LCG, Knuth's constants).
-struct Lcg(u64);
-
-impl Lcg {
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
-    }
+/// Uniform in `[lo, hi)` from the test kit's generator.
+fn uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
 }
 
 #[test]
@@ -220,9 +213,9 @@ fn every_formulation_gives_the_articulated_body_accelerations() {
         let model = dalembert_testkit::spatial::chain3d(n);
         let chain = Chain::new(n);
         for seed in seeds {
-            let mut rng = Lcg(seed);
-            let th: Vec<f64> = (0..n).map(|_| rng.range(-1.5, 1.5)).collect();
-            let thd: Vec<f64> = (0..n).map(|_| rng.range(-3.0, 3.0)).collect();
+            let mut rng = Rng::new(seed);
+            let th: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -1.5, 1.5)).collect();
+            let thd: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -3.0, 3.0)).collect();
             let thdd = chain.joint_accelerations(&th, &thd);
             let (q, v, vdot) = chain.absolute(&th, &thd, &thdd);
             // The kinematics is the model's: its constraints hold at the mapped state.
