@@ -29,10 +29,6 @@ type V6 = Vector6<f64>;
 /// Gravity of the anchors' spatial scenes (−z).
 const G: f64 = 9.81;
 
-fn skew(d: &V3) -> Matrix3<f64> {
-    Matrix3::new(0.0, -d.z, d.y, d.z, 0.0, -d.x, -d.y, d.x, 0.0)
-}
-
 fn split(v: &V6) -> (V3, V3) {
     (v.fixed_rows::<3>(0).into_owned(), v.fixed_rows::<3>(3).into_owned())
 }
@@ -76,7 +72,7 @@ impl Chain {
     fn new(n: usize) -> Self {
         let com = V3::new(0.5, 0.0, 0.0);
         let ic = Matrix3::from_diagonal(&V3::new(1.0 / 600.0, 1.01 / 12.0, 1.01 / 12.0));
-        let cx = skew(&com);
+        let cx = com.cross_matrix();
         let mut inertia = Matrix6::zeros();
         inertia
             .fixed_view_mut::<3, 3>(0, 0)
@@ -120,7 +116,8 @@ impl Chain {
         let mut x = Matrix6::zeros();
         x.fixed_view_mut::<3, 3>(0, 0).copy_from(&e);
         x.fixed_view_mut::<3, 3>(3, 3).copy_from(&e);
-        x.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-e * skew(&Self::offset(i))));
+        x.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&(-e * Self::offset(i).cross_matrix()));
         x
     }
 
@@ -142,10 +139,9 @@ impl Chain {
         p
     }
 
-    /// Joint accelerations (table 7.1), gravity as a base acceleration `−g`.
-    fn joint_accelerations(&self, th: &[f64], thd: &[f64]) -> Vec<f64> {
+    /// Joint accelerations from pass 1 `p` (table 7.1), gravity as a base acceleration `−g`.
+    fn joint_accelerations(&self, p: &Pass) -> Vec<f64> {
         let n = self.n;
-        let p = self.velocities(th, thd);
         let mut ia: Vec<Matrix6<f64>> = vec![self.inertia; n];
         let mut pa: Vec<V6> = (0..n).map(|i| crf(&p.v[i], &(self.inertia * p.v[i]))).collect();
         let (mut uu, mut dd, mut tau) = (vec![V6::zeros(); n], vec![0.0; n], vec![0.0; n]);
@@ -175,8 +171,7 @@ impl Chain {
     /// centre-of-mass velocity, body-frame angular velocity), and with `thdd` the accelerations
     /// `v̇` (centre-of-mass acceleration, body-frame angular acceleration), from the spatial
     /// accelerations with a base at rest.
-    fn absolute(&self, th: &[f64], thd: &[f64], thdd: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        let p = self.velocities(th, thd);
+    fn absolute(&self, th: &[f64], p: &Pass, thdd: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
         let (mut q, mut v, mut vdot) = (Vec::new(), Vec::new(), Vec::new());
         let (mut w, mut o) = (Matrix3::identity(), V3::zeros());
         let mut a_parent = V6::zeros();
@@ -216,8 +211,9 @@ fn every_formulation_gives_the_articulated_body_accelerations() {
             let mut rng = Rng::new(seed);
             let th: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -1.5, 1.5)).collect();
             let thd: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -3.0, 3.0)).collect();
-            let thdd = chain.joint_accelerations(&th, &thd);
-            let (q, v, vdot) = chain.absolute(&th, &thd, &thdd);
+            let pass = chain.velocities(&th, &thd);
+            let thdd = chain.joint_accelerations(&pass);
+            let (q, v, vdot) = chain.absolute(&th, &pass, &thdd);
             // The kinematics is the model's: its constraints hold at the mapped state.
             let sys = model.constraints();
             let (mut c, mut cdot) = (vec![0.0; sys.num_equations()], vec![0.0; sys.num_equations()]);
