@@ -36,6 +36,8 @@ struct Mechanism {
     qd: Vec<f64>,
     /// Spatial (errors against 13-column reference rows).
     spatial: bool,
+    /// The model in joint coordinates, when it is a tree of revolute and prismatic joints.
+    joints: Option<dalembert::spatial::JointCoordinates>,
 }
 
 impl From<mechanisms::Mechanism> for Mechanism {
@@ -45,6 +47,7 @@ impl From<mechanisms::Mechanism> for Mechanism {
             q: m.q,
             qd: m.qd,
             spatial: false,
+            joints: None,
         }
     }
 }
@@ -52,17 +55,21 @@ impl From<mechanisms::Mechanism> for Mechanism {
 impl From<Arc<dalembert::spatial::Model>> for Mechanism {
     fn from(m: Arc<dalembert::spatial::Model>) -> Self {
         let (q, qd) = m.initial_state();
+        let joints = m.joint_coordinates().ok();
         Mechanism {
             model: m,
             q,
             qd,
             spatial: true,
+            joints,
         }
     }
 }
 
 struct Variant {
     name: &'static str,
+    /// Run the model in joint coordinates (spatial trees; other scenes skip the variant).
+    joint_space: bool,
     integrator: &'static str,
     options: IntegratorOptions,
 }
@@ -73,21 +80,37 @@ fn variants() -> Vec<Variant> {
     vec![
         Variant {
             name: "augmented RK4",
+            joint_space: false,
             integrator: "RK4",
             options: IntegratorOptions::fixed(Method::rk4(), h, 0.01),
         },
         Variant {
+            name: "joint coordinates RK4",
+            joint_space: true,
+            integrator: "RK4",
+            options: IntegratorOptions::fixed(Method::rk4(), h, 0.01),
+        },
+        Variant {
+            name: "joint coordinates GenAlpha",
+            joint_space: true,
+            integrator: "GeneralizedAlpha",
+            options: IntegratorOptions::fixed(Method::generalized_alpha(0.9), h, 0.01),
+        },
+        Variant {
             name: "augmented RK4+proj",
+            joint_space: false,
             integrator: "RK4",
             options: IntegratorOptions::fixed(Method::rk4(), h, 0.01).with_stabilization(proj),
         },
         Variant {
             name: "augmented Euler+proj",
+            joint_space: false,
             integrator: "Euler",
             options: IntegratorOptions::fixed(Method::symplectic_euler(), h, 0.01).with_stabilization(proj),
         },
         Variant {
             name: "augmented GenAlpha",
+            joint_space: false,
             integrator: "GeneralizedAlpha",
             options: IntegratorOptions::fixed(Method::generalized_alpha(0.9), h, 0.01),
         },
@@ -101,6 +124,7 @@ fn front_variants() -> Vec<Variant> {
     let proj = Stabilization::Projection { tolerance: 1e-10 };
     let rk4 = |name: &'static str, h: f64| Variant {
         name,
+        joint_space: false,
         integrator: "RK4",
         options: IntegratorOptions::fixed(Method::rk4(), h, h.max(0.01)),
     };
@@ -110,6 +134,7 @@ fn front_variants() -> Vec<Variant> {
         options.max_step = 0.1;
         Variant {
             name,
+            joint_space: false,
             integrator: "DOPRI5",
             options,
         }
@@ -133,9 +158,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// µs per forward-dynamics evaluation (median of batches).
-fn fd_us(mech: &Mechanism) -> f64 {
-    let mut f = Augmented::with_defaults(mech.model.clone()).expect("formulation");
-    let (n, m) = (mech.qd.len(), mech.model.num_equations());
+fn fd_us((model, q, qd): (&Arc<dyn MultibodySystem>, &[f64], &[f64])) -> f64 {
+    let mut f = Augmented::with_defaults(model.clone()).expect("formulation");
+    let (n, m) = (qd.len(), model.num_equations());
     let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
     let reps = (20000 / (n + 1)).max(20);
     let batches: Vec<f64> = (0..7)
@@ -144,7 +169,7 @@ fn fd_us(mech: &Mechanism) -> f64 {
             for k in 0..reps {
                 // A new time at every call (the scenes do not depend on it): the formulation keeps
                 // the constraint values of an unchanged state, which would skip their evaluation.
-                f.accelerations(1e-12 * k as f64, &mech.q, &mech.qd, None, &mut qdd, &mut lam)
+                f.accelerations(1e-12 * k as f64, q, qd, None, &mut qdd, &mut lam)
                     .expect("evaluation");
             }
             t0.elapsed().as_secs_f64() * 1e6 / reps as f64
@@ -165,15 +190,35 @@ struct RunResult {
     steps: u64,
 }
 
-fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
-    let mut f = Augmented::with_defaults(mech.model.clone()).expect("formulation");
-    let e0 = f.energy(0.0, &mech.q, &mech.qd).total();
+/// The system and initial state a variant runs: the scene's, or its joint-coordinate form.
+fn system_of(mech: &Mechanism, joint_space: bool) -> Option<(Arc<dyn MultibodySystem>, Vec<f64>, Vec<f64>)> {
+    if !joint_space {
+        return Some((mech.model.clone(), mech.q.clone(), mech.qd.clone()));
+    }
+    let jc = mech.joints.as_ref()?;
+    let (q, qd) = jc.initial_state();
+    Some((jc.system(), q, qd))
+}
+
+fn simulate(mech: &Mechanism, joint_space: bool, opts: &IntegratorOptions) -> Option<RunResult> {
+    let (model, q0, qd0) = system_of(mech, joint_space)?;
+    let mut f = Augmented::with_defaults(model).expect("formulation");
+    let e0 = f.energy(0.0, &q0, &qd0).total();
     let mut at_one = (Vec::new(), Vec::new());
     let mut de_max = 0.0f64;
     let mut de_last = 0.0;
-    let result = integrate(&mut f, 0.0, 10.0, &mech.q, &mech.qd, opts, &mut |s| {
+    let mut frames = mech.joints.as_ref().map(|jc| jc.frames()).unwrap_or_default();
+    let result = integrate(&mut f, 0.0, 10.0, &q0, &qd0, opts, &mut |s| {
         if (s.t - 1.0).abs() < 1e-9 {
-            at_one = (s.q.to_vec(), s.qd.to_vec());
+            at_one = match (&mech.joints, joint_space) {
+                // The errors are measured on the model's absolute coordinates.
+                (Some(jc), true) => {
+                    let (mut q, mut qd) = (mech.q.clone(), mech.qd.clone());
+                    jc.absolute(s.q, s.qd, &mut frames, &mut q, &mut qd);
+                    (q, qd)
+                }
+                _ => (s.q.to_vec(), s.qd.to_vec()),
+            };
         }
         de_max = de_max.max((s.energy - e0).abs());
         de_last = s.energy - e0;
@@ -182,7 +227,7 @@ fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
         Ok(s) => (None, s),
         Err(e) => (Some(format!("stopped at {}", e.error)), *e.statistics),
     };
-    RunResult {
+    Some(RunResult {
         failure,
         sim_s: stats.wall_time.as_secs_f64(),
         at_one,
@@ -190,7 +235,7 @@ fn simulate(mech: &Mechanism, opts: &IntegratorOptions) -> RunResult {
         de_max,
         cviol: stats.max_constraint_violation,
         steps: stats.steps,
-    }
+    })
 }
 
 /// Max abs errors (positions and angles; velocities) against the reference bodies at t = 1 s.
@@ -254,11 +299,16 @@ fn main() {
     }
     for (scene, n, mech) in &scenes {
         let key = format!("{scene}/{n}");
-        let fd = fd_us(mech);
         let front = std::env::var("ANCHORS_FRONT").is_ok();
         for v in if front { front_variants() } else { variants() } {
+            let Some((model, q, qd)) = system_of(mech, v.joint_space) else {
+                continue;
+            };
+            let fd = fd_us((&model, &q, &qd));
             let repeats = if quick { 1 } else { 3 };
-            let runs: Vec<RunResult> = (0..repeats).map(|_| simulate(mech, &v.options)).collect();
+            let runs: Vec<RunResult> = (0..repeats)
+                .filter_map(|_| simulate(mech, v.joint_space, &v.options))
+                .collect();
             let sim_s = median(runs.iter().map(|r| r.sim_s).collect());
             let r = &runs[0];
             let (ep, ev) = errors(mech, &r.at_one, &reference["scenes"][&key]["bodies"]);
@@ -270,7 +320,7 @@ fn main() {
                 "N": n,
                 "integrator": v.integrator,
                 "fd_us": fd,
-                "fd_call": "Augmented::accelerations",
+                "fd_call": if v.joint_space { "Augmented::accelerations (joint coordinates: articulated-body algorithm)" } else { "Augmented::accelerations" },
                 "sim_s": sim_s,
                 "sim_native_s": sim_s,
                 "err_pos_1s": if has_ref { serde_json::json!(ep) } else { serde_json::Value::Null },

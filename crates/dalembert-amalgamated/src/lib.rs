@@ -30,6 +30,7 @@
 use dalembert_system::linalg::DenseCholesky;
 use dalembert_system::minimum_norm::{scatter_minimum_norm, MinimumNorm};
 use dalembert_system::partition::VelocityTransform;
+use dalembert_system::tree::Articulated;
 use dalembert_system::{
     Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
     MultibodySystem, PartitionTracker, RedundancyTreatment,
@@ -52,6 +53,9 @@ pub struct Amalgamated {
     /// The minimum-norm multipliers of a redundant system, for the current independent equations.
     minimum_norm: Option<MinimumNorm>,
     work: Work,
+    /// A tree in joint coordinates without constraint equations: `M q̈ = Q` (`B_i = I`) solved by
+    /// the articulated-body algorithm.
+    articulated: Option<Articulated>,
 }
 
 /// Storage of one evaluation for a system of `dim = 2n + ni` unknowns (rebuilt only when a
@@ -109,6 +113,7 @@ impl Amalgamated {
             rhs: vec![0.0; m],
             tracker,
             redundancy,
+            articulated: Articulated::for_system(&*model),
             model,
             stats: FormulationStats::default(),
             minimum_norm: None,
@@ -190,6 +195,9 @@ impl Formulation for Amalgamated {
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
         self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
+        if let Some(tree) = &mut self.articulated {
+            return tree.solve(&*self.model, t, q, qd, qdd);
+        }
         self.model.check_state(t, q, qd)?;
         let n = qd.len();
         self.model.mass(q, &mut self.mass);

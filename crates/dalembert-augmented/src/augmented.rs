@@ -3,6 +3,7 @@
 use crate::diagnosis::{diagnose, independent_rows};
 use crate::redundant::{checked_solve, Independent};
 use dalembert_system::linalg::SaddlePoint;
+use dalembert_system::tree::Articulated;
 use dalembert_system::{
     Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
     MultibodySystem, RedundancyTreatment,
@@ -61,6 +62,9 @@ pub struct Augmented {
     r: Vec<f64>,
     /// The independent equations of a redundant system (minimum-norm treatment), once found.
     independent: Option<Independent>,
+    /// A tree in joint coordinates without constraint equations, under `Backend::Auto`: `M q̈ = Q`
+    /// solved by the articulated-body algorithm.
+    articulated: Option<Articulated>,
     stats: FormulationStats,
 }
 
@@ -103,6 +107,10 @@ impl Augmented {
             b: vec![0.0; n + m],
             r: vec![0.0; n + m],
             independent: None,
+            articulated: match options.backend {
+                Backend::Auto => Articulated::for_system(&*model),
+                _ => None,
+            },
             solver,
             options,
             model,
@@ -221,6 +229,9 @@ impl Formulation for Augmented {
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
         self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
+        if let Some(tree) = &mut self.articulated {
+            return tree.solve(&*self.model, t, q, qd, qdd);
+        }
         self.load(t, q, qd)?;
         let n = qd.len();
         let sys = self.model.constraints();

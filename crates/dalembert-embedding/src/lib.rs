@@ -21,6 +21,7 @@
 use dalembert_system::linalg::{DenseCholesky, DenseLu};
 use dalembert_system::minimum_norm::{scatter_minimum_norm, MinimumNorm};
 use dalembert_system::partition::{Partition, Repartition};
+use dalembert_system::tree::Articulated;
 use dalembert_system::{
     Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
     MultibodySystem, PartitionTracker, RedundancyTreatment,
@@ -79,6 +80,9 @@ pub struct Embedding {
     /// The minimum-norm multipliers of a redundant system, for the current independent equations.
     minimum_norm: Option<MinimumNorm>,
     work: Work,
+    /// A tree in joint coordinates without constraint equations: `M q̈ = Q` (`B_i = I`) solved by
+    /// the articulated-body algorithm.
+    articulated: Option<Articulated>,
 }
 
 /// Storage of one evaluation, sized for a partition with `ni` independent coordinates (rebuilt only
@@ -143,6 +147,7 @@ impl Embedding {
         let n = model.layout().n_v();
         let m = model.num_equations();
         Embedding {
+            articulated: Articulated::for_system(&*model),
             mass: model.mass_storage(),
             values: model.constraints().values(),
             evaluated_at: EvaluatedAt::new(model.layout().n_q(), model.layout().n_v()),
@@ -205,6 +210,9 @@ impl Formulation for Embedding {
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
         self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
+        if let Some(tree) = &mut self.articulated {
+            return tree.solve(&*self.model, t, q, qd, qdd);
+        }
         self.load(t, q, qd)?;
         let sys = self.model.constraints();
         let n = qd.len();

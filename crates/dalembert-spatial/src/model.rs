@@ -224,6 +224,11 @@ impl Model {
         self.joints.iter().chain(&self.drivers)
     }
 
+    /// Names of the force elements, in order.
+    pub fn force_names(&self) -> impl Iterator<Item = &str> {
+        self.force_names.iter().map(|n| n.as_str())
+    }
+
     /// Gravitational acceleration.
     pub fn gravity(&self) -> Vector3<f64> {
         self.gravity

@@ -6,6 +6,8 @@
 //!   analyses written once on it (structure, kinematic analysis, coordinate partitioning);
 //! * [`MultibodySystem`]: mass, forces, constraints, position update and energy;
 //! * [`TimeFunction`]: prescribed functions of time (drivers, time-varying forces) of any model;
+//! * [`tree`]: kinematic trees in joint coordinates ([`JointSpace`]) and the articulated-body
+//!   algorithm that solves them in O(n);
 //! * [`Formulation`]: the forward-dynamics interface every formulation implements and every
 //!   integrator consumes, with its errors ([`DynamicsError`]) and settings.
 //!
@@ -32,6 +34,7 @@ pub mod structure;
 pub mod system;
 pub mod tangent;
 pub mod time_function;
+pub mod tree;
 
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
@@ -47,3 +50,4 @@ pub use structure::StructureReport;
 pub use system::MultibodySystem;
 pub use tangent::{TangentPattern, TangentValues};
 pub use time_function::TimeFunction;
+pub use tree::{JointSpace, KinematicTree};

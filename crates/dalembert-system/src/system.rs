@@ -110,6 +110,14 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// The system as a kinematic tree in joint coordinates, when it is one ([`crate::JointSpace`]):
+    /// with no constraint equations every formulation's equations are then `M q̈ = Q`, and the
+    /// formulations solve them by the articulated-body algorithm ([`crate::tree::Articulated`])
+    /// instead of forming `M`. Default `None`.
+    fn kinematic_tree(&self) -> Option<&crate::KinematicTree> {
+        None
+    }
+
     /// Kinetic energy at `(q, v)`.
     fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64;
 

@@ -43,7 +43,9 @@ pub enum Backend {
     /// singular positions of the IFToMM A02 N-four-bar its different rounding moved which step sizes
     /// lose the branch without a stop (N = 4, RK4 + projection at 0.5 ms: 2.6e-3 with the tree, 1.4e-4
     /// with the Schur complement), so closed chains keep the back ends their robustness figures
-    /// (`docs/stability.md`) were measured with.
+    /// (`docs/stability.md`) were measured with. A tree in joint coordinates without constraint
+    /// equations ([`crate::MultibodySystem::kinematic_tree`]) is solved by the articulated-body
+    /// algorithm ([`crate::tree::Articulated`]), the O(n) factorization of its `M`.
     #[default]
     Auto,
     /// Dense LU with partial pivoting of the whole saddle-point matrix.

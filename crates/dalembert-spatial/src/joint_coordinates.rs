@@ -1,0 +1,234 @@
+//! A spatial model that is a tree of revolute and prismatic joints, in joint coordinates
+//! ([`dalembert_system::JointSpace`]): one coordinate per joint instead of 7 positions and 6
+//! velocities per body, no constraint equations, and the formulations' solve by the
+//! articulated-body algorithm (`docs/joint-coordinates.md`).
+//!
+//! The tree's zero configuration is the model's initial one. Body `k`'s tree frame has its
+//! origin at the joint that attaches it to its parent and the body's axes; the joint's axis is
+//! the model's (fixed in both bodies). Initial rates are the joints' relative velocities along
+//! their axes: the model's initial velocities projected onto the joints.
+
+use crate::euler_parameters::{self, from_rotation};
+use crate::frame::{NQ, NV};
+use crate::joints::JointKind;
+use crate::Model;
+use dalembert_system::tree::{self, KinematicTree, TreeBody, WorldFrame};
+use dalembert_system::{JointSpace, ModelError};
+use nalgebra::{Matrix3, Vector3};
+use std::sync::Arc;
+
+/// A spatial model in joint coordinates, with the map back to its absolute coordinates.
+#[derive(Debug, Clone)]
+pub struct JointCoordinates {
+    system: Arc<JointSpace>,
+    /// The model's index of each tree body.
+    bodies: Vec<usize>,
+    q0: Vec<f64>,
+    v0: Vec<f64>,
+}
+
+fn refuse(element: String, what: &str) -> ModelError {
+    ModelError::InvalidParameter {
+        element,
+        what: what.to_string(),
+    }
+}
+
+impl Model {
+    /// This model in joint coordinates, when it is a tree of revolute and prismatic joints
+    /// rooted at the ground, with gravity and no force elements or drivers; otherwise an error
+    /// naming the first element that joint coordinates cannot take.
+    pub fn joint_coordinates(&self) -> Result<JointCoordinates, ModelError> {
+        if let Some(d) = self.driver_names().next() {
+            return Err(refuse(format!("driver '{d}'"), "joint coordinates take no drivers yet"));
+        }
+        if let Some(f) = self.force_names().next() {
+            return Err(refuse(
+                format!("force '{f}'"),
+                "joint coordinates take gravity only, no force elements yet",
+            ));
+        }
+        let n = self.bodies().len();
+        let joints = self.joints();
+        if joints.len() != n {
+            return Err(refuse(
+                "model".into(),
+                &format!(
+                    "joint coordinates need a tree: one joint per body ({} joints for {n} bodies)",
+                    joints.len()
+                ),
+            ));
+        }
+        let frames: Vec<(Vector3<f64>, Matrix3<f64>)> = self
+            .bodies()
+            .iter()
+            .map(|b| {
+                (
+                    b.position,
+                    euler_parameters::rotation(&euler_parameters::normalized(&b.orientation)),
+                )
+            })
+            .collect();
+        // Breadth first from the ground: each joint attaches the body it reaches to its parent.
+        let mut order: Vec<(usize, Option<usize>, usize)> = Vec::with_capacity(n); // (body, parent, joint)
+        let mut placed = vec![false; n];
+        let mut used = vec![false; joints.len()];
+        let mut frontier: Vec<Option<usize>> = vec![None];
+        while let Some(parent) = frontier.pop() {
+            for (k, j) in joints.iter().enumerate() {
+                let child = match (j.body_i, j.body_j) {
+                    (a, Some(b)) if a == parent => b,
+                    (Some(a), b) if b == parent => a,
+                    _ => continue,
+                };
+                if used[k] {
+                    continue;
+                }
+                used[k] = true;
+                if placed[child] {
+                    return Err(refuse(
+                        format!("joint '{}'", j.name),
+                        "closes a loop: joint coordinates need a tree (use the absolute coordinates)",
+                    ));
+                }
+                match j.kind {
+                    Some(JointKind::Revolute | JointKind::Prismatic) => {}
+                    Some(kind) => {
+                        return Err(refuse(
+                            format!("joint '{}'", j.name),
+                            &format!(
+                                "joint coordinates take revolute and prismatic joints, not {}",
+                                kind.name()
+                            ),
+                        ))
+                    }
+                    None => unreachable!("drivers are not joints"),
+                }
+                placed[child] = true;
+                order.push((child, parent, k));
+                frontier.push(Some(child));
+            }
+        }
+        if let Some(k) = placed.iter().position(|p| !p) {
+            return Err(refuse(
+                format!("body '{}'", self.bodies()[k].name),
+                "is not joined to the ground through the tree",
+            ));
+        }
+        let index_of = |body: usize| order.iter().position(|o| o.0 == body);
+        // Each tree body's frame: origin at its joint (global), the body's axes.
+        let mut origin = vec![Vector3::zeros(); n];
+        let mut bodies = Vec::with_capacity(n);
+        let (mut q0, mut v0) = (vec![0.0; n], vec![0.0; n]);
+        for (t, &(child, parent, k)) in order.iter().enumerate() {
+            let j = &joints[k];
+            let (r, a) = frames[child];
+            let (point, axes) = if j.body_j == Some(child) {
+                (j.point_j, j.axes_j)
+            } else {
+                (j.point_i, j.axes_i)
+            };
+            let axis = axes.column(2).into_owned();
+            origin[t] = r + a * point;
+            let (location, rotation) = match parent {
+                None => (origin[t], a),
+                Some(p) => {
+                    let (tp, ap) = (index_of(p).unwrap_or(0), frames[p].1);
+                    (ap.transpose() * (origin[t] - origin[tp]), ap.transpose() * a)
+                }
+            };
+            let body = &self.bodies()[child];
+            let kind = if j.kind == Some(JointKind::Revolute) {
+                tree::JointKind::Revolute
+            } else {
+                tree::JointKind::Prismatic
+            };
+            // Initial rate: the relative motion along the axis.
+            let axis_global = a * axis;
+            let (w_parent, v_parent) = parent.map_or((Vector3::zeros(), Vector3::zeros()), |p| {
+                let b = &self.bodies()[p];
+                (
+                    b.angular_velocity,
+                    b.velocity + b.angular_velocity.cross(&(origin[t] - b.position)),
+                )
+            });
+            v0[t] = match kind {
+                tree::JointKind::Revolute => axis_global.dot(&(body.angular_velocity - w_parent)),
+                _ => axis_global.dot(&(body.velocity + body.angular_velocity.cross(&(origin[t] - r)) - v_parent)),
+            };
+            q0[t] = 0.0;
+            let rows = |m: &Matrix3<f64>| [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]);
+            bodies.push(TreeBody {
+                name: body.name.clone(),
+                parent: parent.and_then(index_of),
+                kind,
+                axis: axis.into(),
+                location: location.into(),
+                rotation: rows(&rotation),
+                mass: body.mass,
+                com: (-point).into(),
+                inertia: rows(&body.inertia),
+                force: None,
+            });
+        }
+        let tree = KinematicTree::new(self.gravity().into(), bodies)?;
+        Ok(JointCoordinates {
+            system: Arc::new(JointSpace::new(tree)),
+            bodies: order.iter().map(|o| o.0).collect(),
+            q0,
+            v0,
+        })
+    }
+}
+
+impl JointCoordinates {
+    /// The system in joint coordinates.
+    pub fn system(&self) -> Arc<JointSpace> {
+        self.system.clone()
+    }
+
+    /// The initial joint coordinates (zero: the model's initial configuration) and rates.
+    pub fn initial_state(&self) -> (Vec<f64>, Vec<f64>) {
+        (self.q0.clone(), self.v0.clone())
+    }
+
+    /// The model's index of each tree body (the tree lists parents first).
+    pub fn model_bodies(&self) -> &[usize] {
+        &self.bodies
+    }
+
+    /// Storage for [`JointCoordinates::absolute`].
+    pub fn frames(&self) -> Vec<WorldFrame> {
+        let tree = self.system.tree();
+        let mut out = vec![
+            WorldFrame {
+                rotation: Matrix3::identity(),
+                origin: Vector3::zeros(),
+                velocity: Default::default(),
+            };
+            tree.len()
+        ];
+        tree.world_frames(&self.q0, Some(&self.v0), &mut out);
+        out
+    }
+
+    /// The model's absolute coordinates at joint state `(q, q̇)`: per body (in the model's order)
+    /// centre of mass and Euler parameters into `q_abs` (7 each), centre-of-mass velocity (global)
+    /// and body-frame angular velocity into `v_abs` (6 each). `frames` from
+    /// [`JointCoordinates::frames`].
+    pub fn absolute(&self, q: &[f64], qd: &[f64], frames: &mut [WorldFrame], q_abs: &mut [f64], v_abs: &mut [f64]) {
+        let tree = self.system.tree();
+        tree.world_frames(q, Some(qd), frames);
+        for (t, (&k, f)) in self.bodies.iter().zip(frames.iter()).enumerate() {
+            let com = Vector3::from(tree.bodies()[t].com);
+            let r = f.origin + f.rotation * com;
+            let p = from_rotation(&f.rotation);
+            q_abs[NQ * k..NQ * k + 3].copy_from_slice(r.as_slice());
+            q_abs[NQ * k + 3..NQ * k + 7].copy_from_slice(&p);
+            let (w, v_o) = (f.velocity.w, f.velocity.v);
+            let v = f.rotation * (v_o + w.cross(&com));
+            v_abs[NV * k..NV * k + 3].copy_from_slice(v.as_slice());
+            v_abs[NV * k + 3..NV * k + 6].copy_from_slice(w.as_slice());
+        }
+    }
+}

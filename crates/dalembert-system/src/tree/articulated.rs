@@ -1,0 +1,141 @@
+//! The articulated-body algorithm: `q̈ = M(q)⁻¹ Q(t, q, q̇)` for a tree in joint coordinates in
+//! O(n), without forming `M` (Featherstone 2008, table 7.1).
+//!
+//! ```text
+//! pass 1 (root → leaves)   Xᵢ = X_J(qᵢ) X_T,   vᵢ = Xᵢ v_λ + Sᵢ q̇ᵢ,   cᵢ = vᵢ ×ₘ Sᵢ q̇ᵢ,
+//!                          I^Aᵢ = Iᵢ,   p^Aᵢ = vᵢ ×* Iᵢ vᵢ
+//! pass 2 (leaves → root)   Uᵢ = I^Aᵢ Sᵢ,   Dᵢ = Sᵢᵀ Uᵢ,   uᵢ = τᵢ − Sᵢᵀ p^Aᵢ,
+//!                          I^a = I^Aᵢ − Uᵢ Uᵢᵀ / Dᵢ,   p^a = p^Aᵢ + I^a cᵢ + Uᵢ uᵢ / Dᵢ,
+//!                          I^A_λ += Xᵢᵀ I^a Xᵢ,   p^A_λ += Xᵢᵀ p^a
+//! pass 3 (root → leaves)   a' = Xᵢ a_λ + cᵢ,   q̈ᵢ = (uᵢ − Uᵢᵀ a') / Dᵢ,   aᵢ = a' + Sᵢ q̈ᵢ
+//! ```
+//!
+//! with the base acceleration `a₀ = [0; −g]` standing for gravity and `τᵢ` the joint's force
+//! element. `Dᵢ` is the pivot of the tree's `L D Lᵀ` factorization of `M`: one that is not
+//! positive (a body chain without inertia about its joint) is reported, not divided by.
+
+use super::algebra::{Inertia, Sv};
+use super::recursion::Pass;
+use super::KinematicTree;
+use crate::{DynamicsError, MultibodySystem};
+
+/// The workspace of the articulated-body algorithm for one tree, allocated once; solving
+/// allocates nothing.
+#[derive(Debug, Clone)]
+pub struct Articulated {
+    pass: Pass,
+    ia: Vec<Inertia>,
+    pa: Vec<Sv>,
+    u: Vec<Sv>,
+    d: Vec<f64>,
+    tau: Vec<f64>,
+}
+
+impl Articulated {
+    /// A workspace for `tree`.
+    pub fn new(tree: &KinematicTree) -> Self {
+        let n = tree.len();
+        Articulated {
+            pass: Pass::new(n),
+            ia: vec![Inertia::zeros(); n],
+            pa: vec![Sv::ZERO; n],
+            u: vec![Sv::ZERO; n],
+            d: vec![0.0; n],
+            tau: vec![0.0; n],
+        }
+    }
+
+    /// The workspace for `system` when the formulations should solve it by this algorithm: a
+    /// tree in joint coordinates ([`MultibodySystem::kinematic_tree`]) with no constraint
+    /// equations, where every formulation's equations are `M q̈ = Q`.
+    pub fn for_system(system: &dyn MultibodySystem) -> Option<Self> {
+        match system.kinematic_tree() {
+            Some(tree) if system.num_equations() == 0 => Some(Articulated::new(tree)),
+            _ => None,
+        }
+    }
+
+    /// `q̈` of `system` (whose [`MultibodySystem::kinematic_tree`] this workspace was made for) at
+    /// `(t, q, q̇)` into `qdd`, after checking the state: what a formulation calls.
+    pub fn solve(
+        &mut self,
+        system: &dyn MultibodySystem,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        system.check_state(t, q, qd)?;
+        match system.kinematic_tree() {
+            Some(tree) if tree.len() == self.d.len() => self.accelerations(tree, t, q, qd, qdd),
+            _ => Err(DynamicsError::Singular {
+                time: t,
+                what: "the articulated-body workspace does not match the system's tree".into(),
+            }),
+        }
+    }
+
+    /// Each body's spatial acceleration `[α; a_O]` (body components, origin on its joint) from the
+    /// last [`Articulated::accelerations`], and pass 1's velocities `[ω; v_O]`.
+    pub fn body_motion(&self) -> (&[Sv], &[Sv]) {
+        (&self.pass.f, &self.pass.v)
+    }
+
+    /// `q̈` at `(q, q̇)` into `qdd` (lengths: the tree's joints).
+    pub fn accelerations(
+        &mut self,
+        tree: &KinematicTree,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let n = tree.len();
+        let p = &mut self.pass;
+        tree.velocities(q, qd, p);
+        for i in 0..n {
+            let inertia = &tree.links[i].inertia;
+            self.ia[i] = *inertia;
+            self.pa[i] = p.v[i].cross_force(&inertia.mul(&p.v[i]));
+        }
+        for i in (0..n).rev() {
+            let s = tree.subspace(i);
+            let u = self.ia[i].mul(&s);
+            let d = s.dot(&u);
+            if d.is_nan() || d <= 0.0 {
+                return Err(DynamicsError::SingularMass {
+                    time: t,
+                    bodies: vec![tree.bodies()[i].name.clone()],
+                });
+            }
+            let tau = tree.joint_force(i, q[i], qd[i]) - s.dot(&self.pa[i]);
+            (self.u[i], self.d[i], self.tau[i]) = (u, d, tau);
+            if let Some(k) = tree.links[i].parent {
+                let mut ia = self.ia[i];
+                ia.sub_outer(&u, d);
+                let pa = self.pa[i] + ia.mul(&p.c[i]) + u.scale(tau / d);
+                let back = ia.transform_back(&p.x[i]);
+                self.ia[k].add(&back);
+                let back = p.x[i].force_back(&pa);
+                self.pa[k] += back;
+            }
+        }
+        // Pass 3: p.f holds the body accelerations.
+        let a0 = tree.base_acceleration();
+        for i in 0..n {
+            let a_parent = tree.links[i].parent.map_or(a0, |k| p.f[k]);
+            let a = p.x[i].motion(&a_parent) + p.c[i];
+            let qdd_i = (self.tau[i] - self.u[i].dot(&a)) / self.d[i];
+            qdd[i] = qdd_i;
+            p.f[i] = a + tree.subspace(i).scale(qdd_i);
+        }
+        if !crate::all_finite(qdd) {
+            let i = qdd.iter().position(|x| !x.is_finite()).unwrap_or(0);
+            return Err(DynamicsError::NonFinite {
+                time: t,
+                what: format!("acceleration of body '{}'", tree.bodies()[i].name),
+            });
+        }
+        Ok(())
+    }
+}

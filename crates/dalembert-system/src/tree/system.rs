@@ -1,0 +1,163 @@
+//! [`JointSpace`]: a kinematic tree in joint coordinates as a [`MultibodySystem`], so that every
+//! formulation and integrator runs it unchanged.
+
+use super::recursion::{Pass, WorldFrame};
+use super::{JointKind, KinematicTree};
+use crate::{
+    BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, Layout,
+    MultibodySystem,
+};
+use std::sync::Mutex;
+
+/// A [`KinematicTree`] on the seam: positions the joint coordinates, velocities their rates (one
+/// layout block per body, named after it), no constraint equations, `M(q)` as one dense block
+/// (the joint coordinates couple every body with its ancestors), `Q` by the recursive
+/// Newton–Euler algorithm. Formulations solve it by [`super::Articulated`].
+#[derive(Debug)]
+pub struct JointSpace {
+    tree: KinematicTree,
+    layout: Layout,
+    pattern: ConstraintPattern,
+    /// Scratch of the recursions behind `&self` (allocated once; the lock is uncontended in a run).
+    scratch: Mutex<Scratch>,
+}
+
+#[derive(Debug)]
+struct Scratch {
+    pass: Pass,
+    frames: Vec<WorldFrame>,
+}
+
+const ANGLE: &[&str] = &["angle"];
+const RATE: &[&str] = &["rate"];
+const DISPLACEMENT: &[&str] = &["displacement"];
+const SPEED: &[&str] = &["speed"];
+
+impl JointSpace {
+    /// The seam's view of `tree`.
+    pub fn new(tree: KinematicTree) -> Self {
+        let layout = Layout::new(tree.bodies().iter().map(|b| match b.kind {
+            JointKind::Revolute => (b.name.as_str(), ANGLE, RATE),
+            JointKind::Prismatic => (b.name.as_str(), DISPLACEMENT, SPEED),
+        }));
+        let pattern = ConstraintPattern::from_segments(0, &layout, []);
+        let n = tree.len();
+        let frame = WorldFrame {
+            rotation: super::algebra::M3::identity(),
+            origin: super::algebra::V3::zeros(),
+            velocity: super::algebra::Sv::ZERO,
+        };
+        JointSpace {
+            scratch: Mutex::new(Scratch {
+                pass: Pass::new(n),
+                frames: vec![frame; n],
+            }),
+            tree,
+            layout,
+            pattern,
+        }
+    }
+
+    /// The tree.
+    pub fn tree(&self) -> &KinematicTree {
+        &self.tree
+    }
+
+    fn scratch(&self) -> std::sync::MutexGuard<'_, Scratch> {
+        // A panic while the lock was held leaves no broken invariant: the scratch is overwritten
+        // before it is read.
+        self.scratch.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+impl ConstraintSet for JointSpace {
+    fn pattern(&self) -> &ConstraintPattern {
+        &self.pattern
+    }
+    fn equation(&self, row: usize) -> EquationRef {
+        // There are no equations: no row can be asked for.
+        EquationRef {
+            constraint: row,
+            name: "none".into(),
+            equation: 0,
+            label: "none",
+        }
+    }
+    fn values(&self) -> ConstraintValues {
+        ConstraintValues::new(&self.pattern, 0)
+    }
+    fn evaluate(&self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut ConstraintValues) {}
+}
+
+impl MultibodySystem for JointSpace {
+    fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    fn constraints(&self) -> &dyn ConstraintSet {
+        self
+    }
+
+    fn mass_storage(&self) -> BlockDiagonal {
+        BlockDiagonal::zeros([self.layout.n_v()])
+    }
+
+    fn mass(&self, q: &[f64], out: &mut BlockDiagonal) {
+        let mut s = self.scratch();
+        self.tree.mass_matrix(q, &mut s.pass, out.block_mut(0));
+    }
+
+    fn mass_is_constant(&self) -> bool {
+        false
+    }
+
+    fn applied_forces(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+        let mut s = self.scratch();
+        self.tree.bias_forces(q, v, &mut s.pass, out);
+    }
+
+    fn check_forces(&self, t: f64, _q: &[f64], _v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
+        match q_e.iter().position(|x| !x.is_finite()) {
+            None => Ok(()),
+            Some(i) => Err(DynamicsError::NonFinite {
+                time: t,
+                what: format!("generalized force on joint of body '{}'", self.tree.bodies()[i].name),
+            }),
+        }
+    }
+
+    fn force_coupling(&self) -> Option<Vec<Vec<usize>>> {
+        // In joint coordinates every body's force depends on its ancestors' and descendants'
+        // coordinates: one group of all bodies.
+        Some(vec![(0..self.tree.len()).collect()])
+    }
+
+    fn kinematic_tree(&self) -> Option<&KinematicTree> {
+        Some(&self.tree)
+    }
+
+    fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
+        let mut s = self.scratch();
+        self.tree.velocities(q, v, &mut s.pass);
+        self.tree.kinetic(&s.pass)
+    }
+
+    fn potential_energy(&self, _t: f64, q: &[f64]) -> f64 {
+        let mut s = self.scratch();
+        self.tree.world_frames(q, None, &mut s.frames);
+        self.tree.potential(q, &s.frames)
+    }
+
+    fn is_conservative(&self) -> bool {
+        self.tree.is_conservative()
+    }
+
+    fn bodies_without_inertia(&self) -> Vec<String> {
+        self.tree
+            .bodies()
+            .iter()
+            .filter(|b| b.mass == 0.0 && b.inertia.iter().flatten().all(|x| *x == 0.0))
+            .map(|b| b.name.clone())
+            .collect()
+    }
+}
