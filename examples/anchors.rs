@@ -10,6 +10,7 @@
 //! ```
 //!
 //! Options (environment): `ANCHORS_QUICK=1` limits chains to N ≤ 8 and repeats once;
+//! `ANCHORS_NS=16,64` runs only those chain sizes;
 //! `ANCHORS_FRONT=1` runs the work–precision variants instead (RK4 at steps of 2 to 50 ms,
 //! Dormand–Prince with projection at tolerances 1e-3 to 1e-9): with the same error measure and
 //! timing as the engines, they give dalembert's front against the engines' points at 1 ms. Run it
@@ -152,6 +153,14 @@ fn front_variants() -> Vec<Variant> {
     ]
 }
 
+/// The chain sizes: `ANCHORS_NS` (comma-separated, like the engine scripts' `--ns`) or all.
+fn anchors_ns() -> Vec<usize> {
+    match std::env::var("ANCHORS_NS") {
+        Ok(list) => list.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
+        Err(_) => vec![1, 2, 4, 8, 16, 32, 64],
+    }
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     v[v.len() / 2]
@@ -277,7 +286,7 @@ fn main() {
         Err(_) => Box::new(std::io::stdout()),
     };
     let mut scenes: Vec<(String, usize, Mechanism)> = Vec::new();
-    for &n in &[1usize, 2, 4, 8, 16, 32, 64] {
+    for &n in &anchors_ns() {
         if quick && n > 8 {
             continue;
         }

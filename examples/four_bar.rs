@@ -57,6 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         integrator: IntegratorOptions::fixed(Method::rk4(), h, 0.5).with_stabilization(Stabilization::None),
         velocity_weights: None,
         independent: None,
+        coordinates: Default::default(),
     };
     sim.assemble()?;
 

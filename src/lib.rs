@@ -39,4 +39,6 @@ pub use analysis::{CheckReport, Recording};
 pub use mechanism::Mechanism;
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError, SceneValue};
-pub use simulation::{energy_warning, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION};
+pub use simulation::{
+    energy_warning, Coordinates, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION,
+};

@@ -6,8 +6,12 @@ use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::structure::dense_fits;
 use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, RedundancyTreatment};
 use dalembert_embedding::{Embedding, EmbeddingOptions};
-use dalembert_integrators::{integrate_cancellable, IntegrationFailure, IntegratorOptions, Sample, Statistics};
-use std::sync::atomic::AtomicBool;
+use dalembert_integrators::{
+    integrate_cancellable, IntegrationError, IntegrationFailure, IntegratorOptions, Sample, Statistics,
+};
+use dalembert_system::{ModelError, MultibodySystem};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Which formulation of the equations of motion to use.
@@ -37,6 +41,86 @@ impl FormulationKind {
             FormulationKind::Augmented => "augmented",
             FormulationKind::Embedding => "embedding",
             FormulationKind::Amalgamated => "amalgamated",
+        }
+    }
+}
+
+/// The coordinates a run integrates.
+///
+/// ```
+/// // Two links on revolute joints about y, in joint coordinates: the samples are the model's
+/// // absolute coordinates (per body x, y, z, four Euler parameters) and multipliers.
+/// let text = r#"
+/// [scene]
+/// gravity = [0.0, 0.0, -9.81]
+/// [[bodies]]
+/// name = "upper"
+/// mass = 1.0
+/// shape = { box = [1.0, 0.1, 0.1] }
+/// position = [0.5, 0.0, 0.0]
+/// [[bodies]]
+/// name = "lower"
+/// mass = 1.0
+/// shape = { box = [1.0, 0.1, 0.1] }
+/// position = [1.5, 0.0, 0.0]
+/// [[joints]]
+/// name = "shoulder"
+/// type = "revolute"
+/// bodies = ["ground", "upper"]
+/// at = [0.0, 0.0, 0.0]
+/// axis = [0.0, 1.0, 0.0]
+/// [[joints]]
+/// name = "elbow"
+/// type = "revolute"
+/// bodies = ["upper", "lower"]
+/// at = [1.0, 0.0, 0.0]
+/// axis = [0.0, 1.0, 0.0]
+/// [simulation]
+/// end = 0.5
+/// coordinates = "joint"
+/// "#;
+/// let scene = dalembert::Scene::from_toml(text, "double pendulum")?;
+/// assert_eq!(scene.settings.coordinates, dalembert::Coordinates::Joint);
+/// let (mut z, mut lambda) = (0.0, 0.0);
+/// scene.simulation().run(&mut |s| {
+///     z = s.q[9]; // the lower link's centre of mass, height
+///     lambda = s.lambda[2]; // the shoulder's vertical reaction component
+/// })?;
+/// assert!(z < -0.5, "the pendulum falls: z = {z}");
+/// assert!(lambda.abs() > 0.0, "the reactions are the model's multipliers");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Coordinates {
+    /// The model's own: absolute coordinates of every body, joints as constraint equations.
+    #[default]
+    Absolute,
+    /// One coordinate per joint, for a spatial tree of revolute and prismatic joints
+    /// (`docs/joint-coordinates.md`): integrated without constraint equations, solved by the
+    /// articulated-body algorithm; every output sample is mapped back to the absolute coordinates
+    /// and its accelerations, multipliers and reactions are the model's own formulation's there.
+    Joint,
+}
+
+impl Coordinates {
+    /// Names in scene files, flags and keywords.
+    pub const NAMES: &'static [&'static str] = &["absolute", "joint"];
+
+    /// Name used in reports and scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Coordinates::Absolute => "absolute",
+            Coordinates::Joint => "joint",
+        }
+    }
+
+    /// The coordinates called `name`.
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "absolute" => Some(Coordinates::Absolute),
+            "joint" => Some(Coordinates::Joint),
+            _ => None,
         }
     }
 }
@@ -75,6 +159,9 @@ pub enum SimulationError {
     /// The run stopped early (the statistics up to then are inside).
     #[error("{0}")]
     Integration(#[from] IntegrationFailure),
+    /// The model cannot run in joint coordinates (the error names the element).
+    #[error("joint coordinates: {0}")]
+    JointCoordinates(#[source] ModelError),
 }
 
 /// A model with an initial state and the settings of a run.
@@ -106,6 +193,8 @@ pub struct Simulation {
     /// while they stay independent; `None`: chosen by the formulation. Other formulations ignore
     /// it.
     pub independent: Option<Vec<usize>>,
+    /// The coordinates integrated (default: the model's absolute ones).
+    pub coordinates: Coordinates,
 }
 
 impl Simulation {
@@ -125,13 +214,18 @@ impl Simulation {
         Ok(())
     }
 
-    /// Builds the chosen formulation.
+    /// Builds the chosen formulation on the model (in its absolute coordinates).
     pub fn formulation(&self) -> Result<Box<dyn Formulation>, SimulationError> {
+        self.formulation_on(self.model.system())
+    }
+
+    /// Builds the chosen formulation on `system` (the model, or its joint coordinates).
+    fn formulation_on(&self, system: Arc<dyn MultibodySystem>) -> Result<Box<dyn Formulation>, SimulationError> {
         // The embedding and amalgamated formulations still partition the coordinates on a dense
         // C_q (m × n) and both store B_i by rows (n × dof) and the reduced mass matrix (dof ×
         // dof): refuse models whose dense matrices would not fit, naming the size, instead of
         // failing in the allocator.
-        let (n, m) = (self.model.num_velocities(), self.model.num_equations());
+        let (n, m) = (system.layout().n_v(), system.num_equations());
         let too_large = match self.formulation {
             FormulationKind::Augmented => None,
             _ if !dense_fits(m, n) => Some((m, n)),
@@ -152,7 +246,6 @@ impl Simulation {
             )));
         }
         let redundancy = self.redundancy;
-        let system = self.model.system();
         Ok(match self.formulation {
             FormulationKind::Augmented => Box::new(Augmented::new(
                 system,
@@ -185,6 +278,9 @@ impl Simulation {
         observer: &mut dyn FnMut(&Sample<'_>),
         cancel: &AtomicBool,
     ) -> Result<Statistics, SimulationError> {
+        if self.coordinates == Coordinates::Joint {
+            return self.run_in_joint_coordinates(observer, cancel);
+        }
         let mut f = self.formulation()?;
         Ok(integrate_cancellable(
             f.as_mut(),
@@ -196,5 +292,91 @@ impl Simulation {
             observer,
             cancel,
         )?)
+    }
+
+    /// [`Simulation::run_cancellable`] in joint coordinates: the tree from the current (assembled)
+    /// state, integrated with the chosen formulation and method; each output sample mapped back
+    /// to the model's coordinates, with `q̈`, `λ` and the residuals of the model's own formulation
+    /// there (one evaluation per sample). `cancel` is read at every output sample. A failure of
+    /// that evaluation stops the run at the sample, with the error and the statistics so far.
+    fn run_in_joint_coordinates(
+        &self,
+        observer: &mut dyn FnMut(&Sample<'_>),
+        cancel: &AtomicBool,
+    ) -> Result<Statistics, SimulationError> {
+        let not_spatial = || ModelError::InvalidParameter {
+            element: "model".into(),
+            what: "joint coordinates are for spatial models".into(),
+        };
+        let model = self
+            .model
+            .spatial()
+            .ok_or_else(not_spatial)
+            .map_err(SimulationError::JointCoordinates)?;
+        let jc = model
+            .joint_coordinates_at(&self.q, &self.qd)
+            .map_err(SimulationError::JointCoordinates)?;
+        let (q0, qd0) = jc.initial_state();
+        let mut f = self.formulation_on(jc.system())?;
+        let mut absolute = self.formulation()?;
+        let (n, m) = (self.qd.len(), self.model.num_equations());
+        let (mut q, mut qd) = (self.q.clone(), self.qd.clone());
+        let (mut qdd, mut lambda, mut c, mut cdot) = (vec![0.0; n], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        let mut frames = jc.frames();
+        let (stop, mut failed) = (AtomicBool::new(false), None);
+        let (mut violation, mut velocity_violation) = (0.0f64, 0.0f64);
+        let result = integrate_cancellable(
+            f.as_mut(),
+            self.start,
+            self.end,
+            &q0,
+            &qd0,
+            &self.integrator,
+            &mut |s| {
+                if stop.load(Ordering::Relaxed) {
+                    return;
+                }
+                jc.absolute(s.q, s.qd, &mut frames, &mut q, &mut qd);
+                if let Err(e) = absolute.accelerations(s.t, &q, &qd, None, &mut qdd, &mut lambda) {
+                    failed = Some(e);
+                    stop.store(true, Ordering::Relaxed);
+                    return;
+                }
+                absolute.residuals(s.t, &q, &qd, &mut c, &mut cdot);
+                let max = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                violation = violation.max(max(&c));
+                velocity_violation = velocity_violation.max(max(&cdot));
+                observer(&Sample {
+                    t: s.t,
+                    q: &q,
+                    qd: &qd,
+                    qdd: &qdd,
+                    lambda: &lambda,
+                    constraint_violation: max(&c),
+                    velocity_violation: max(&cdot),
+                    energy: s.energy,
+                });
+                if cancel.load(Ordering::Relaxed) {
+                    stop.store(true, Ordering::Relaxed);
+                }
+            },
+            &stop,
+        );
+        let with_violations = |mut st: Statistics| {
+            st.max_constraint_violation = violation;
+            st.max_velocity_violation = velocity_violation;
+            st
+        };
+        match (result, failed) {
+            (Ok(st), _) => Ok(with_violations(st)),
+            (Err(e), Some(cause)) => Err(SimulationError::Integration(IntegrationFailure {
+                error: IntegrationError::Dynamics(cause),
+                statistics: Box::new(with_violations(*e.statistics)),
+            })),
+            (Err(e), None) => Err(SimulationError::Integration(IntegrationFailure {
+                error: e.error,
+                statistics: Box::new(with_violations(*e.statistics)),
+            })),
+        }
     }
 }

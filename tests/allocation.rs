@@ -5,7 +5,8 @@
 //! augmented with its dense (four-bar) and sparse (chain of 64) back ends, embedding and
 //! amalgamated (dense on the four-bar, sparse amalgamated system on the chain of 64); and the same
 //! for spatial models (the anchors' slider-crank, a closed loop, and the spatial chain of 64), whose
-//! steps also advance Euler parameters and normalize them.
+//! steps also advance Euler parameters and normalize them; and the spatial chain in joint
+//! coordinates (articulated-body algorithm, and the dense solve of the composite-rigid-body `M`).
 //!
 //! Only the test's own thread is counted: libtest's harness thread allocates when it prints "has
 //! been running for over 60 seconds", which once fell inside a measured run on a loaded CI machine
@@ -116,6 +117,20 @@ fn stepping_allocates_nothing_after_setup() {
     let slider_crank_3d = spatial(dalembert_testkit::spatial::slider_crank_3d());
     let chain_3d = spatial(dalembert_testkit::spatial::chain3d(64));
     let forced_3d = spatial(dalembert_testkit::spatial::forced_double_pendulum());
+    // In joint coordinates: the articulated-body algorithm (augmented with its automatic back end,
+    // embedding, amalgamated), and the dense solve of M (composite-rigid-body algorithm) with the
+    // recursive Newton–Euler forces.
+    let joints_3d = {
+        let jc = dalembert_testkit::spatial::chain3d(16)
+            .joint_coordinates()
+            .expect("chain3d is a tree");
+        let (q, qd) = jc.initial_state();
+        Case {
+            sys: jc.system(),
+            q,
+            qd,
+        }
+    };
     // Every registered integrator with its default parameters, and every stabilization for those
     // that do not keep the constraints themselves.
     let mut cases = Vec::new();
@@ -137,6 +152,30 @@ fn stepping_allocates_nothing_after_setup() {
         (&chain, "augmented", Backend::Sparse, "chain of 64, augmented, sparse"),
         (&chain, "augmented", Backend::Tree, "chain of 64, augmented, tree"),
         (&four_bar, "embedding", Backend::Auto, "four-bar, embedding"),
+        (
+            &joints_3d,
+            "augmented",
+            Backend::Auto,
+            "spatial chain of 16 in joint coordinates, augmented (articulated body)",
+        ),
+        (
+            &joints_3d,
+            "augmented",
+            Backend::Dense,
+            "spatial chain of 16 in joint coordinates, augmented, dense",
+        ),
+        (
+            &joints_3d,
+            "embedding",
+            Backend::Auto,
+            "spatial chain of 16 in joint coordinates, embedding",
+        ),
+        (
+            &joints_3d,
+            "amalgamated",
+            Backend::Auto,
+            "spatial chain of 16 in joint coordinates, amalgamated",
+        ),
         (&chain, "embedding", Backend::Auto, "chain of 64, embedding"),
         (&four_bar, "amalgamated", Backend::Auto, "four-bar, amalgamated (dense)"),
         (

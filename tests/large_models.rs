@@ -162,6 +162,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
         integrator: IntegratorOptions::fixed(Method::rk4(), 1e-3, 1e-2),
         velocity_weights: None,
         independent: None,
+        coordinates: Default::default(),
     };
     for kind in [FormulationKind::Embedding, FormulationKind::Amalgamated] {
         sim.formulation = kind;
@@ -199,6 +200,7 @@ fn generalized_alpha_steps_a_chain_of_forty_thousand_links() {
         integrator: IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-3, 1e-3),
         velocity_weights: None,
         independent: None,
+        coordinates: Default::default(),
     };
     let stats = sim.run(&mut |_| {}).unwrap();
     assert_eq!(stats.steps, 2);

@@ -36,6 +36,7 @@ fn every_method_runs_on_every_formulation() {
                 integrator: opts,
                 velocity_weights: None,
                 independent: None,
+                coordinates: Default::default(),
             };
             let mut f = sim.formulation().unwrap();
             let mut last = Vec::new();

@@ -8,7 +8,7 @@ use super::names::{Ctx, Names};
 use super::{method_parameter, parameter_keys, unknown_name, RunSettings, Scene};
 use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
 use crate::mechanism::Mechanism;
-use crate::simulation::{FormulationKind, Simulation};
+use crate::simulation::{Coordinates, FormulationKind, Simulation};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
     BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Gear, JointAngle, JointDisplacement, Model,
@@ -324,9 +324,35 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         file.simulation.as_ref(),
         &mechanism.velocity_names(),
     )?;
+    check_coordinates(&b.ctx, file.simulation.as_ref(), &mechanism, &settings)?;
     let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
     let state = (b.q.clone(), qd, weights);
     assembled(&b.ctx, name, mechanism, state, settings, drawing)
+}
+
+/// `Ok` unless `settings` ask for joint coordinates that `mechanism` cannot take (a planar model,
+/// or a spatial one that is not a tree of revolute and prismatic joints with gravity alone): the
+/// error is placed at the `coordinates` key and names the element at fault.
+pub(crate) fn check_coordinates(
+    ctx: &Ctx<'_>,
+    sim: Option<&Spanned<SimDef>>,
+    mechanism: &Mechanism,
+    settings: &RunSettings,
+) -> Result<(), SceneError> {
+    if settings.coordinates != Coordinates::Joint {
+        return Ok(());
+    }
+    let problem = match mechanism.spatial() {
+        None => Some("joint coordinates are for spatial scenes".to_string()),
+        Some(m) => m.joint_coordinates().err().map(|e| e.to_string()),
+    };
+    match problem {
+        None => Ok(()),
+        Some(what) => {
+            let span = sim.map(|s| key_span(ctx.text, &s.span(), "coordinates").unwrap_or(s.span()));
+            Err(ctx.err(span, format!("[simulation]: coordinates = \"joint\": {what}")))
+        }
+    }
 }
 
 /// The scene of `model` with its initial state `(q, q̇, velocity weights)` assembled (position
@@ -350,6 +376,7 @@ pub(crate) fn assembled(
         integrator: settings.integrator_options(),
         velocity_weights: Some(weights),
         independent: settings.independent.clone(),
+        coordinates: settings.coordinates,
     };
     sim.assemble()
         .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
@@ -618,6 +645,9 @@ pub(crate) fn settings(
         s.formulation =
             FormulationKind::parse(f).ok_or_else(|| err(unknown_name("formulation", f, FormulationKind::NAMES)))?;
     }
+    if let Some(c) = &d.coordinates {
+        s.coordinates = Coordinates::parse(c).ok_or_else(|| err(unknown_name("coordinates", c, Coordinates::NAMES)))?;
+    }
     if let Some(r) = &d.redundant {
         s.redundancy = super::parse_redundancy(r)
             .ok_or_else(|| err(unknown_name("redundancy treatment", r, super::REDUNDANCY_NAMES)))?;
@@ -683,7 +713,7 @@ pub(crate) fn settings(
 
 /// The span of `key` where the table starting at `table` sets it (`key = …` at the start of a
 /// line, before the next table header).
-fn key_span(text: &str, table: &std::ops::Range<usize>, key: &str) -> Option<std::ops::Range<usize>> {
+pub(crate) fn key_span(text: &str, table: &std::ops::Range<usize>, key: &str) -> Option<std::ops::Range<usize>> {
     let body = text.get(table.start..)?;
     let mut offset = table.start;
     for (k, line) in body.split_inclusive('\n').enumerate() {

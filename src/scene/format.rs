@@ -141,6 +141,7 @@ pub(crate) struct SimDef {
     pub stabilization: Option<String>,
     pub redundant: Option<String>,
     pub independent: Option<Vec<String>>,
+    pub coordinates: Option<String>,
     #[serde(flatten)]
     pub parameters: std::collections::BTreeMap<String, toml::Value>,
 }
@@ -155,4 +156,5 @@ pub(crate) const SIM_KEYS: &[&str] = &[
     "stabilization",
     "redundant",
     "independent",
+    "coordinates",
 ];

@@ -127,6 +127,7 @@ impl Scene {
             integrator: self.settings.integrator_options(),
             velocity_weights: None,
             independent: self.settings.independent.clone(),
+            coordinates: self.settings.coordinates,
         }
     }
 }

@@ -2,7 +2,7 @@
 //! validated once for both (the messages name the flag or the keyword).
 
 use super::{parse_redundancy, unknown_name, RunSettings, REDUNDANCY_NAMES};
-use crate::FormulationKind;
+use crate::{Coordinates, FormulationKind};
 use dalembert_integrators::{method_names, Method, Stabilization, METHODS};
 
 /// How the caller spells a setting's name in messages.
@@ -35,6 +35,8 @@ pub struct RunOverrides {
     pub stabilization: Option<String>,
     /// `error | minimum-norm`.
     pub redundant: Option<String>,
+    /// `absolute | joint`.
+    pub coordinates: Option<String>,
 }
 
 impl RunOverrides {
@@ -57,6 +59,9 @@ impl RunOverrides {
         if let Some(i) = &self.integrator {
             let m = Method::named(i).ok_or_else(|| unknown_name("integrator", i, &method_names()))?;
             s.set_method(m);
+        }
+        if let Some(c) = &self.coordinates {
+            s.coordinates = Coordinates::parse(c).ok_or_else(|| unknown_name("coordinates", c, Coordinates::NAMES))?;
         }
         if let Some(r) = &self.redundant {
             s.redundancy =

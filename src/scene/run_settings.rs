@@ -1,7 +1,7 @@
 //! The run a scene asks for (`[simulation]`): formulation, method and its parameters (read from
 //! the integrators' registry), step, output interval, stabilization.
 
-use crate::simulation::FormulationKind;
+use crate::simulation::{Coordinates, FormulationKind};
 use dalembert_constraints::RedundancyTreatment;
 use dalembert_integrators::{IntegratorOptions, Method, Parameter, Stabilization, METHODS};
 
@@ -32,6 +32,10 @@ pub struct RunSettings {
     /// Every method parameter given (`rtol = 1e-6`), by key, whether or not [`Self::method`] has
     /// it: choosing another method later ([`RunSettings::set_method`]) applies those it has.
     pub parameters: Vec<(&'static str, f64)>,
+    /// The coordinates integrated (`coordinates = "absolute" | "joint"`): joint coordinates for a
+    /// spatial tree of revolute and prismatic joints (`docs/joint-coordinates.md`). Default
+    /// absolute.
+    pub coordinates: Coordinates,
 }
 
 impl Default for RunSettings {
@@ -46,6 +50,7 @@ impl Default for RunSettings {
             redundancy: RedundancyTreatment::default(),
             independent: None,
             parameters: Vec::new(),
+            coordinates: Coordinates::Absolute,
         }
     }
 }

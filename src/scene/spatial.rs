@@ -478,6 +478,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         file.simulation.as_ref(),
         &mechanism.velocity_names(),
     )?;
+    build::check_coordinates(&ctx, file.simulation.as_ref(), &mechanism, &settings)?;
     let name = file.scene.name.unwrap_or_else(|| origin.to_string());
     build::assembled(&ctx, name, mechanism, (q, qd, weights), settings, Drawing::default())
 }

@@ -55,6 +55,10 @@ pub struct RunArgs {
     /// reactions)
     #[arg(long)]
     redundant: Option<String>,
+    /// Coordinates integrated: absolute | joint (a spatial tree of revolute and prismatic joints in
+    /// joint coordinates, solved by the articulated-body algorithm; outputs are the same columns)
+    #[arg(long)]
+    coordinates: Option<String>,
 }
 
 /// Loads the scene and applies the command-line overrides (warnings printed).
@@ -69,6 +73,7 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
         every: a.every,
         stabilization: a.stabilization.clone(),
         redundant: a.redundant.clone(),
+        coordinates: a.coordinates.clone(),
     };
     let (settings, warnings) = o.apply(&scene.settings, Spelling::Flags)?;
     for w in warnings {

@@ -188,9 +188,11 @@ impl PyScene {
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
     /// line's flags do); the methods' parameters (`rtol`, `atol`, `rho_inf`) are keywords too. Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
     /// so far) when the run stops early; with `strict=True` also when a conservative model's
-    /// energy drifts by more than 1 % (otherwise a warning). The GIL is released during the run,
-    /// and Ctrl-C stops it within one step (KeyboardInterrupt, rows so far in `.run`).
-    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, redundant=None, strict=false, **parameters))]
+    /// energy drifts by more than 1 % (otherwise a warning). `coordinates="joint"` runs a spatial
+    /// tree in joint coordinates (same outputs). The GIL is released during the run, and Ctrl-C
+    /// stops it within one step (within one output interval in joint coordinates;
+    /// KeyboardInterrupt, rows so far in `.run`).
+    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, redundant=None, coordinates=None, strict=false, **parameters))]
     fn simulate(
         &self,
         py: Python<'_>,
@@ -201,6 +203,7 @@ impl PyScene {
         every: Option<f64>,
         stabilization: Option<String>,
         redundant: Option<String>,
+        coordinates: Option<String>,
         strict: bool,
         parameters: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<PyRun> {
@@ -221,6 +224,7 @@ impl PyScene {
             every,
             stabilization,
             redundant,
+            coordinates,
         };
         let (settings, warnings) = o
             .apply(&self.inner.settings, Spelling::Keywords)

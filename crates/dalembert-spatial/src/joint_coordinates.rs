@@ -37,8 +37,18 @@ fn refuse(element: String, what: &str) -> ModelError {
 impl Model {
     /// This model in joint coordinates, when it is a tree of revolute and prismatic joints
     /// rooted at the ground, with gravity and no force elements or drivers; otherwise an error
-    /// naming the first element that joint coordinates cannot take.
+    /// naming the first element that joint coordinates cannot take. The tree's zero
+    /// configuration is the bodies' initial poses ([`Model::initial_state`]); see
+    /// [`Model::joint_coordinates_at`].
     pub fn joint_coordinates(&self) -> Result<JointCoordinates, ModelError> {
+        let (q, v) = self.initial_state();
+        self.joint_coordinates_at(&q, &v)
+    }
+
+    /// [`Model::joint_coordinates`] with the tree's zero configuration at the absolute state
+    /// `(q, v)` (an assembled state: the joints hold there), and the initial rates the joints'
+    /// relative velocities along their axes at `v`.
+    pub fn joint_coordinates_at(&self, q: &[f64], v: &[f64]) -> Result<JointCoordinates, ModelError> {
         if let Some(d) = self.driver_names().next() {
             return Err(refuse(format!("driver '{d}'"), "joint coordinates take no drivers yet"));
         }
@@ -59,13 +69,30 @@ impl Model {
                 ),
             ));
         }
-        let frames: Vec<(Vector3<f64>, Matrix3<f64>)> = self
-            .bodies()
-            .iter()
-            .map(|b| {
+        if q.len() != NQ * n || v.len() != NV * n {
+            return Err(refuse(
+                "state".into(),
+                &format!(
+                    "needs {} positions and {} velocities, got {} and {}",
+                    NQ * n,
+                    NV * n,
+                    q.len(),
+                    v.len()
+                ),
+            ));
+        }
+        // Per body: centre of mass, axes, centre-of-mass velocity and angular velocity (global).
+        let frames: Vec<(Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>)> = (0..n)
+            .map(|k| {
+                let (qk, vk) = (&q[NQ * k..NQ * (k + 1)], &v[NV * k..NV * (k + 1)]);
+                let p = euler_parameters::normalized(&[qk[3], qk[4], qk[5], qk[6]]);
+                let a = euler_parameters::rotation(&p);
+                let w = a * Vector3::new(vk[3], vk[4], vk[5]);
                 (
-                    b.position,
-                    euler_parameters::rotation(&euler_parameters::normalized(&b.orientation)),
+                    Vector3::new(qk[0], qk[1], qk[2]),
+                    a,
+                    Vector3::new(vk[0], vk[1], vk[2]),
+                    w,
                 )
             })
             .collect();
@@ -122,7 +149,7 @@ impl Model {
         let (mut q0, mut v0) = (vec![0.0; n], vec![0.0; n]);
         for (t, &(child, parent, k)) in order.iter().enumerate() {
             let j = &joints[k];
-            let (r, a) = frames[child];
+            let (r, a, vel, w) = frames[child];
             let (point, axes) = if j.body_j == Some(child) {
                 (j.point_j, j.axes_j)
             } else {
@@ -146,15 +173,12 @@ impl Model {
             // Initial rate: the relative motion along the axis.
             let axis_global = a * axis;
             let (w_parent, v_parent) = parent.map_or((Vector3::zeros(), Vector3::zeros()), |p| {
-                let b = &self.bodies()[p];
-                (
-                    b.angular_velocity,
-                    b.velocity + b.angular_velocity.cross(&(origin[t] - b.position)),
-                )
+                let (rp, _, vp, wp) = frames[p];
+                (wp, vp + wp.cross(&(origin[t] - rp)))
             });
             v0[t] = match kind {
-                tree::JointKind::Revolute => axis_global.dot(&(body.angular_velocity - w_parent)),
-                _ => axis_global.dot(&(body.velocity + body.angular_velocity.cross(&(origin[t] - r)) - v_parent)),
+                tree::JointKind::Revolute => axis_global.dot(&(w - w_parent)),
+                _ => axis_global.dot(&(vel + w.cross(&(origin[t] - r)) - v_parent)),
             };
             q0[t] = 0.0;
             let rows = |m: &Matrix3<f64>| [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]);

@@ -76,7 +76,10 @@ impl Articulated {
     }
 
     /// Each body's spatial acceleration `[α; a_O]` (body components, origin on its joint) from the
-    /// last [`Articulated::accelerations`], and pass 1's velocities `[ω; v_O]`.
+    /// last [`Articulated::accelerations`], and pass 1's velocities `[ω; v_O]`. The accelerations
+    /// include the fictitious base acceleration `[0; −g]` that stands for gravity: the body's true
+    /// acceleration is `[α; a_O + Rᵀ g]` with `R` its axes in the world
+    /// ([`KinematicTree::world_frames`]).
     pub fn body_motion(&self) -> (&[Sv], &[Sv]) {
         (&self.pass.f, &self.pass.v)
     }

@@ -88,6 +88,9 @@ pub(crate) struct Link {
     pub location: V3,
     /// Transpose of the body axes at zero coordinate (parent components → body components).
     pub rotation_t: M3,
+    /// `[a]× R_Tᵀ` and `[a]×² R_Tᵀ`: the joint rotation's transform is
+    /// `E = R_Jᵀ R_Tᵀ = R_Tᵀ − sin q [a]× R_Tᵀ + (1 − cos q) [a]×² R_Tᵀ` (Rodrigues).
+    pub rodrigues: (M3, M3),
     pub mass: f64,
     pub com: V3,
     /// Spatial inertia about the body origin.
@@ -134,8 +137,20 @@ impl KinematicTree {
             if !finite(inertia.as_slice()) || (inertia - inertia.transpose()).amax() > 1e-12 * inertia.amax() {
                 return Err(bad(b, "inertia tensor must be finite and symmetric".into()));
             }
-            if inertia.symmetric_eigenvalues().min() < -1e-12 * inertia.amax() {
+            let mut moments: Vec<f64> = inertia.symmetric_eigenvalues().iter().copied().collect();
+            moments.sort_by(f64::total_cmp);
+            let tol = 1e-12 * inertia.amax();
+            if moments[0] < -tol {
                 return Err(bad(b, "inertia tensor must be positive semi-definite".into()));
+            }
+            if moments[0] + moments[1] < moments[2] - tol {
+                return Err(bad(
+                    b,
+                    format!(
+                        "principal moments {:e}, {:e}, {:e} violate the triangle inequality J1 + J2 >= J3 of any rigid body",
+                        moments[0], moments[1], moments[2]
+                    ),
+                ));
             }
             let axis = V3::from(b.axis);
             if !finite(&b.axis) || axis.norm() < 1e-12 {
@@ -159,12 +174,15 @@ impl KinematicTree {
                 }
             }
             let com = V3::from(b.com);
+            let (axis, rotation_t) = (axis.normalize(), rotation.transpose());
+            let ax = axis.cross_matrix();
             links.push(Link {
+                rodrigues: (ax * rotation_t, ax * ax * rotation_t),
                 parent: b.parent,
                 kind: b.kind,
-                axis: axis.normalize(),
+                axis,
                 location: V3::from(b.location),
-                rotation_t: rotation.transpose(),
+                rotation_t,
                 mass: b.mass,
                 com,
                 inertia: Inertia::rigid(b.mass, &com, &inertia),

@@ -61,12 +61,10 @@ impl KinematicTree {
         let l = &self.links[i];
         match l.kind {
             JointKind::Revolute => {
-                // Rodrigues: R_J = I + sin q [a]× + (1 − cos q) [a]×²; E = R_Jᵀ R_Tᵀ.
                 let (s, c) = q.sin_cos();
-                let ax = l.axis.cross_matrix();
-                let rj_t = M3::identity() - ax * s + ax * ax * (1.0 - c);
+                let (p1, p2) = &l.rodrigues;
                 Transform {
-                    e: rj_t * l.rotation_t,
+                    e: l.rotation_t - p1 * s + p2 * (1.0 - c),
                     r: l.location,
                 }
             }
