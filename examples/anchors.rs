@@ -199,8 +199,11 @@ struct RunResult {
     steps: u64,
 }
 
+/// A system with an initial state `(q, q̇)`.
+type Start = (Arc<dyn MultibodySystem>, Vec<f64>, Vec<f64>);
+
 /// The system and initial state a variant runs: the scene's, or its joint-coordinate form.
-fn system_of(mech: &Mechanism, joint_space: bool) -> Option<(Arc<dyn MultibodySystem>, Vec<f64>, Vec<f64>)> {
+fn system_of(mech: &Mechanism, joint_space: bool) -> Option<Start> {
     if !joint_space {
         return Some((mech.model.clone(), mech.q.clone(), mech.qd.clone()));
     }

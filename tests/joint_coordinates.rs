@@ -376,8 +376,11 @@ fn what_joint_coordinates_cannot_take_is_refused_naming_it() {
     assert!(e.contains("body 'c'") && e.contains("ground"), "{e}");
 }
 
-/// The samples of a scene's run: time, positions, velocities, multipliers.
-fn samples(scene: &dalembert::Scene) -> Vec<(f64, Vec<f64>, Vec<f64>, Vec<f64>)> {
+/// A sample of a run: time, positions, velocities, multipliers.
+type Row = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The samples of a scene's run.
+fn samples(scene: &dalembert::Scene) -> Vec<Row> {
     let mut out = Vec::new();
     scene
         .simulation()

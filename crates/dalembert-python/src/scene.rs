@@ -346,7 +346,7 @@ impl PyScene {
     /// Writes a self-contained HTML animation of a simulation with the scene's settings.
     #[pyo3(signature = (path, max_frames=2400))]
     fn animate(&self, py: Python<'_>, path: std::path::PathBuf, max_frames: usize) -> PyResult<()> {
-        let run = self.simulate(py, None, None, None, None, None, None, None, false, None)?;
+        let run = self.simulate(py, None, None, None, None, None, None, None, None, false, None)?;
         run.animate_to(&path, max_frames)
     }
 

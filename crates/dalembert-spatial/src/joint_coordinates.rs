@@ -27,6 +27,9 @@ pub struct JointCoordinates {
     v0: Vec<f64>,
 }
 
+/// A body's centre of mass, axes, centre-of-mass velocity and angular velocity (global).
+type BodyState = (Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>);
+
 fn refuse(element: String, what: &str) -> ModelError {
     ModelError::InvalidParameter {
         element,
@@ -82,7 +85,7 @@ impl Model {
             ));
         }
         // Per body: centre of mass, axes, centre-of-mass velocity and angular velocity (global).
-        let frames: Vec<(Vector3<f64>, Matrix3<f64>, Vector3<f64>, Vector3<f64>)> = (0..n)
+        let frames: Vec<BodyState> = (0..n)
             .map(|k| {
                 let (qk, vk) = (&q[NQ * k..NQ * (k + 1)], &v[NV * k..NV * (k + 1)]);
                 let p = euler_parameters::normalized(&[qk[3], qk[4], qk[5], qk[6]]);
