@@ -342,11 +342,7 @@ pub(crate) fn check_coordinates(
     if settings.coordinates != Coordinates::Joint {
         return Ok(());
     }
-    let problem = match mechanism.spatial() {
-        None => Some("joint coordinates are for spatial scenes".to_string()),
-        Some(m) => m.joint_coordinates().err().map(|e| e.to_string()),
-    };
-    match problem {
+    match super::joint_coordinates_problem(mechanism) {
         None => Ok(()),
         Some(what) => {
             let span = sim.map(|s| key_span(ctx.text, &s.span(), "coordinates").unwrap_or(s.span()));

@@ -93,7 +93,28 @@ pub struct Scene {
     pub origin: String,
 }
 
+/// Why `mechanism` cannot run in joint coordinates (one line naming the element), or `None`.
+pub(crate) fn joint_coordinates_problem(mechanism: &Mechanism) -> Option<String> {
+    match mechanism.spatial() {
+        None => Some("joint coordinates are for spatial scenes".to_string()),
+        Some(m) => m.joint_coordinates().err().map(|e| e.to_string()),
+    }
+}
+
 impl Scene {
+    /// `Ok` unless the settings ask for joint coordinates that the model cannot take: then one
+    /// line naming the joint, force or body at fault (for settings changed after loading, by
+    /// the command line or Python; a scene file's own are checked when it loads).
+    pub fn check_settings(&self) -> Result<(), String> {
+        if self.settings.coordinates != crate::Coordinates::Joint {
+            return Ok(());
+        }
+        match joint_coordinates_problem(&self.model) {
+            None => Ok(()),
+            Some(what) => Err(format!("coordinates = joint: {what}")),
+        }
+    }
+
     /// Reads, builds and assembles a scene file.
     pub fn from_path(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();

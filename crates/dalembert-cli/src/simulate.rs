@@ -80,6 +80,7 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
         eprintln!("warning: {w}");
     }
     scene.settings = settings;
+    scene.check_settings()?;
     Ok(scene)
 }
 
@@ -110,16 +111,26 @@ pub fn run(a: Args) -> Result<(), String> {
         model.num_equations(),
         dof
     );
-    outln!(
-        "method       {} formulation, {}, constraints: {}",
-        s.formulation.name(),
-        method,
-        if m.entry().keeps_constraints {
-            "kept by the method (positions exact to its Newton tolerance)"
-        } else {
-            s.stabilization.name()
-        }
-    );
+    if s.coordinates == dalembert::Coordinates::Joint {
+        // One coordinate per joint, no constraint equations: the three formulations are one
+        // equation, solved by the articulated-body algorithm; the joints hold by construction.
+        outln!(
+            "method       joint coordinates ({} joints, articulated-body algorithm), {}; outputs mapped to the absolute coordinates",
+            mechanism.num_bodies(),
+            method
+        );
+    } else {
+        outln!(
+            "method       {} formulation, {}, constraints: {}",
+            s.formulation.name(),
+            method,
+            if m.entry().keeps_constraints {
+                "kept by the method (positions exact to its Newton tolerance)"
+            } else {
+                s.stabilization.name()
+            }
+        );
+    }
     let mut csv = match &a.output {
         Some(p) => {
             let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;

@@ -62,3 +62,26 @@ def test_spatial_columns_and_refusals(scenes, tmp_path):
         assert report["reactions"][c] == pytest.approx(run[c][0], rel=1e-12, abs=1e-15)
     with pytest.raises(ValueError, match="spatial"):
         run.animate(tmp_path / "x.html")
+
+
+def test_joint_coordinates_give_the_absolute_run(scenes):
+    """The shipped spatial chain runs in joint coordinates (its scene says so) and in absolute
+    coordinates (the keyword): the same columns, the same motion. Both are RK4 at 1 ms on different
+    equations for one motion: their states differ by the two truncation errors, below 1e-9 m at
+    t = 1 s for this chain (the anchors' errors, docs/performance.md); 1e-8 leaves room. The
+    reactions are the model's multipliers at nearly equal states: 1e-6 of their largest."""
+    scene = dalembert.Scene.load(scenes / "spatial-chain-16.toml")
+    joint = scene.simulate(end=1.0)
+    absolute = scene.simulate(end=1.0, coordinates="absolute")
+    assert joint.columns == absolute.columns
+    for c in ["link15.x", "link15.z", "link7.y", "link3.e2"]:
+        assert np.max(np.abs(joint[c] - absolute[c])) < 1e-8, c
+    for c in ["joint0.fz", "joint8.mx"]:
+        scale = np.max(np.abs(absolute[c]))
+        assert np.max(np.abs(joint[c] - absolute[c])) < 1e-6 * scale, c
+    # The chain falls: a run that stood still would pass the comparisons above.
+    assert joint["link15.z"][-1] < -1.0
+    with pytest.raises(ValueError, match="joint 'pivot'"):
+        dalembert.Scene.load(scenes / "heavy-top.toml").simulate(end=0.1, coordinates="joint")
+    with pytest.raises(ValueError, match="coordinates"):
+        scene.simulate(end=0.1, coordinates="relative")
