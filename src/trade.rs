@@ -4,7 +4,7 @@
 //! plots it; the Python package returns it.
 
 use crate::scene::unknown_name;
-use crate::{FormulationKind, Scene, SimulationError};
+use crate::{Coordinates, FormulationKind, Scene, SimulationError};
 use dalembert_integrators::{
     method_names, Applies, IntegrationError, IntegratorOptions, Method, Stabilization, TradeAxis,
 };
@@ -12,7 +12,9 @@ use dalembert_integrators::{
 /// The grid of settings to try. [`TradeGrid::default`] is the command line's default grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TradeGrid {
-    /// Formulation names.
+    /// Formulation names, and [`JOINT`]: the scene in joint coordinates (a spatial tree of
+    /// revolute and prismatic joints; `docs/joint-coordinates.md`), where the three formulations
+    /// are one equation and so one entry. The formulations run in absolute coordinates.
     pub formulations: Vec<String>,
     /// Integrator names (of [`dalembert_integrators::METHODS`]).
     pub integrators: Vec<String>,
@@ -30,11 +32,18 @@ pub struct TradeGrid {
     pub every: Option<f64>,
 }
 
+/// The grid's name for the joint-coordinate runs (`joint/rk4`, …).
+pub const JOINT: &str = "joint";
+
 impl Default for TradeGrid {
+    /// Every formulation and the joint coordinates (dropped by [`trade`] for a model that cannot
+    /// take them), every method, stabilization and the steps and tolerances below.
     fn default() -> Self {
-        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect();
+        let names = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<String>>();
+        let mut formulations = names(FormulationKind::NAMES);
+        formulations.push(JOINT.to_string());
         TradeGrid {
-            formulations: names(FormulationKind::NAMES),
+            formulations,
             integrators: names(&method_names()),
             stabilizations: names(Stabilization::NAMES),
             steps: vec![1e-2, 3e-3, 1e-3, 3e-4],
@@ -99,7 +108,7 @@ type Outcome = (f64, u64, f64, f64);
 /// Samples `[q, q̇]` at the comparison times, and the outcome or the failure.
 fn samples(
     scene: &Scene,
-    kind: FormulationKind,
+    kind: (FormulationKind, Coordinates),
     opts: IntegratorOptions,
     end: f64,
 ) -> (Vec<Vec<f64>>, Result<Outcome, SimulationError>) {
@@ -110,12 +119,13 @@ fn samples(
 /// [`samples`], and the singular positions the run bridged (`Statistics::bridges`).
 fn samples_bridged(
     scene: &Scene,
-    kind: FormulationKind,
+    (kind, coordinates): (FormulationKind, Coordinates),
     opts: IntegratorOptions,
     end: f64,
 ) -> (Vec<Vec<f64>>, Result<Outcome, SimulationError>, u64) {
     let mut sim = scene.simulation();
     sim.formulation = kind;
+    sim.coordinates = coordinates;
     sim.integrator = opts;
     sim.end = end;
     let mut out = Vec::new();
@@ -134,7 +144,10 @@ fn samples_bridged(
 
 /// The runs of `g`: formulation, label, options and parameter, from each method's
 /// [`TradeAxis`] in the registry. Unknown names are one-line errors.
-fn runs_of(g: &TradeGrid) -> Result<Vec<(FormulationKind, String, IntegratorOptions, f64)>, String> {
+/// A run of the grid: formulation and coordinates, label, options, step or tolerance.
+type GridRun = ((FormulationKind, Coordinates), String, IntegratorOptions, f64);
+
+fn runs_of(g: &TradeGrid) -> Result<Vec<GridRun>, String> {
     for (values, what) in [(&g.steps, "steps"), (&g.tolerances, "tolerances")] {
         if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(format!("{what}: every value must be positive and finite, got {v}"));
@@ -151,13 +164,22 @@ fn runs_of(g: &TradeGrid) -> Result<Vec<(FormulationKind, String, IntegratorOpti
         .collect::<Result<Vec<_>, _>>()?;
     let mut out = Vec::new();
     for f in &g.formulations {
-        let kind = FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, FormulationKind::NAMES))?;
+        let joint = f == JOINT;
+        let kind = match joint {
+            true => (FormulationKind::Augmented, Coordinates::Joint),
+            false => {
+                let mut names = FormulationKind::NAMES.to_vec();
+                names.push(JOINT);
+                let k = FormulationKind::parse(f).ok_or_else(|| unknown_name("formulation", f, &names))?;
+                (k, Coordinates::Absolute)
+            }
+        };
         for i in &g.integrators {
             let method = Method::named(i).ok_or_else(|| unknown_name("integrator", i, &method_names()))?;
             let entry = method.entry();
             // A method for the augmented index-3 equations only would, with another formulation,
             // measure the augmented method under another name.
-            if entry.applies == Applies::AugmentedIndex3 && kind != FormulationKind::Augmented {
+            if entry.applies == Applies::AugmentedIndex3 && kind.0 != FormulationKind::Augmented {
                 continue;
             }
             match entry.trade {
@@ -171,10 +193,16 @@ fn runs_of(g: &TradeGrid) -> Result<Vec<(FormulationKind, String, IntegratorOpti
                             IntegratorOptions::fixed(m, 1e-3, 1.0).with_stabilization(Stabilization::projection());
                         // Steps limited only by the tolerance (dense output gives the samples).
                         o.max_step = f64::INFINITY;
-                        out.push((kind, format!("{f}/{}/projection", entry.name), o, tol));
+                        // In joint coordinates there is nothing to project: no suffix.
+                        let label = match joint {
+                            true => format!("{f}/{}", entry.name),
+                            false => format!("{f}/{}/projection", entry.name),
+                        };
+                        out.push((kind, label, o, tol));
                     }
                 }
-                TradeAxis::Steps if entry.keeps_constraints => {
+                // Without constraint equations every stabilization is the same run: one variant.
+                TradeAxis::Steps if entry.keeps_constraints || joint => {
                     for &h in &g.steps {
                         let o = IntegratorOptions::fixed(method, h, 1.0);
                         out.push((kind, format!("{f}/{}", entry.name), o, h));
@@ -198,6 +226,18 @@ fn runs_of(g: &TradeGrid) -> Result<Vec<(FormulationKind, String, IntegratorOpti
 /// or value of the grid that is not valid, or a reference run that fails (each grid run that
 /// fails is a row with its status instead).
 pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize)) -> Result<Trade, String> {
+    let mut g = g.clone();
+    if let Some(problem) = crate::scene::joint_coordinates_problem(&scene.model) {
+        if g.formulations.iter().any(|f| f == JOINT) {
+            // The default grid offers joint coordinates where the model takes them; a grid that
+            // names them for a model that does not is an error.
+            if g.formulations != TradeGrid::default().formulations {
+                return Err(format!("formulation '{JOINT}': {problem}"));
+            }
+            g.formulations.retain(|f| f != JOINT);
+        }
+    }
+    let g = &g;
     let grid = runs_of(g)?;
     let end = g.end.unwrap_or(scene.settings.end.min(5.0));
     let largest_step = g.steps.iter().cloned().fold(0.0f64, f64::max);
@@ -216,7 +256,8 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
         IntegratorOptions::fixed(Method::dopri5(1e-12, 1e-12), 1e-4, 1.0)
             .with_stabilization(Stabilization::Projection { tolerance: 1e-12 }),
     );
-    let (mut reference, status, bridges) = samples_bridged(scene, FormulationKind::Augmented, ref_opts, end);
+    let absolute = (FormulationKind::Augmented, Coordinates::Absolute);
+    let (mut reference, status, bridges) = samples_bridged(scene, absolute, ref_opts, end);
     let mut reference_name = "dopri5 at rtol = atol = 1e-12".to_string();
     // An adaptive step does not cross a singular position of a closed chain to its tolerance: it
     // stops there, or bridges it with steps checked to about 31 × the tolerances only. The
@@ -237,7 +278,7 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
             IntegratorOptions::fixed(Method::rk4(), h, 1.0)
                 .with_stabilization(Stabilization::Projection { tolerance: 1e-12 }),
         );
-        let (r, status) = samples(scene, FormulationKind::Augmented, opts, end);
+        let (r, status) = samples(scene, absolute, opts, end);
         status.map_err(|e2| format!("reference run failed: {e}; and the fixed-step fallback: {e2}"))?;
         reference = r;
         reference_name = format!(

@@ -19,8 +19,9 @@ pub struct Args {
     /// step (a fixed step is never longer than the interval between samples).
     #[arg(long, allow_hyphen_values = true)]
     every: Option<f64>,
-    /// Formulations to try (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "augmented,embedding,amalgamated")]
+    /// Formulations to try (comma-separated), and `joint`: the scene in joint coordinates (a
+    /// spatial tree of revolute and prismatic joints; dropped from the default for other models).
+    #[arg(long, value_delimiter = ',', default_values_t = TradeGrid::default().formulations)]
     formulations: Vec<String>,
     /// Integrators to try (default: every registered method).
     #[arg(long, value_delimiter = ',', default_values_t = registry_names(&dalembert::integrators::method_names()))]
