@@ -216,11 +216,16 @@ impl Simulation {
 
     /// Builds the chosen formulation on the model (in its absolute coordinates).
     pub fn formulation(&self) -> Result<Box<dyn Formulation>, SimulationError> {
-        self.formulation_on(self.model.system())
+        self.formulation_on(self.model.system(), self.independent.clone())
     }
 
-    /// Builds the chosen formulation on `system` (the model, or its joint coordinates).
-    fn formulation_on(&self, system: Arc<dyn MultibodySystem>) -> Result<Box<dyn Formulation>, SimulationError> {
+    /// Builds the chosen formulation on `system` (the model, or its joint coordinates), with the
+    /// embedding formulation's `independent` velocity indices of that system.
+    fn formulation_on(
+        &self,
+        system: Arc<dyn MultibodySystem>,
+        independent: Option<Vec<usize>>,
+    ) -> Result<Box<dyn Formulation>, SimulationError> {
         // The embedding and amalgamated formulations still partition the coordinates on a dense
         // C_q (m × n) and both store B_i by rows (n × dof) and the reduced mass matrix (dof ×
         // dof): refuse models whose dense matrices would not fit, naming the size, instead of
@@ -258,7 +263,7 @@ impl Simulation {
                 system,
                 EmbeddingOptions {
                     redundancy,
-                    independent: self.independent.clone(),
+                    independent,
                     ..Default::default()
                 },
             )),
@@ -317,7 +322,9 @@ impl Simulation {
             .joint_coordinates_at(&self.q, &self.qd)
             .map_err(SimulationError::JointCoordinates)?;
         let (q0, qd0) = jc.initial_state();
-        let mut f = self.formulation_on(jc.system())?;
+        // The model's independent coordinates do not index the joint coordinates (which are all
+        // independent).
+        let mut f = self.formulation_on(jc.system(), None)?;
         let mut absolute = self.formulation()?;
         let (n, m) = (self.qd.len(), self.model.num_equations());
         let (mut q, mut qd) = (self.q.clone(), self.qd.clone());

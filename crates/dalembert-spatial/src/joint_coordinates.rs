@@ -99,53 +99,59 @@ impl Model {
                 )
             })
             .collect();
-        // Breadth first from the ground: each joint attaches the body it reaches to its parent.
+        // The joints at each body (the ground is slot n), then depth first from the ground: each
+        // joint attaches the body it reaches to its parent. O(bodies + joints).
+        let slot = |b: Option<usize>| b.unwrap_or(n);
+        let mut at: Vec<Vec<usize>> = vec![Vec::new(); n + 1];
+        for (k, j) in joints.iter().enumerate() {
+            at[slot(j.body_i)].push(k);
+            at[slot(j.body_j)].push(k);
+        }
         let mut order: Vec<(usize, Option<usize>, usize)> = Vec::with_capacity(n); // (body, parent, joint)
-        let mut placed = vec![false; n];
+        let mut tree_index = vec![usize::MAX; n];
         let mut used = vec![false; joints.len()];
         let mut frontier: Vec<Option<usize>> = vec![None];
         while let Some(parent) = frontier.pop() {
-            for (k, j) in joints.iter().enumerate() {
-                let child = match (j.body_i, j.body_j) {
-                    (a, Some(b)) if a == parent => b,
-                    (Some(a), b) if b == parent => a,
-                    _ => continue,
-                };
-                if used[k] {
+            for &k in &at[slot(parent)] {
+                if std::mem::replace(&mut used[k], true) {
                     continue;
                 }
-                used[k] = true;
-                if placed[child] {
-                    return Err(refuse(
+                let j = &joints[k];
+                let loop_error = || {
+                    refuse(
                         format!("joint '{}'", j.name),
                         "closes a loop: joint coordinates need a tree (use the absolute coordinates)",
-                    ));
+                    )
+                };
+                // The other end; the ground reached again closes a loop.
+                let child = if j.body_i == parent { j.body_j } else { j.body_i };
+                let Some(child) = child else {
+                    return Err(loop_error());
+                };
+                if tree_index[child] != usize::MAX {
+                    return Err(loop_error());
                 }
                 match j.kind {
                     Some(JointKind::Revolute | JointKind::Prismatic) => {}
-                    Some(kind) => {
+                    other => {
+                        let kind = other.map_or("a driver", |k| k.name());
                         return Err(refuse(
                             format!("joint '{}'", j.name),
-                            &format!(
-                                "joint coordinates take revolute and prismatic joints, not {}",
-                                kind.name()
-                            ),
-                        ))
+                            &format!("joint coordinates take revolute and prismatic joints, not {kind}"),
+                        ));
                     }
-                    None => unreachable!("drivers are not joints"),
                 }
-                placed[child] = true;
+                tree_index[child] = order.len();
                 order.push((child, parent, k));
                 frontier.push(Some(child));
             }
         }
-        if let Some(k) = placed.iter().position(|p| !p) {
+        if let Some(k) = tree_index.iter().position(|&t| t == usize::MAX) {
             return Err(refuse(
                 format!("body '{}'", self.bodies()[k].name),
                 "is not joined to the ground through the tree",
             ));
         }
-        let index_of = |body: usize| order.iter().position(|o| o.0 == body);
         // Each tree body's frame: origin at its joint (global), the body's axes.
         let mut origin = vec![Vector3::zeros(); n];
         let mut bodies = Vec::with_capacity(n);
@@ -163,7 +169,7 @@ impl Model {
             let (location, rotation) = match parent {
                 None => (origin[t], a),
                 Some(p) => {
-                    let (tp, ap) = (index_of(p).unwrap_or(0), frames[p].1);
+                    let (tp, ap) = (tree_index[p], frames[p].1);
                     (ap.transpose() * (origin[t] - origin[tp]), ap.transpose() * a)
                 }
             };
@@ -187,7 +193,7 @@ impl Model {
             let rows = |m: &Matrix3<f64>| [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]);
             bodies.push(TreeBody {
                 name: body.name.clone(),
-                parent: parent.and_then(index_of),
+                parent: parent.map(|p| tree_index[p]),
                 kind,
                 axis: axis.into(),
                 location: location.into(),
