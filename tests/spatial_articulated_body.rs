@@ -1,27 +1,17 @@
-//! The spatial chain of `shared/anchors` (`chain3d`: boxes joined by revolute joints about
-//! alternating y and z axes) against Featherstone's articulated-body algorithm written here from its
-//! textbook form (*Rigid Body Dynamics Algorithms*, 2008, table 7.1), in joint coordinates and link
-//! frames: an independent derivation of the accelerations from the chain's data alone (link length,
-//! mass, inertia, joint axes), at states where every joint has a random angle and rate. The
-//! recursion never forms a constraint; the formulations solve the constrained equations in
-//! absolute coordinates.
-//!
-//! Asserted: the joint-space state mapped to absolute coordinates satisfies the model's
-//! constraints to 1e-12 (positions) and 1e-11 (velocities), so the kinematics here is the model's;
-//! every formulation's `v̇` (centre-of-mass acceleration, body-frame angular acceleration) equals the
-//! recursion's to 1e-9 of the largest, the tolerance of the formulations' agreement test (their
-//! eliminations differ by round-off amplified by the conditioning of these systems; measured
-//! 2026-11-25: at most 6.4e-15 relative). This recursion is also the core of the joint-coordinate
-//! formulation the spatial issue's speed target needs (`docs/performance.md`, gap 3).
+//! The library's articulated-body algorithm (`dalembert_system::tree::Articulated`, 3 × 3 blocks,
+//! on the tree that `Model::joint_coordinates` makes of the spatial model) against Featherstone's
+//! algorithm written here from its textbook form (*Rigid Body Dynamics Algorithms*, 2008, table
+//! 7.1) with dense 6 × 6 transforms, from the definition of the anchors' spatial chain (`chain3d`:
+//! boxes joined by revolute joints about alternating y and z axes) alone: link length, mass,
+//! inertia, joint axes. At states where every joint has a random angle and rate, the two `q̈`
+//! agree to 1e-12 of the largest: two O(n) recursions in different arithmetic (measured
+//! 2026-11-25: 1.3e-14). This checks the conversion of the model to joint coordinates
+//! and the library's recursion together; `tests/joint_coordinates.rs` checks both against the
+//! formulations in absolute coordinates.
 
-use dalembert::amalgamated::Amalgamated;
-use dalembert::augmented::Augmented;
-use dalembert::embedding::Embedding;
-use dalembert::spatial::euler_parameters::from_rotation;
-use dalembert::system::{Formulation, MultibodySystem};
+use dalembert::system::tree::Articulated;
 use dalembert_testkit::fuzz::Rng;
 use nalgebra::{Matrix3, Matrix6, Rotation3, Unit, Vector3, Vector6};
-use std::sync::Arc;
 
 type V3 = Vector3<f64>;
 type V6 = Vector6<f64>;
@@ -166,34 +156,6 @@ impl Chain {
         }
         thdd
     }
-
-    /// The state in dalembert's spatial coordinates (per body: centre of mass, Euler parameters;
-    /// centre-of-mass velocity, body-frame angular velocity), and with `thdd` the accelerations
-    /// `v̇` (centre-of-mass acceleration, body-frame angular acceleration), from the spatial
-    /// accelerations with a base at rest.
-    fn absolute(&self, th: &[f64], p: &Pass, thdd: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
-        let (mut q, mut v, mut vdot) = (Vec::new(), Vec::new(), Vec::new());
-        let (mut w, mut o) = (Matrix3::identity(), V3::zeros());
-        let mut a_parent = V6::zeros();
-        for i in 0..self.n {
-            o += w * Self::offset(i);
-            w *= Self::rotation(i, th[i]);
-            let a = p.x[i] * a_parent + p.c[i] + Self::s(i) * thdd[i];
-            a_parent = a;
-            let ((om, vo), (al, ao)) = (split(&p.v[i]), split(&a));
-            let c = self.com;
-            let com = o + w * c;
-            let e = from_rotation(&w);
-            q.extend_from_slice(&[com.x, com.y, com.z, e[0], e[1], e[2], e[3]]);
-            let vc = w * (vo + om.cross(&c));
-            v.extend_from_slice(&[vc.x, vc.y, vc.z, om.x, om.y, om.z]);
-            // Classical acceleration of the body point c from the spatial one: a_O + α × c +
-            // ω × (v_O + ω × c), in link components.
-            let ac = w * (ao + al.cross(&c) + om.cross(&(vo + om.cross(&c))));
-            vdot.extend_from_slice(&[ac.x, ac.y, ac.z, al.x, al.y, al.z]);
-        }
-        (q, v, vdot)
-    }
 }
 
 /// Uniform in `[lo, hi)` from the test kit's generator.
@@ -202,50 +164,30 @@ fn uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
 }
 
 #[test]
-fn every_formulation_gives_the_articulated_body_accelerations() {
+fn the_library_recursion_gives_the_textbook_accelerations() {
     let mut worst = 0.0f64;
     for (n, seeds) in [(1usize, 0..3u64), (3, 3..6), (8, 6..9), (16, 9..11)] {
-        let model = dalembert_testkit::spatial::chain3d(n);
         let chain = Chain::new(n);
+        let jc = dalembert_testkit::spatial::chain3d(n)
+            .joint_coordinates()
+            .expect("chain3d is a tree");
+        let sys = jc.system();
+        let mut aba = Articulated::new(sys.tree());
         for seed in seeds {
             let mut rng = Rng::new(seed);
             let th: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -1.5, 1.5)).collect();
             let thd: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -3.0, 3.0)).collect();
-            let pass = chain.velocities(&th, &thd);
-            let thdd = chain.joint_accelerations(&pass);
-            let (q, v, vdot) = chain.absolute(&th, &pass, &thdd);
-            // The kinematics is the model's: its constraints hold at the mapped state.
-            let sys = model.constraints();
-            let (mut c, mut cdot) = (vec![0.0; sys.num_equations()], vec![0.0; sys.num_equations()]);
-            sys.residuals(0.0, &q, &v, &mut sys.values(), &mut c, &mut cdot);
-            let (c_max, cdot_max) = (
-                c.iter().fold(0.0f64, |a, x| a.max(x.abs())),
-                cdot.iter().fold(0.0f64, |a, x| a.max(x.abs())),
-            );
+            let expected = chain.joint_accelerations(&chain.velocities(&th, &thd));
+            let mut qdd = vec![0.0; n];
+            aba.solve(sys.as_ref(), 0.0, &th, &thd, &mut qdd).expect("evaluation");
+            let scale = expected.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let diff = qdd.iter().zip(&expected).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+            worst = worst.max(diff / scale);
             assert!(
-                c_max < 1e-12 && cdot_max < 1e-11,
-                "N = {n}, seed {seed}: |C| {c_max:e}, |Ċ| {cdot_max:e}"
+                diff <= 1e-12 * scale,
+                "N = {n}, seed {seed}: max |Δq̈| {diff:e} of {scale:e}"
             );
-            let m: Arc<dyn MultibodySystem> = model.clone();
-            let formulations: Vec<Box<dyn Formulation>> = vec![
-                Box::new(Augmented::with_defaults(m.clone()).expect("augmented")),
-                Box::new(Embedding::with_defaults(m.clone())),
-                Box::new(Amalgamated::with_defaults(m.clone())),
-            ];
-            let scale = vdot.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            for mut f in formulations {
-                let (mut qdd, mut lam) = (vec![0.0; v.len()], vec![0.0; sys.num_equations()]);
-                f.accelerations(0.0, &q, &v, None, &mut qdd, &mut lam)
-                    .expect("evaluation");
-                let diff = qdd.iter().zip(&vdot).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-                worst = worst.max(diff / scale);
-                assert!(
-                    diff <= 1e-9 * scale,
-                    "N = {n}, seed {seed}, {}: max |Δv̇| {diff:e} of {scale:e}",
-                    f.name()
-                );
-            }
         }
     }
-    println!("largest difference from the recursion, relative to the largest acceleration: {worst:e}");
+    println!("largest difference from the textbook recursion, relative to the largest acceleration: {worst:e}");
 }
