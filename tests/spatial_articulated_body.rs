@@ -47,7 +47,6 @@ struct Chain {
     n: usize,
     /// Spatial inertia of a link about its frame origin.
     inertia: Matrix6<f64>,
-    com: V3,
 }
 
 /// Per link, in its own frame: `X` (parent to link), the velocity, and the velocity-product
@@ -70,7 +69,7 @@ impl Chain {
         inertia.fixed_view_mut::<3, 3>(0, 3).copy_from(&cx);
         inertia.fixed_view_mut::<3, 3>(3, 0).copy_from(&cx.transpose());
         inertia.fixed_view_mut::<3, 3>(3, 3).copy_from(&Matrix3::identity());
-        Chain { n, inertia, com }
+        Chain { n, inertia }
     }
 
     fn axis(i: usize) -> V3 {
