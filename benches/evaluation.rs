@@ -1,6 +1,7 @@
 //! One forward-dynamics evaluation (`q̈`, `λ`) per formulation on the reference scenes and on chains
-//! of N rods, then the scaling exponent of the augmented formulation's cost against N (fitted on
-//! N = 64 … 4096, printed at the end).
+//! of N rods; the anchors' spatial chain (chain3d) in absolute and in joint coordinates (the
+//! articulated-body algorithm); then the scaling exponent of the augmented formulation's cost
+//! against N (fitted on N = 64 … 4096, printed at the end).
 //!
 //! `cargo bench --bench evaluation` (add `-- --quick` for a fast pass).
 
@@ -83,6 +84,40 @@ fn evaluations(c: &mut Criterion) {
     group.finish();
 }
 
+/// chain3d of 16 and 64 links at a state with every joint turned and turning: the augmented
+/// formulation in absolute coordinates and in joint coordinates (where every formulation is the
+/// articulated-body algorithm).
+fn spatial_chain(c: &mut Criterion) {
+    let mut group = c.benchmark_group("spatial chain");
+    for n in [16usize, 64] {
+        let model = dalembert_testkit::spatial::chain3d(n);
+        let jc = model.joint_coordinates().expect("chain3d is a tree");
+        let th: Vec<f64> = (0..n).map(|k| 0.3 - 0.02 * k as f64).collect();
+        let thd: Vec<f64> = (0..n).map(|k| 0.5 + 0.01 * k as f64).collect();
+        let (mut q, mut v) = model.initial_state();
+        jc.absolute(&th, &thd, &mut jc.frames(), &mut q, &mut v);
+        let cases: [(
+            &str,
+            std::sync::Arc<dyn dalembert::system::MultibodySystem>,
+            Vec<f64>,
+            Vec<f64>,
+        ); 2] = [("absolute", model.clone(), q, v), ("joint", jc.system(), th, thd)];
+        for (name, sys, q, v) in cases {
+            let mut f = Augmented::with_defaults(sys.clone()).expect("augmented");
+            let (mut qdd, mut lam) = (vec![0.0; v.len()], vec![0.0; sys.num_equations()]);
+            group.bench_function(BenchmarkId::new(name, format!("chain3d-{n}")), |b| {
+                let mut t = 0.0;
+                b.iter(|| {
+                    t += 1e-12;
+                    f.accelerations(t, black_box(&q), black_box(&v), None, &mut qdd, &mut lam)
+                        .expect("evaluation");
+                })
+            });
+        }
+    }
+    group.finish();
+}
+
 /// Median time of one augmented evaluation on a chain of `n` links, and the back end `Auto` chose.
 fn time_per_evaluation(n: usize) -> (f64, &'static str) {
     let mech = chain(n);
@@ -128,6 +163,7 @@ fn scaling() {
 fn main() {
     let mut c = Criterion::default().configure_from_args();
     evaluations(&mut c);
+    spatial_chain(&mut c);
     c.final_summary();
     scaling();
 }
