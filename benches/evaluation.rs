@@ -84,6 +84,14 @@ fn evaluations(c: &mut Criterion) {
     group.finish();
 }
 
+/// A system to evaluate: name, system, positions, velocities.
+type Case = (
+    &'static str,
+    std::sync::Arc<dyn dalembert::system::MultibodySystem>,
+    Vec<f64>,
+    Vec<f64>,
+);
+
 /// chain3d of 16 and 64 links at a state with every joint turned and turning: the augmented
 /// formulation in absolute coordinates and in joint coordinates (where every formulation is the
 /// articulated-body algorithm).
@@ -96,12 +104,7 @@ fn spatial_chain(c: &mut Criterion) {
         let thd: Vec<f64> = (0..n).map(|k| 0.5 + 0.01 * k as f64).collect();
         let (mut q, mut v) = model.initial_state();
         jc.absolute(&th, &thd, &mut jc.frames(), &mut q, &mut v);
-        let cases: [(
-            &str,
-            std::sync::Arc<dyn dalembert::system::MultibodySystem>,
-            Vec<f64>,
-            Vec<f64>,
-        ); 2] = [("absolute", model.clone(), q, v), ("joint", jc.system(), th, thd)];
+        let cases: [Case; 2] = [("absolute", model.clone(), q, v), ("joint", jc.system(), th, thd)];
         for (name, sys, q, v) in cases {
             let mut f = Augmented::with_defaults(sys.clone()).expect("augmented");
             let (mut qdd, mut lam) = (vec![0.0; v.len()], vec![0.0; sys.num_equations()]);
