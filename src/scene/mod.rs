@@ -103,15 +103,22 @@ pub(crate) fn joint_coordinates_problem(mechanism: &Mechanism) -> Option<String>
 
 impl Scene {
     /// `Ok` unless the settings ask for joint coordinates that the model cannot take: then one
-    /// line naming the joint, force or body at fault (for settings changed after loading, by
-    /// the command line or Python; a scene file's own are checked when it loads).
-    pub fn check_settings(&self) -> Result<(), String> {
+    /// line naming the setting as `spelling` writes it and the joint, force or body at fault (for
+    /// settings changed after loading, by the command line or Python; a scene file's own are
+    /// checked when it loads).
+    pub fn check_settings(&self, spelling: Spelling) -> Result<(), String> {
         if self.settings.coordinates != crate::Coordinates::Joint {
             return Ok(());
         }
         match joint_coordinates_problem(&self.model) {
             None => Ok(()),
-            Some(what) => Err(format!("coordinates = joint: {what}")),
+            Some(what) => {
+                let setting = match spelling {
+                    Spelling::Flags => "--coordinates joint",
+                    Spelling::Keywords => "coordinates=\"joint\"",
+                };
+                Err(format!("{setting}: {what}"))
+            }
         }
     }
 

@@ -80,7 +80,7 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
         eprintln!("warning: {w}");
     }
     scene.settings = settings;
-    scene.check_settings()?;
+    scene.check_settings(Spelling::Flags)?;
     Ok(scene)
 }
 

@@ -234,7 +234,9 @@ impl PyScene {
         }
         let mut scene = (*self.inner).clone();
         scene.settings = settings;
-        scene.check_settings().map_err(PyValueError::new_err)?;
+        scene
+            .check_settings(Spelling::Keywords)
+            .map_err(PyValueError::new_err)?;
         let scene = Arc::new(scene);
         let (rec, raised) = {
             let scene = scene.clone();
