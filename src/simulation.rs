@@ -374,16 +374,19 @@ impl Simulation {
             st.max_velocity_violation = velocity_violation;
             st
         };
+        // A failed evaluation at a sample is the run's outcome, even at the last sample (after
+        // which the integration itself ends without error).
+        let failure = |error, st: Statistics| {
+            Err(SimulationError::Integration(IntegrationFailure {
+                error,
+                statistics: Box::new(with_violations(st)),
+            }))
+        };
         match (result, failed) {
-            (Ok(st), _) => Ok(with_violations(st)),
-            (Err(e), Some(cause)) => Err(SimulationError::Integration(IntegrationFailure {
-                error: IntegrationError::Dynamics(cause),
-                statistics: Box::new(with_violations(*e.statistics)),
-            })),
-            (Err(e), None) => Err(SimulationError::Integration(IntegrationFailure {
-                error: e.error,
-                statistics: Box::new(with_violations(*e.statistics)),
-            })),
+            (Ok(st), None) => Ok(with_violations(st)),
+            (Ok(st), Some(cause)) => failure(IntegrationError::Dynamics(cause), st),
+            (Err(e), Some(cause)) => failure(IntegrationError::Dynamics(cause), *e.statistics),
+            (Err(e), None) => failure(e.error, *e.statistics),
         }
     }
 }
