@@ -512,3 +512,34 @@ fn trade_measures_joint_coordinates_beside_the_formulations() {
     let e = trade(&loop_scene, &only_joint, &mut |_, _| {}).unwrap_err();
     assert!(e.contains("formulation 'joint'"), "{e}");
 }
+
+#[test]
+fn a_stop_request_ends_a_joint_coordinate_run_at_a_sample() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let text = dalembert_testkit::spatial::chain3d_toml(4, 1.0)
+        .replace("[simulation]\n", "[simulation]\ncoordinates = \"joint\"\n");
+    let sim = dalembert::Scene::from_toml(&text, "chain3d-4").unwrap().simulation();
+    let cancel = AtomicBool::new(false);
+    let mut times = Vec::new();
+    let r = sim.run_cancellable(
+        &mut |s| {
+            times.push(s.t);
+            // Asked to stop during the third output interval.
+            if times.len() == 3 {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        },
+        &cancel,
+    );
+    match r {
+        Err(dalembert::SimulationError::Integration(f)) => {
+            assert!(
+                matches!(f.error, dalembert::integrators::IntegrationError::Interrupted { .. }),
+                "{f}"
+            );
+        }
+        other => panic!("expected an interrupted run, got {other:?}"),
+    }
+    // The samples up to the request, none after: t = 0, 0.01, 0.02.
+    assert_eq!(times.len(), 3, "{times:?}");
+}
