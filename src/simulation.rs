@@ -351,16 +351,17 @@ impl Simulation {
                 }
                 absolute.residuals(s.t, &q, &qd, &mut c, &mut cdot);
                 let max = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-                violation = violation.max(max(&c));
-                velocity_violation = velocity_violation.max(max(&cdot));
+                let (c_max, cdot_max) = (max(&c), max(&cdot));
+                violation = violation.max(c_max);
+                velocity_violation = velocity_violation.max(cdot_max);
                 observer(&Sample {
                     t: s.t,
                     q: &q,
                     qd: &qd,
                     qdd: &qdd,
                     lambda: &lambda,
-                    constraint_violation: max(&c),
-                    velocity_violation: max(&cdot),
+                    constraint_violation: c_max,
+                    velocity_violation: cdot_max,
                     energy: s.energy,
                 });
                 if cancel.load(Ordering::Relaxed) {

@@ -155,7 +155,8 @@ impl Model {
         // Each tree body's frame: origin at its joint (global), the body's axes.
         let mut origin = vec![Vector3::zeros(); n];
         let mut bodies = Vec::with_capacity(n);
-        let (mut q0, mut v0) = (vec![0.0; n], vec![0.0; n]);
+        // Zero joint coordinates: the tree is built at this state.
+        let (q0, mut v0) = (vec![0.0; n], vec![0.0; n]);
         for (t, &(child, parent, k)) in order.iter().enumerate() {
             let j = &joints[k];
             let (r, a, vel, w) = frames[child];
@@ -189,7 +190,6 @@ impl Model {
                 tree::JointKind::Revolute => axis_global.dot(&(w - w_parent)),
                 _ => axis_global.dot(&(vel + w.cross(&(origin[t] - r)) - v_parent)),
             };
-            q0[t] = 0.0;
             let rows = |m: &Matrix3<f64>| [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]);
             bodies.push(TreeBody {
                 name: body.name.clone(),

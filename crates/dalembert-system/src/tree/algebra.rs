@@ -71,14 +71,6 @@ impl std::ops::AddAssign for Sv {
     }
 }
 
-impl std::ops::Sub for Sv {
-    type Output = Sv;
-    #[inline]
-    fn sub(self, o: Sv) -> Sv {
-        Sv::new(self.w - o.w, self.v - o.v)
-    }
-}
-
 /// The Plücker transform of motion vectors from a frame `A` to a frame `B` whose origin is `r`
 /// (in `A`'s axes) and whose axes are `A`'s rotated by `Eᵀ`: `X = [[E, 0], [−E r×, E]]`.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -152,18 +152,15 @@ impl KinematicTree {
     /// Every body's frame in the world at `(q, q̇)` into `out` (one per body); without `qd` the
     /// velocities are zero.
     pub fn world_frames(&self, q: &[f64], qd: Option<&[f64]>, out: &mut [WorldFrame]) {
-        let mut v_parent;
         for i in 0..self.links.len() {
             let x = self.joint_transform(i, q[i]);
-            let (rotation, origin) = match self.links[i].parent {
-                Some(k) => {
-                    v_parent = out[k].velocity;
-                    (out[k].rotation * x.e.transpose(), out[k].origin + out[k].rotation * x.r)
-                }
-                None => {
-                    v_parent = Sv::ZERO;
-                    (x.e.transpose(), x.r)
-                }
+            let (rotation, origin, v_parent) = match self.links[i].parent {
+                Some(k) => (
+                    out[k].rotation * x.e.transpose(),
+                    out[k].origin + out[k].rotation * x.r,
+                    out[k].velocity,
+                ),
+                None => (x.e.transpose(), x.r, Sv::ZERO),
             };
             let velocity = x.motion(&v_parent) + self.subspace(i).scale(qd.map_or(0.0, |r| r[i]));
             out[i] = WorldFrame {
