@@ -164,6 +164,30 @@ pub enum SimulationError {
     JointCoordinates(#[source] ModelError),
 }
 
+impl SimulationError {
+    /// The time the run stopped at, where the error carries it (a failure during the run; `None`
+    /// for a failure before it).
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            SimulationError::Integration(f) => f.error.time(),
+            SimulationError::Setup(d) => d.time(),
+            _ => None,
+        }
+    }
+
+    /// The time a cancelled run reached (`IntegrationError::Interrupted`), or `None` for any
+    /// other failure.
+    pub fn interrupted_at(&self) -> Option<f64> {
+        match self {
+            SimulationError::Integration(f) => match f.error {
+                IntegrationError::Interrupted { time } => Some(time),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+}
+
 /// A model with an initial state and the settings of a run.
 #[derive(Debug, Clone)]
 pub struct Simulation {

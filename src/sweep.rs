@@ -129,8 +129,20 @@ pub fn cartesian(parameters: &[(String, Vec<SceneValue>)]) -> Vec<Assignment> {
     out
 }
 
+/// The error of a run stopped by a cancellation: `interrupted at t = …` (the time it reached), or
+/// `cancelled` for a run that never started.
+pub const CANCELLED: &str = "cancelled";
+
 /// Runs `scene` with `assignment` to `end` (the scene's end when `None`) and summarizes `outputs`.
-pub fn run_one(scene: &Scene, assignment: &Assignment, end: Option<f64>, outputs: &[Output]) -> SweepRow {
+/// The run stops at its next step once `cancel` is set; its row's error then says
+/// `interrupted at t = …`.
+pub fn run_one(
+    scene: &Scene,
+    assignment: &Assignment,
+    end: Option<f64>,
+    outputs: &[Output],
+    cancel: &AtomicBool,
+) -> SweepRow {
     let start = Instant::now();
     let pairs: Vec<(&str, SceneValue)> = assignment.iter().map(|(p, v)| (p.as_str(), v.clone())).collect();
     let result = scene.with_values(&pairs).map_err(|e| e.to_string()).and_then(|s| {
@@ -143,7 +155,8 @@ pub fn run_one(scene: &Scene, assignment: &Assignment, end: Option<f64>, outputs
         let mut acc: Vec<(f64, usize)> = vec![(f64::NAN, 0); outputs.len()];
         let model = s.model.clone();
         let stats = sim
-            .run(&mut |smp| {
+            .run_cancellable(
+                &mut |smp| {
                 row.clear();
                 rows.push(&model, smp, &mut row);
                 for (o, a) in outputs.iter().zip(acc.iter_mut()) {
@@ -167,8 +180,13 @@ pub fn run_one(scene: &Scene, assignment: &Assignment, end: Option<f64>, outputs
                         a.1 += 1;
                     }
                 }
-            })
-            .map_err(|e| e.to_string())?;
+                },
+                cancel,
+            )
+            .map_err(|e| match e.interrupted_at() {
+                Some(t) => format!("interrupted at t = {}", crate::output::shortest(t)),
+                None => e.to_string(),
+            })?;
         Ok(outputs
             .iter()
             .zip(&acc)
@@ -197,7 +215,9 @@ pub fn run_one(scene: &Scene, assignment: &Assignment, end: Option<f64>, outputs
 }
 
 /// Runs every assignment on `threads` threads (all cores when `None`), in parallel, rows in the
-/// order of `runs`. A run not started when `cancel` is set is a row with the error "cancelled".
+/// order of `runs`. Once `cancel` is set, every run in progress stops at its next step (its row's
+/// error `interrupted at t = …`) and a run not yet started is a row with the error
+/// [`CANCELLED`].
 pub fn sweep(
     scene: &Scene,
     runs: &[Assignment],
@@ -206,20 +226,38 @@ pub fn sweep(
     threads: Option<usize>,
     cancel: &AtomicBool,
 ) -> Result<Vec<SweepRow>, String> {
+    sweep_streaming(scene, runs, end, outputs, threads, cancel, &|_, _| {})
+}
+
+/// [`sweep`] that hands each row to `finished(index, row)` as soon as its run ends (from the
+/// worker thread that ran it, in the order the runs finish), so that a caller can write it at
+/// once: a sweep stopped by any means keeps every row finished before.
+pub fn sweep_streaming(
+    scene: &Scene,
+    runs: &[Assignment],
+    end: Option<f64>,
+    outputs: &[Output],
+    threads: Option<usize>,
+    cancel: &AtomicBool,
+    finished: &(dyn Fn(usize, &SweepRow) + Sync),
+) -> Result<Vec<SweepRow>, String> {
     use rayon::prelude::*;
     let work = || {
         runs.par_iter()
-            .map(|a| {
-                if cancel.load(Ordering::Relaxed) {
+            .enumerate()
+            .map(|(k, a)| {
+                let row = if cancel.load(Ordering::Relaxed) {
                     SweepRow {
                         assignment: a.clone(),
                         outputs: vec![f64::NAN; outputs.len()],
                         wall_time: 0.0,
-                        error: Some("cancelled".into()),
+                        error: Some(CANCELLED.into()),
                     }
                 } else {
-                    run_one(scene, a, end, outputs)
-                }
+                    run_one(scene, a, end, outputs, cancel)
+                };
+                finished(k, &row);
+                row
             })
             .collect()
     };
@@ -241,21 +279,42 @@ pub fn write_csv(
     outputs: &[String],
     rows: &[SweepRow],
 ) -> std::io::Result<()> {
-    let mut w = csv::WriterBuilder::new()
-        .terminator(csv::Terminator::Any(b'\n'))
-        .from_writer(out);
-    let mut header: Vec<&str> = parameters.iter().map(String::as_str).collect();
-    header.extend(outputs.iter().map(String::as_str));
-    header.extend(["wall_time_s", "error"]);
-    w.write_record(&header)?;
-    let number = |x: f64| {
-        let mut b = Vec::new();
-        // Writing to a Vec cannot fail.
-        let _ = crate::output::write_number(&mut b, x);
-        String::from_utf8_lossy(&b).into_owned()
-    };
+    let mut w = SweepCsv::new(out, parameters, outputs)?;
     for r in rows {
-        let mut rec: Vec<String> = parameters
+        w.row(r)?;
+    }
+    w.finish()
+}
+
+/// A sweep's CSV written row by row (the header first), each row flushed as it is written: a
+/// sweep that stops by any means leaves a well-formed file with every row finished so far.
+pub struct SweepCsv<W: std::io::Write> {
+    w: csv::Writer<W>,
+    parameters: Vec<String>,
+}
+
+impl<W: std::io::Write> SweepCsv<W> {
+    /// Writes the header: one column per parameter path, one per output, `wall_time_s`, `error`.
+    pub fn new(out: W, parameters: &[String], outputs: &[String]) -> std::io::Result<Self> {
+        let mut w = csv::WriterBuilder::new()
+            .terminator(csv::Terminator::Any(b'\n'))
+            .from_writer(out);
+        let mut header: Vec<&str> = parameters.iter().map(String::as_str).collect();
+        header.extend(outputs.iter().map(String::as_str));
+        header.extend(["wall_time_s", "error"]);
+        w.write_record(&header)?;
+        w.flush()?;
+        Ok(SweepCsv {
+            w,
+            parameters: parameters.to_vec(),
+        })
+    }
+
+    /// Writes one row and flushes it.
+    pub fn row(&mut self, r: &SweepRow) -> std::io::Result<()> {
+        let number = |x: f64| crate::output::shortest(x);
+        let mut rec: Vec<String> = self
+            .parameters
             .iter()
             .map(|p| {
                 r.assignment
@@ -277,9 +336,14 @@ pub fn write_csv(
                 .map(|e| crate::scene::one_line(e).into_owned())
                 .unwrap_or_default(),
         );
-        w.write_record(&rec)?;
+        self.w.write_record(&rec)?;
+        self.w.flush()
     }
-    w.flush()
+
+    /// Flushes the file.
+    pub fn finish(mut self) -> std::io::Result<()> {
+        self.w.flush()
+    }
 }
 
 /// Splits a command-line list `1,2,[0,-9.81]` at the commas outside brackets and quotes.

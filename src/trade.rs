@@ -8,6 +8,7 @@ use crate::{Coordinates, FormulationKind, Scene, SimulationError};
 use dalembert_integrators::{
     method_names, Applies, IntegrationError, IntegratorOptions, Method, Stabilization, TradeAxis,
 };
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The grid of settings to try. [`TradeGrid::default`] is the command line's default grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -85,8 +86,11 @@ pub struct Trade {
     pub every: f64,
     /// What the errors are measured against, in words.
     pub reference: String,
-    /// Every run of the grid, in grid order.
+    /// Every run of the grid, in grid order (those run before an interruption, the last of them
+    /// with the status `interrupted at t = …`, when [`Trade::interrupted`]).
     pub runs: Vec<TradeRun>,
+    /// True when the cancellation flag stopped the grid part way ([`trade_cancellable`]).
+    pub interrupted: bool,
     /// Indices of the runs on the Pareto front (no other run both faster and more accurate),
     /// fastest first.
     pub front: Vec<usize>,
@@ -111,8 +115,9 @@ fn samples(
     kind: (FormulationKind, Coordinates),
     opts: IntegratorOptions,
     end: f64,
+    cancel: &AtomicBool,
 ) -> (Vec<Vec<f64>>, Result<Outcome, SimulationError>) {
-    let (out, r, _) = samples_bridged(scene, kind, opts, end);
+    let (out, r, _) = samples_bridged(scene, kind, opts, end, cancel);
     (out, r)
 }
 
@@ -122,6 +127,7 @@ fn samples_bridged(
     (kind, coordinates): (FormulationKind, Coordinates),
     opts: IntegratorOptions,
     end: f64,
+    cancel: &AtomicBool,
 ) -> (Vec<Vec<f64>>, Result<Outcome, SimulationError>, u64) {
     let mut sim = scene.simulation();
     sim.formulation = kind;
@@ -129,7 +135,7 @@ fn samples_bridged(
     sim.integrator = opts;
     sim.end = end;
     let mut out = Vec::new();
-    let res = sim.run(&mut |s| out.push([s.q, s.qd].concat()));
+    let res = sim.run_cancellable(&mut |s| out.push([s.q, s.qd].concat()), cancel);
     let bridges = res.as_ref().map(|st| st.bridges).unwrap_or(0);
     let r = res.map(|st| {
         (
@@ -226,6 +232,18 @@ fn runs_of(g: &TradeGrid) -> Result<Vec<GridRun>, String> {
 /// or value of the grid that is not valid, or a reference run that fails (each grid run that
 /// fails is a row with its status instead).
 pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize)) -> Result<Trade, String> {
+    trade_cancellable(scene, g, progress, &AtomicBool::new(false))
+}
+
+/// [`trade`] that stops once `cancel` is set (e.g. by Ctrl-C): the run in progress stops at its
+/// next step and is the last row (status `interrupted at t = …`), no further run starts, and the
+/// result says [`Trade::interrupted`]. Set during the reference run, it is an error.
+pub fn trade_cancellable(
+    scene: &Scene,
+    g: &TradeGrid,
+    progress: &mut dyn FnMut(usize, usize),
+    cancel: &AtomicBool,
+) -> Result<Trade, String> {
     let mut g = g.clone();
     if let Some(problem) = crate::scene::joint_coordinates_problem(&scene.model) {
         if g.formulations.iter().any(|f| f == JOINT) {
@@ -257,7 +275,15 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
             .with_stabilization(Stabilization::Projection { tolerance: 1e-12 }),
     );
     let absolute = (FormulationKind::Augmented, Coordinates::Absolute);
-    let (mut reference, status, bridges) = samples_bridged(scene, absolute, ref_opts, end);
+    let (mut reference, status, bridges) = samples_bridged(scene, absolute, ref_opts, end, cancel);
+    if let Err(e) = &status {
+        if let Some(t) = e.interrupted_at() {
+            return Err(format!(
+                "interrupted during the reference run, at t = {}: no run of the grid was made",
+                crate::output::shortest(t)
+            ));
+        }
+    }
     let mut reference_name = "dopri5 at rtol = atol = 1e-12".to_string();
     // An adaptive step does not cross a singular position of a closed chain to its tolerance: it
     // stops there, or bridges it with steps checked to about 31 × the tolerances only. The
@@ -278,7 +304,7 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
             IntegratorOptions::fixed(Method::rk4(), h, 1.0)
                 .with_stabilization(Stabilization::Projection { tolerance: 1e-12 }),
         );
-        let (r, status) = samples(scene, absolute, opts, end);
+        let (r, status) = samples(scene, absolute, opts, end, cancel);
         status.map_err(|e2| format!("reference run failed: {e}; and the fixed-step fallback: {e2}"))?;
         reference = r;
         reference_name = format!(
@@ -288,7 +314,10 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
     let total = grid.len();
     let mut runs = Vec::with_capacity(total);
     for (k, (kind, method, opts, parameter)) in grid.into_iter().enumerate() {
-        let (got, res) = samples(scene, kind, with_every(opts), end);
+        if cancel.load(Ordering::Relaxed) {
+            break;
+        }
+        let (got, res) = samples(scene, kind, with_every(opts), end, cancel);
         runs.push(match res {
             Ok((time_s, evaluations, constraint, energy)) => TradeRun {
                 method,
@@ -313,7 +342,10 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
                 error: None,
                 constraint: f64::NAN,
                 energy: f64::NAN,
-                status: e.to_string(),
+                status: match e.interrupted_at() {
+                    Some(t) => format!("interrupted at t = {}", crate::output::shortest(t)),
+                    None => e.to_string(),
+                },
             },
         });
         progress(k + 1, total);
@@ -325,6 +357,7 @@ pub fn trade(scene: &Scene, g: &TradeGrid, progress: &mut dyn FnMut(usize, usize
         every,
         runs,
         front,
+        interrupted: cancel.load(Ordering::Relaxed),
     })
 }
 

@@ -68,7 +68,12 @@ impl Frames {
             .iter()
             .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
             .collect();
-        let table = read_columns(reader, origin, &names)?;
+        let table = read_columns(reader, origin, &names).map_err(|mut e| {
+            if e.line == Some(1) && e.message.starts_with("no column") {
+                e.message = format!("does not match the scene: {}", e.message);
+            }
+            e
+        })?;
         if table.times.is_empty() {
             return Err(ResultCsvError {
                 file: origin.to_string(),

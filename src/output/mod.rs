@@ -9,7 +9,7 @@
 mod read;
 mod table;
 
-pub use read::{read_columns, ResultCsvError, ResultTable};
+pub use read::{no_column, read_columns, read_header, ResultCsvError, ResultTable};
 pub use table::{Recorder, Rows, Table, SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS};
 
 use crate::mechanism::Mechanism;
@@ -39,12 +39,29 @@ pub struct CsvOutput<W: Write> {
 /// Writes `x` in shortest round-trip form: plain decimals for magnitudes from 1e-5 to 1e16,
 /// scientific notation outside (so 1e-300 takes 6 characters, not 302). Both read back exactly.
 pub fn write_number(w: &mut impl Write, x: f64) -> io::Result<()> {
-    let a = x.abs();
-    if a == 0.0 || !a.is_finite() || (1e-5..1e16).contains(&a) {
-        write!(w, "{x}")
-    } else {
-        write!(w, "{x:e}")
+    write!(w, "{}", dalembert_system::Shortest(x))
+}
+
+/// `x` in the shortest round-trip form of [`write_number`], as a string: for every number a
+/// message, a table or a file prints.
+pub fn shortest(x: f64) -> String {
+    dalembert_system::Shortest(x).to_string()
+}
+
+/// `x` in fixed-point notation with `decimals` digits after the point, right-aligned in `width`
+/// characters, as the command line's tables print it: a value that rounds to zero prints without
+/// a sign (`0.000000`, never `-0.000000`), and one too large for fixed point (past 1e15) in its
+/// shortest form.
+pub fn fixed(x: f64, width: usize, decimals: usize) -> String {
+    if x.is_finite() && x.abs() >= 1e15 {
+        return format!("{:>width$}", shortest(x));
     }
+    let text = format!("{x:.decimals$}");
+    let text = match text.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => text,
+    };
+    format!("{text:>width$}")
 }
 
 impl<W: Write> CsvOutput<W> {

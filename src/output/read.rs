@@ -43,7 +43,7 @@ pub fn read_columns(reader: impl Read, origin: &str, names: &[String]) -> Result
         header
             .iter()
             .position(|h| h == name)
-            .ok_or_else(|| err(Some(1), format!("does not match the scene: no column '{name}'")))
+            .ok_or_else(|| err(Some(1), no_column(name, &header.iter().collect::<Vec<_>>())))
     };
     let t_col = column("t")?;
     let cols = names.iter().map(|n| column(n)).collect::<Result<Vec<_>, _>>()?;
@@ -72,7 +72,7 @@ pub fn read_columns(reader: impl Read, origin: &str, names: &[String]) -> Result
         let t = number(t_col)?;
         if let Some(&last) = table.times.last() {
             if t <= last {
-                return Err(err(line, format!("times must increase: t = {t} after {last}")));
+                return Err(err(line, format!("times must increase: t = {} after {}", crate::output::shortest(t), crate::output::shortest(last))));
             }
         }
         table.times.push(t);
@@ -81,6 +81,29 @@ pub fn read_columns(reader: impl Read, origin: &str, names: &[String]) -> Result
         }
     }
     Ok(table)
+}
+
+/// The header (line 1) of a result CSV, as written: names with commas, quotes or line breaks
+/// whole.
+pub fn read_header(reader: impl Read, origin: &str) -> Result<Vec<String>, ResultCsvError> {
+    let mut rdr = csv::ReaderBuilder::new().has_headers(true).from_reader(reader);
+    let header = rdr.headers().map_err(|e| ResultCsvError {
+        file: origin.to_string(),
+        line: Some(1),
+        message: format!("not a result CSV: {}", cause(&e)),
+    })?;
+    Ok(header.iter().map(str::to_string).collect())
+}
+
+/// `no column 'NAME' (its columns: …)`, at most 40 of them listed, with the nearest as a hint.
+pub fn no_column(name: &str, header: &[&str]) -> String {
+    const SHOWN: usize = 40;
+    let mut list = header.iter().take(SHOWN).copied().collect::<Vec<_>>().join(", ");
+    if header.len() > SHOWN {
+        list.push_str(&format!(", … ({} in all)", header.len()));
+    }
+    let hint = crate::scene::nearest(name, header).map_or(String::new(), |n| format!("; did you mean '{n}'?"));
+    format!("no column '{name}' (its columns: {list}){hint}")
 }
 
 /// The cause of a CSV error without its position (reported separately).

@@ -57,8 +57,62 @@ pub fn parse_redundancy(s: &str) -> Option<RedundancyTreatment> {
 /// The one-line error for a name that is not one of `names`: `unknown integrator 'rk5' (expected
 /// symplectic-euler, rk4, dopri5, generalized-alpha)`. The integrators' names come from the
 /// registry ([`dalembert_integrators::method_names`]).
+/// When one of `names` is close to `value` (a likely typo), `; did you mean 'NAME'?` is added.
 pub fn unknown_name(what: &str, value: &str, names: &[&str]) -> String {
-    format!("unknown {what} '{value}' (expected {})", names.join(", "))
+    let hint = nearest(value, names).map_or(String::new(), |n| format!("; did you mean '{n}'?"));
+    format!("unknown {what} '{value}' (expected {}){hint}", names.join(", "))
+}
+
+/// The one of `names` nearest to `value` by edit distance (insertions, deletions, substitutions
+/// and swaps of neighbouring characters, case ignored), when it is near enough to be a typo of
+/// it: at most one edit in three characters of the longer, and at least one. `None` when no
+/// name is that near or two are equally near.
+pub fn nearest<'a>(value: &str, names: &[&'a str]) -> Option<&'a str> {
+    let value: Vec<char> = value.to_lowercase().chars().collect();
+    let mut best: Option<(usize, &'a str)> = None;
+    let mut tie = false;
+    for &name in names {
+        let candidate: Vec<char> = name.to_lowercase().chars().collect();
+        let d = edit_distance(&value, &candidate);
+        let limit = (value.len().max(candidate.len()) / 3).max(1);
+        if d == 0 || d > limit {
+            continue;
+        }
+        match best {
+            Some((b, _)) if d > b => {}
+            Some((b, _)) if d == b => tie = true,
+            _ => {
+                best = Some((d, name));
+                tie = false;
+            }
+        }
+    }
+    best.filter(|_| !tie).map(|(_, n)| n)
+}
+
+/// Optimal-string-alignment distance between `a` and `b`.
+fn edit_distance(a: &[char], b: &[char]) -> usize {
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    for (i, row) in d.chunks_mut(w).enumerate() {
+        row[0] = i;
+    }
+    for (j, x) in d[..w].iter_mut().enumerate() {
+        *x = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut v = (d[(i - 1) * w + j] + 1)
+                .min(d[i * w + j - 1] + 1)
+                .min(d[(i - 1) * w + j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                v = v.min(d[(i - 2) * w + j - 2] + 1);
+            }
+            d[i * w + j] = v;
+        }
+    }
+    d[a.len() * w + b.len()]
 }
 
 /// True when the scene's `[scene] gravity` has three components: a spatial scene.
@@ -157,5 +211,26 @@ impl Scene {
             independent: self.settings.independent.clone(),
             coordinates: self.settings.coordinates,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nearest;
+
+    /// Typos a user makes (a doubled, dropped, swapped or wrong letter) find the name; a word
+    /// that is far from every name, or equally near two, finds none.
+    #[test]
+    fn nearest_names_a_typo_and_nothing_else() {
+        let keys = ["name", "mass", "inertia", "position", "angle", "velocity"];
+        assert_eq!(nearest("masss", &keys), Some("mass"));
+        assert_eq!(nearest("postion", &keys), Some("position"));
+        assert_eq!(nearest("intertia", &keys), Some("inertia"));
+        assert_eq!(nearest("agnle", &keys), Some("angle"));
+        assert_eq!(nearest("Mass", &keys), Some("mass"));
+        assert_eq!(nearest("stiffness", &keys), None);
+        assert_eq!(nearest("mass", &keys), None, "an exact name is no typo");
+        assert_eq!(nearest("simulat", &["simulate", "sweep"]), Some("simulate"));
+        assert_eq!(nearest("ab", &["ac", "ad"]), None, "a tie suggests nothing");
     }
 }

@@ -105,7 +105,7 @@ impl Scene {
         };
         let mut file: Table = toml::from_str(&self.source).map_err(|e| fail(e.message().to_string()))?;
         for (path, value) in values {
-            let slot = locate(&mut file, path).map_err(|m| fail(format!("cannot set '{path}': {m}")))?;
+            let (slot, _) = locate(&mut file, path).map_err(|m| fail(format!("cannot set '{path}': {m}")))?;
             *slot = value.to_toml();
         }
         let text = toml::to_string(&file).map_err(|e| fail(e.to_string()))?;
@@ -122,24 +122,47 @@ impl Scene {
 }
 
 impl Scene {
-    /// `Ok` when `path` names a place [`Scene::with_values`] can set (an existing table or a named
-    /// element, and a key); the value's own rules are checked when it is set.
+    /// `Ok` when `path` names a place [`Scene::with_values`] can set: an existing table or a named
+    /// element, and a key the format has there (checked by reading the scene with the key added,
+    /// so the format's own list of keys decides). The error is one line naming the path and the
+    /// nearest valid key. The value's own rules are checked when it is set.
     pub fn check_path(&self, path: &str) -> Result<(), SceneError> {
-        let mut file: Table = toml::from_str(&self.source).map_err(|e| SceneError {
+        let fail = |message: String| SceneError {
             file: self.origin.clone(),
             position: None,
-            message: e.message().to_string(),
-        })?;
-        locate(&mut file, path).map(|_| ()).map_err(|m| SceneError {
-            file: self.origin.clone(),
-            position: None,
-            message: format!("cannot set '{path}': {m}"),
-        })
+            message,
+        };
+        let mut file: Table = toml::from_str(&self.source).map_err(|e| fail(e.message().to_string()))?;
+        let added = {
+            let (_, added) = locate(&mut file, path).map_err(|m| fail(format!("cannot set '{path}': {m}")))?;
+            added
+        };
+        if !added {
+            return Ok(());
+        }
+        // A key the file does not hold yet: the format refuses it if it has no such key.
+        let key = path.rsplit('.').next().unwrap_or(path);
+        let Ok(text) = toml::to_string(&file) else {
+            return Ok(());
+        };
+        let Err(e) = Scene::from_toml(&text, &self.origin) else {
+            return Ok(());
+        };
+        let Some(expected) = e.message.strip_prefix(&format!("unknown field `{key}`")) else {
+            return Ok(());
+        };
+        let keys: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+        let place = &path[..path.len() - key.len() - 1];
+        let hint = super::nearest(key, &keys).map_or(String::new(), |k| format!("; did you mean '{place}.{k}'?"));
+        Err(fail(format!(
+            "cannot set '{path}': {place} has no key '{key}' (its keys: {}){hint}",
+            keys.join(", ")
+        )))
     }
 }
 
-/// The slot for `path` in a scene file's table, created when the key is new.
-fn locate<'a>(file: &'a mut Table, path: &str) -> Result<&'a mut Value, String> {
+/// The slot for `path` in a scene file's table, created when the key is new (then `true`).
+fn locate<'a>(file: &'a mut Table, path: &str) -> Result<(&'a mut Value, bool), String> {
     let (head, rest) = path
         .split_once('.')
         .ok_or("a path is a table and a key, e.g. bodies.slider.mass")?;
@@ -183,13 +206,17 @@ fn locate<'a>(file: &'a mut Table, path: &str) -> Result<&'a mut Value, String> 
     key_slot(table, &rest[len + 1..])
 }
 
-/// The slot for a dotted `key` inside `table` (`mass`, `shape.rod`), intermediate tables created.
-fn key_slot<'a>(table: &'a mut Table, key: &str) -> Result<&'a mut Value, String> {
+/// The slot for a dotted `key` inside `table` (`mass`, `shape.rod`), intermediate tables created;
+/// `true` when the key is new.
+fn key_slot<'a>(table: &'a mut Table, key: &str) -> Result<(&'a mut Value, bool), String> {
     if key.is_empty() {
         return Err("the path names no key".into());
     }
     match key.split_once('.') {
-        None => Ok(table.entry(key).or_insert(Value::Boolean(false))),
+        None => {
+            let added = !table.contains_key(key);
+            Ok((table.entry(key).or_insert(Value::Boolean(false)), added))
+        }
         Some((first, more)) => {
             let inner = table
                 .entry(first)

@@ -45,6 +45,9 @@ pub fn run(a: Args) -> Result<(), String> {
         let stem = a.scene.file_stem().map(|s| s.to_string_lossy().into_owned());
         PathBuf::from(format!("{}.html", stem.unwrap_or_else(|| "animation".into())))
     });
+    let mut inputs: Vec<&std::path::Path> = vec![&a.scene];
+    inputs.extend(a.from.as_deref());
+    crate::paths::refuse_overwriting(&output, &inputs)?;
     let (frames, stopped) = match &a.from {
         Some(csv) => {
             let file = std::fs::File::open(csv).map_err(|e| format!("{}: {e}", csv.display()))?;
@@ -66,7 +69,10 @@ pub fn run(a: Args) -> Result<(), String> {
         viewer = viewer.trace(t);
     }
     if let Some(why) = &stopped {
-        let at = frames.times.last().map_or(String::new(), |t| format!(" at t = {t} s"));
+        let at = frames
+            .times
+            .last()
+            .map_or(String::new(), |&t| format!(" at t = {} s", dalembert::output::shortest(t)));
         viewer = viewer.note(format!("the run stopped{at}: {why}"));
     }
     std::fs::write(&output, viewer.html(&frames)).map_err(|e| format!("{}: {e}", output.display()))?;
@@ -75,8 +81,8 @@ pub fn run(a: Args) -> Result<(), String> {
         "wrote {} ({} frames, t = {} … {} s)",
         output.display(),
         kept,
-        frames.times.first().copied().unwrap_or(0.0),
-        frames.times.last().copied().unwrap_or(0.0)
+        dalembert::output::shortest(frames.times.first().copied().unwrap_or(0.0)),
+        dalembert::output::shortest(frames.times.last().copied().unwrap_or(0.0))
     );
     match stopped {
         // The page holds every frame computed before the failure; the error says where it stopped.

@@ -1,10 +1,33 @@
 //! `dalembert check`: prints [`dalembert::Scene::check`].
 
+use dalembert::scene::{RunOverrides, Spelling};
+use dalembert::output::fixed;
 use dalembert::{CheckReport, Scene};
-use std::path::Path;
+use std::path::PathBuf;
 
-pub fn run(path: &Path) -> Result<(), String> {
-    let scene = Scene::from_path(path).map_err(|e| e.to_string())?;
+/// Arguments of `check`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Redundant constraints: error | minimum-norm (overrides the scene's `redundant`)
+    #[arg(long)]
+    redundant: Option<String>,
+}
+
+pub fn run(a: Args) -> Result<(), String> {
+    let mut scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    if a.redundant.is_some() {
+        let o = RunOverrides {
+            redundant: a.redundant.clone(),
+            ..RunOverrides::default()
+        };
+        let (settings, warnings) = o.apply(&scene.settings, Spelling::Flags)?;
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
+        scene.settings = settings;
+    }
     let r = scene.check().map_err(|e| e.to_string())?;
     outln!("scene        {}", r.scene);
     outln!(
@@ -53,11 +76,11 @@ fn print_planar(r: &CheckReport, qdd: &[f64]) {
     );
     for (i, chunk) in qdd.chunks(3).enumerate() {
         outln!(
-            "{:>16} {:14.6} {:14.6} {:14.6}",
+            "{:>16} {} {} {}",
             body_of(&r.coordinate_names[3 * i]),
-            chunk[0],
-            chunk[1],
-            chunk[2]
+            fixed(chunk[0], 14, 6),
+            fixed(chunk[1], 14, 6),
+            fixed(chunk[2], 14, 6)
         );
     }
     outln!("\ninitial reactions (on the first body from the second, global)");
@@ -71,15 +94,15 @@ fn print_planar(r: &CheckReport, qdd: &[f64]) {
     for (name, fields) in grouped(&r.reactions) {
         let value = |f: &str| fields.iter().find(|(n, _)| *n == f).map(|&(_, v)| v);
         if let Some(e) = value("effort") {
-            outln!("{:>16} {:>14} {:>14} {:14.6}", name, "", "", e);
+            outln!("{:>16} {:>14} {:>14} {}", name, "", "", fixed(e, 14, 6));
             continue;
         }
-        let t = value("torque").map(|t| format!("{t:14.6}")).unwrap_or_default();
+        let t = value("torque").map(|t| fixed(t, 14, 6)).unwrap_or_default();
         outln!(
-            "{:>16} {:14.6} {:14.6} {:>14}",
+            "{:>16} {} {} {:>14}",
             name,
-            value("fx").unwrap_or(f64::NAN),
-            value("fy").unwrap_or(f64::NAN),
+            fixed(value("fx").unwrap_or(f64::NAN), 14, 6),
+            fixed(value("fy").unwrap_or(f64::NAN), 14, 6),
             t
         );
     }
@@ -102,7 +125,7 @@ fn print_spatial(r: &CheckReport, qdd: &[f64]) {
     for (i, a) in qdd.chunks(6).enumerate() {
         out!("{:>16}", body_of(&r.coordinate_names[6 * i]));
         for x in a {
-            out!(" {x:11.5}");
+            out!(" {}", fixed(*x, 11, 5));
         }
         outln!();
     }
@@ -120,11 +143,11 @@ fn print_spatial(r: &CheckReport, qdd: &[f64]) {
     for (name, fields) in grouped(&r.reactions) {
         out!("{name:>16}");
         if let [("effort", e)] = fields.as_slice() {
-            outln!(" effort {e:.6}");
+            outln!(" effort {}", fixed(*e, 0, 6));
             continue;
         }
         for (_, v) in &fields {
-            out!(" {v:11.5}");
+            out!(" {}", fixed(*v, 11, 5));
         }
         outln!();
     }

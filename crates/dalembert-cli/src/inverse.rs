@@ -1,6 +1,6 @@
 //! `dalembert inverse`: [`dalembert::Scene::inverse`] printed and written as CSV.
 
-use dalembert::output::Rows;
+use dalembert::output::{fixed, Rows};
 use dalembert::{CsvOutput, Scene};
 use std::path::PathBuf;
 
@@ -30,8 +30,9 @@ pub fn run(a: Args) -> Result<(), String> {
     }
     let mut csv = match &a.output {
         Some(p) => {
+            crate::paths::refuse_overwriting(p, &[&a.scene])?;
             let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            Some(CsvOutput::new(&model, std::io::BufWriter::new(f)).map_err(|e| e.to_string())?)
+            Some(CsvOutput::new(&model, std::io::BufWriter::new(f)).map_err(|e| format!("{}: {e}", p.display()))?)
         }
         None => None,
     };
@@ -41,26 +42,29 @@ pub fn run(a: Args) -> Result<(), String> {
         .iter()
         .filter_map(|d| rows.names().iter().position(|n| *n == format!("{d}.effort")))
         .collect();
-    outln!("scene        {}", scene.name);
-    out!("{:>9}", "t [s]");
-    for d in &drivers {
-        out!(" {:>16}", format!("{d}.effort"));
-    }
-    outln!();
     let steps = (end / every - 1e-9).ceil() as usize;
     let every_row = (steps / 10).max(1);
     let mut i = 0;
     let mut row = Vec::new();
     let res = scene.inverse(end, every, &mut |s| {
+        // The header with the first row: a scene the inverse dynamics refuses prints only its error.
+        if i == 0 {
+            outln!("scene        {}", scene.name);
+            out!("{:>9}", "t [s]");
+            for d in &drivers {
+                out!(" {:>16}", format!("{d}.effort"));
+            }
+            outln!();
+        }
         if let Some(w) = csv.as_mut() {
             w.write(&model, s);
         }
         if i % every_row == 0 || i == steps {
             row.clear();
             rows.push(&model, s, &mut row);
-            out!("{:9.4}", s.t);
+            out!("{}", fixed(s.t, 9, 4));
             for &k in &effort_cols {
-                out!(" {:16.6}", row[k]);
+                out!(" {}", fixed(row[k], 16, 6));
             }
             outln!();
         }
@@ -68,8 +72,8 @@ pub fn run(a: Args) -> Result<(), String> {
     });
     let finished = csv.map(|w| w.finish());
     res.map_err(|e| e.to_string())?;
-    if let Some(Err(e)) = finished {
-        return Err(format!("writing CSV: {e}"));
+    if let (Some(Err(e)), Some(p)) = (finished, &a.output) {
+        return Err(format!("{}: {e}", p.display()));
     }
     Ok(())
 }

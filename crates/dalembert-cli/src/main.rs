@@ -52,18 +52,18 @@ mod animate;
 mod check;
 mod inverse;
 mod method_args;
+mod paths;
 mod plot;
 mod simulate;
 mod sweep;
 mod trade;
 
 use clap::{Parser, Subcommand};
-use std::path::PathBuf;
 use std::process::ExitCode;
 
-/// Constrained planar multibody dynamics from scene files.
+/// Constrained multibody dynamics, planar and spatial, from scene files.
 #[derive(Parser)]
-#[command(name = "dalembert", version, about)]
+#[command(name = "dalembert", version, about, arg_required_else_help = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -74,10 +74,7 @@ enum Command {
     /// Simulate a scene and print a summary (and write a CSV with --output).
     Simulate(simulate::Args),
     /// Parse and assemble a scene; report degrees of freedom, redundancy, initial accelerations and reactions.
-    Check {
-        /// Scene file (TOML).
-        scene: PathBuf,
-    },
+    Check(check::Args),
     /// Inverse dynamics of a fully driven scene: driver efforts and reactions over time.
     Inverse(inverse::Args),
     /// Plot columns of a result CSV against time as an SVG.
@@ -90,21 +87,65 @@ enum Command {
     Animate(animate::Args),
 }
 
+/// A usage error on one line that names what is wrong: the missing arguments, the suggestion for
+/// a mistyped command or flag, the usage, and the commands when the command itself is wrong.
+fn usage_error(e: &clap::Error) -> String {
+    use clap::error::{ContextKind, ErrorKind};
+    use clap::CommandFactory;
+    let text = e.to_string();
+    if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        // Plain `dalembert`: the help, which lists the commands.
+        return text.trim_end().to_string();
+    }
+    if e.kind() == ErrorKind::InvalidSubcommand {
+        let names: Vec<String> = Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_string())
+            .filter(|n| n != "help")
+            .collect();
+        let given = e.get(ContextKind::InvalidSubcommand).map(|v| v.to_string()).unwrap_or_default();
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        let hint = dalembert::scene::nearest(&given, &refs).map_or(String::new(), |n| format!("; did you mean '{n}'?"));
+        return format!("error: unknown command '{given}'{hint} (commands: {}; see --help)", names.join(", "));
+    }
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let mut out = lines
+        .next()
+        .unwrap_or("error: invalid arguments")
+        .trim_end_matches(':')
+        .to_string();
+    let mut listed = Vec::new();
+    for line in lines {
+        if let Some(tip) = line.strip_prefix("tip: ") {
+            out.push_str(&format!("; {tip}"));
+        } else if let Some(usage) = line.strip_prefix("Usage: ") {
+            out.push_str(&format!("; usage: {usage}"));
+        } else if line.starts_with("For more information") {
+        } else {
+            listed.push(line);
+        }
+    }
+    if !listed.is_empty() {
+        // The missing arguments, listed under the first line.
+        let (head, rest) = out.split_once("; ").map_or((out.as_str(), ""), |(h, r)| (h, r));
+        out = format!("{head}: {}{}{rest}", listed.join(", "), if rest.is_empty() { "" } else { "; " });
+    }
+    format!("{out} (see --help)")
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         // Usage errors in one line, like every other error; help and version print as usual.
         Err(e) if e.use_stderr() => {
-            let text = e.to_string();
-            let first = text.lines().next().unwrap_or("error: invalid arguments");
-            eprintln!("{first} (see --help)");
+            eprintln!("{}", usage_error(&e));
             return ExitCode::from(2);
         }
         Err(e) => e.exit(),
     };
     let result = match cli.command {
         Command::Simulate(a) => simulate::run(a),
-        Command::Check { scene } => check::run(&scene),
+        Command::Check(a) => check::run(a),
         Command::Inverse(a) => inverse::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Trade(a) => trade::run(a),

@@ -4,6 +4,7 @@ use crate::method_args::MethodParams;
 use dalembert::integrators::Sample;
 use dalembert::integrators::StepControl;
 use dalembert::scene::{RunOverrides, Spelling};
+use dalembert::output::fixed;
 use dalembert::{CsvOutput, Scene};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -81,10 +82,52 @@ pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
     }
     scene.settings = settings;
     scene.check_settings(Spelling::Flags)?;
+    if let Some(w) = long_run_warning(&scene) {
+        eprintln!("warning: {w}");
+    }
     Ok(scene)
 }
 
+/// Steps past which a fixed-step run gets a warning with its estimated wall time.
+const MANY_STEPS: f64 = 1e7;
+
+/// For a fixed-step run of more than [`MANY_STEPS`] steps: the count and the wall time it will
+/// take, estimated from 200 steps timed here (a step of 1e-12 s over 5 s is 5e12 steps, hours of
+/// work, which a user should hear of before waiting).
+fn long_run_warning(scene: &Scene) -> Option<String> {
+    let s = &scene.settings;
+    if s.method.entry().control == StepControl::Adaptive {
+        return None;
+    }
+    let steps = s.end / s.step;
+    if steps.is_nan() || steps <= MANY_STEPS {
+        return None;
+    }
+    let mut probe = scene.simulation();
+    probe.end = 200.0 * s.step;
+    probe.integrator.output_every = probe.end;
+    let per_step = probe.run(&mut |_| {}).ok()?.wall_time.as_secs_f64() / 200.0;
+    let seconds = per_step * steps;
+    let took = match seconds {
+        x if x < 120.0 => format!("{x:.0} s"),
+        x if x < 7200.0 => format!("{:.0} min", x / 60.0),
+        x if x < 2.0 * 86400.0 => format!("{:.0} h", x / 3600.0),
+        x if x < 2.0 * 365.25 * 86400.0 => format!("{:.0} days", x / 86400.0),
+        x => format!("{} years", short(x / (365.25 * 86400.0))),
+    };
+    Some(format!(
+        "a step of {} s over {} s is {} steps, about {took} at the {} µs per step measured here; Ctrl-C stops the run keeping the rows so far",
+        short(s.step),
+        short(s.end),
+        short(steps.round()),
+        dalembert::output::shortest((per_step * 1e6 * 100.0).round() / 100.0)
+    ))
+}
+
 pub fn run(a: Args) -> Result<(), String> {
+    if let Some(p) = &a.output {
+        crate::paths::refuse_overwriting(p, &[&a.scene])?;
+    }
     let scene = load(&a.scene, &a.run)?;
     let sim = scene.simulation();
     let mechanism = scene.model.clone();
@@ -134,7 +177,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let mut csv = match &a.output {
         Some(p) => {
             let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            Some(CsvOutput::new(&mechanism, std::io::BufWriter::new(f)).map_err(|e| e.to_string())?)
+            Some(CsvOutput::new(&mechanism, std::io::BufWriter::new(f)).map_err(|e| format!("{}: {e}", p.display()))?)
         }
         None => None,
     };
@@ -186,11 +229,14 @@ pub fn run(a: Args) -> Result<(), String> {
                 (Some(c), Some(p)) => {
                     let (rows, last) = (c.rows(), c.last_time());
                     match c.finish() {
-                        Ok(_) => format!(
-                            "; {} holds the {rows} rows up to t = {}",
-                            p.display(),
-                            last.map_or("-".into(), |t| t.to_string())
-                        ),
+                        Ok(_) => match last {
+                            Some(t) => format!(
+                                "; {} holds the {rows} rows up to t = {}",
+                                p.display(),
+                                dalembert::output::shortest(t)
+                            ),
+                            None => format!("; {} holds the header only: no row was computed", p.display()),
+                        },
                         Err(w) => format!("; writing {} also failed: {w}", p.display()),
                     }
                 }
@@ -200,7 +246,8 @@ pub fn run(a: Args) -> Result<(), String> {
         }
     };
     if let Some(c) = csv {
-        c.finish().map_err(|e| format!("writing CSV: {e}"))?;
+        let p = a.output.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+        c.finish().map_err(|e| format!("{p}: {e}"))?;
         outln!(
             "output       {}",
             a.output.as_ref().map(|p| p.display().to_string()).unwrap_or_default()
@@ -278,11 +325,11 @@ fn print_rows(summary: &[(String, usize)], rows: &[(f64, Vec<f64>, f64, f64)]) {
     }
     outln!(" {:>15} {:>10}", "energy [J]", "|C|");
     for (t, angles, e, c) in rows {
-        out!("{t:9.4}");
+        out!("{}", fixed(*t, 9, 4));
         for a in angles.iter().take(6) {
-            out!(" {a:14.6}");
+            out!(" {}", fixed(*a, 14, 6));
         }
-        outln!(" {e:15.8} {c:10.2e}");
+        outln!(" {} {c:10.2e}", fixed(*e, 15, 8));
     }
     outln!();
 }

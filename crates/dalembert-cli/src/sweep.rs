@@ -1,8 +1,9 @@
 //! `dalembert sweep`: one scene run for every combination of values, on all cores.
 
-use dalembert::sweep::{cartesian, split_list, sweep, write_csv, Output};
+use dalembert::sweep::{cartesian, split_list, sweep_streaming, Output, SweepCsv, SweepRow};
 use dalembert::{Scene, SceneValue};
 use std::path::PathBuf;
+use std::sync::Mutex;
 use std::time::Instant;
 
 /// Arguments of `sweep`.
@@ -73,20 +74,46 @@ pub fn run(a: Args) -> Result<(), String> {
         .map(|n| Output::parse(&scene, n))
         .collect::<Result<Vec<_>, _>>()?;
     let runs = cartesian(&parameters);
-    let start = Instant::now();
-    let rows = sweep(&scene, &runs, a.end, &outputs, a.threads, crate::interrupt_flag())?;
-    let wall = start.elapsed().as_secs_f64();
     let paths: Vec<String> = parameters.iter().map(|(p, _)| p.clone()).collect();
-    match &a.output {
+    // The CSV is streamed: the header now, each row as its run ends (in the order the runs end),
+    // so that a sweep stopped by any means leaves every finished row in a well-formed file.
+    let sink: Box<dyn std::io::Write + Send> = match &a.output {
         Some(p) => {
-            let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            write_csv(std::io::BufWriter::new(f), &paths, &names, &rows)
-                .map_err(|e| format!("{}: {e}", p.display()))?;
+            crate::paths::refuse_overwriting(p, &[&a.scene])?;
+            Box::new(std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?)
         }
-        None => {
-            let mut buf = Vec::new();
-            write_csv(&mut buf, &paths, &names, &rows).map_err(|e| e.to_string())?;
-            out!("{}", String::from_utf8_lossy(&buf));
+        None => Box::new(std::io::stdout()),
+    };
+    let where_to = a.output.as_ref().map_or("stdout".to_string(), |p| p.display().to_string());
+    let csv = SweepCsv::new(sink, &paths, &names).map_err(|e| format!("{where_to}: {e}"))?;
+    let writer: Mutex<(Option<SweepCsv<_>>, Option<std::io::Error>)> = Mutex::new((Some(csv), None));
+    let write_row = |_: usize, row: &SweepRow| {
+        let mut guard = writer.lock().unwrap_or_else(|p| p.into_inner());
+        let (csv, failure) = &mut *guard;
+        if let (Some(csv), None) = (csv.as_mut(), failure.as_ref()) {
+            if let Err(e) = csv.row(row) {
+                // A closed stdout (`| head`) ends the output, not the sweep; any other failure is
+                // reported at the end.
+                *failure = Some(e);
+            }
+        }
+    };
+    let start = Instant::now();
+    let rows = sweep_streaming(
+        &scene,
+        &runs,
+        a.end,
+        &outputs,
+        a.threads,
+        crate::interrupt_flag(),
+        &write_row,
+    )?;
+    let wall = start.elapsed().as_secs_f64();
+    let (csv, write_error) = writer.into_inner().unwrap_or_else(|p| p.into_inner());
+    let write_error = write_error.or_else(|| csv.and_then(|c| c.finish().err()));
+    if let Some(e) = write_error {
+        if e.kind() != std::io::ErrorKind::BrokenPipe || a.output.is_some() {
+            return Err(format!("{where_to}: {e}"));
         }
     }
     let failed = rows.iter().filter(|r| r.error.is_some()).count();
@@ -103,7 +130,26 @@ pub fn run(a: Args) -> Result<(), String> {
             .unwrap_or_default()
     );
     if crate::interrupt_flag().load(std::sync::atomic::Ordering::Relaxed) {
-        return Err("interrupted; runs not started are marked \"cancelled\"".into());
+        let stopped = rows
+            .iter()
+            .filter(|r| r.error.as_deref().is_some_and(|e| e.starts_with("interrupted")))
+            .count();
+        let cancelled = rows
+            .iter()
+            .filter(|r| r.error.as_deref() == Some(dalembert::sweep::CANCELLED))
+            .count();
+        return Err(format!(
+            "interrupted: {} runs finished, {stopped} stopped at their next step (rows marked \"interrupted at t = …\"), {cancelled} not started (marked \"cancelled\")",
+            rows.len() - stopped - cancelled
+        ));
+    }
+    if failed > 0 {
+        let first = rows.iter().find_map(|r| r.error.as_deref()).unwrap_or_default();
+        return Err(format!(
+            "{failed} of {} runs failed (the first: {}); their rows hold the error",
+            rows.len(),
+            dalembert::scene::one_line(first)
+        ));
     }
     Ok(())
 }

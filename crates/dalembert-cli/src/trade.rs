@@ -1,7 +1,8 @@
 //! `dalembert trade`: the speed–accuracy trade of every formulation × integrator × constraint
 //! treatment × step (or tolerance) on one scene, measured against a tight reference run.
 
-use dalembert::trade::{trade, TradeGrid, TradeRun};
+use dalembert::trade::{trade_cancellable, TradeGrid, TradeRun};
+use dalembert::output::shortest;
 use dalembert::Scene;
 use plotters::prelude::*;
 use std::fmt::Write as _;
@@ -72,11 +73,16 @@ pub fn run(a: Args) -> Result<(), String> {
         every: a.every,
     };
     let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let t = trade(&scene, &grid, &mut |done, _| {
-        if tty {
-            eprint!("\r{done} runs");
-        }
-    })?;
+    let t = trade_cancellable(
+        &scene,
+        &grid,
+        &mut |done, _| {
+            if tty {
+                eprint!("\r{done} runs");
+            }
+        },
+        crate::interrupt_flag(),
+    )?;
     eprintln!();
     outln!(
         "scene        {} ({} s, compared every {} s against {})",
@@ -118,6 +124,12 @@ pub fn run(a: Args) -> Result<(), String> {
         failed,
         a.output.display()
     );
+    if t.interrupted {
+        return Err(format!(
+            "interrupted: {} runs of the grid made (the last stopped at its next step); the files hold them",
+            runs.len()
+        ));
+    }
     Ok(())
 }
 
@@ -129,12 +141,12 @@ fn write_csv(path: &std::path::Path, runs: &[TradeRun]) -> Result<(), String> {
             s,
             "{},{},{},{},{},{},{},{}",
             r.method,
-            r.parameter,
-            r.time_s,
+            shortest(r.parameter),
+            shortest(r.time_s),
             r.evaluations,
-            r.error.map_or("".into(), |e| e.to_string()),
-            r.constraint,
-            r.energy,
+            r.error.map_or("".into(), shortest),
+            shortest(r.constraint),
+            shortest(r.energy),
             r.status.replace(',', ";")
         );
     }

@@ -144,3 +144,131 @@ fn tiny_numbers_are_written_short_and_read_back_exactly() {
         assert_eq!(s.parse::<f64>().unwrap(), x, "{s}");
     }
 }
+
+/// Starts `dalembert sweep` on the chain of eight with `set`, writing `csv`.
+fn start_sweep(csv: &std::path::Path, set: &str) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_dalembert"))
+        .args(["sweep", &scene("chain-8.toml"), "--set", set, "--threads", "2", "--output"])
+        .arg(csv)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Waits until `csv` holds `rows` rows besides its header (at most 60 s).
+fn wait_for_rows(csv: &std::path::Path, rows: usize) {
+    for _ in 0..600 {
+        let n = std::fs::read_to_string(csv).map_or(0, |t| t.lines().count());
+        if n > rows {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    panic!("{} never held {rows} rows", csv.display());
+}
+
+fn signal(child: &std::process::Child, signal: &str) {
+    let sent = Command::new("kill")
+        .args([&format!("-{signal}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+}
+
+/// SIGINT and SIGTERM stop a sweep's runs in progress at their next step (within a second, where
+/// each run alone would take hours), exit 130, and leave the header, the finished run's row and
+/// one row per stopped run marked "interrupted at t = …" or "cancelled". The first run (end
+/// 0.05 s) finishes at once: its row is there with its numbers.
+fn interrupt_sweep(sig: &str) {
+    let csv = tmp(&format!("sweep-{sig}.csv"));
+    let child = start_sweep(&csv, "simulation.end=0.05,1e5,1e5,1e5");
+    wait_for_rows(&csv, 1);
+    std::thread::sleep(Duration::from_millis(300));
+    signal(&child, sig);
+    let sent = std::time::Instant::now();
+    let out = child.wait_with_output().unwrap();
+    let stopped_in = sent.elapsed();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(stopped_in < Duration::from_secs(1), "stopped {stopped_in:?} after the signal");
+    let rows = rows(&csv);
+    assert_eq!(rows.len(), 4, "one row per run");
+    let error = |r: &csv::StringRecord| r[r.len() - 1].to_string();
+    let finished: Vec<_> = rows.iter().filter(|r| error(r).is_empty()).collect();
+    assert_eq!(finished.len(), 1, "{rows:?}");
+    assert_eq!(&finished[0][0], "0.05");
+    assert!(finished[0][1].parse::<f64>().unwrap().is_finite());
+    let marks: Vec<String> = rows.iter().map(error).filter(|e| !e.is_empty()).collect();
+    assert!(
+        marks.iter().all(|e| e.starts_with("interrupted at t = ") || e == "cancelled"),
+        "{marks:?}"
+    );
+    assert!(marks.iter().any(|e| e.starts_with("interrupted at t = ")), "{marks:?}");
+    assert!(err.contains("error: interrupted: 1 runs finished"), "{err}");
+}
+
+#[test]
+fn sigint_stops_a_sweep_within_a_second_keeping_every_row() {
+    interrupt_sweep("INT");
+}
+
+#[test]
+fn sigterm_stops_a_sweep_within_a_second_keeping_every_row() {
+    interrupt_sweep("TERM");
+}
+
+/// The sweep's CSV is streamed: after SIGKILL (no chance to write anything more) the file holds
+/// the header and the row of the run that had finished.
+#[test]
+fn a_killed_sweep_leaves_its_finished_rows() {
+    let csv = tmp("sweep-KILL.csv");
+    let mut child = start_sweep(&csv, "simulation.end=0.05,1e5");
+    wait_for_rows(&csv, 1);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let rows = rows(&csv);
+    assert_eq!(rows.len(), 1);
+    assert_eq!(&rows[0][0], "0.05");
+    assert_eq!(&rows[0][rows[0].len() - 1], "");
+}
+
+/// SIGINT stops `trade` in the run in progress: exit 130, and trade.csv holds the runs made, the
+/// last one marked interrupted.
+#[test]
+fn sigint_stops_a_trade_keeping_the_runs_made() {
+    let dir = tmp("trade-INT");
+    let child = Command::new(env!("CARGO_BIN_EXE_dalembert"))
+        .args([
+            "trade",
+            &scene("chain-8.toml"),
+            "--formulations",
+            "augmented",
+            "--integrators",
+            "rk4",
+            "--stabilizations",
+            "projection",
+            "--steps",
+            "1e-3,1e-7",
+            "--end",
+            "1",
+            "--output",
+        ])
+        .arg(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The reference (dopri5 at 1e-12) and the run at 1e-3 take about 0.1 s; the one at 1e-7,
+    // 1e7 steps, minutes.
+    std::thread::sleep(Duration::from_secs(3));
+    signal(&child, "INT");
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    let text = std::fs::read_to_string(dir.join("trade.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(lines[1].ends_with(",ok"), "{text}");
+    assert!(lines[2].contains("interrupted at t = "), "{text}");
+}

@@ -11,7 +11,7 @@ pub enum IntegrationError {
     #[error("integration stopped: {0}")]
     Dynamics(#[from] DynamicsError),
     /// The adaptive step fell below the minimum.
-    #[error("t = {time}: step size {step:e} below the minimum {min_step:e} (error estimate {error:.3e}); the problem may be stiff or singular here")]
+    #[error("t = {t}: step size {step:e} below the minimum {min_step:e} (error estimate {error:.3e}); the problem may be stiff or singular here", t = dalembert_system::Shortest(*.time))]
     StepSizeTooSmall {
         /// Time.
         time: f64,
@@ -25,7 +25,7 @@ pub enum IntegrationError {
     /// The state grew without bound (an explicit step beyond its stability limit; for an
     /// implicit method, what its [`Stepper::divergence_hint`](crate::Stepper::divergence_hint)
     /// says).
-    #[error("t = {time}: the solution diverged ({what}) at step {step:e} s; {hint}")]
+    #[error("t = {t}: the solution diverged ({what}) at step {step:e} s; {hint}", t = dalembert_system::Shortest(*.time))]
     Diverged {
         /// Time.
         time: f64,
@@ -39,7 +39,7 @@ pub enum IntegrationError {
     /// An adaptive method's steps collapsed at a singular position of a closed chain (`C_q` nearly
     /// rank deficient: links lining up). Stepping on would let the motion leave on the other
     /// branch without notice, so the run stops here.
-    #[error("t = {time}: {method}'s steps collapse (to {step:.1e} s) at a singular position of the mechanism: the constraint Jacobian is nearly rank deficient (equations involved: {}); {advice}", list(.involved))]
+    #[error("t = {t}: {method}'s steps collapse (to {step:.1e} s) at a singular position of the mechanism: the constraint Jacobian is nearly rank deficient (equations involved: {}); {advice}", list(.involved), t = dalembert_system::Shortest(*.time))]
     SingularPass {
         /// Time of the last accepted step.
         time: f64,
@@ -57,7 +57,7 @@ pub enum IntegrationError {
     /// ([`crate::BRANCH_SWITCH_SHARE`]), or the energy of a conservative model jumped
     /// ([`crate::BRANCH_SWITCH_ENERGY`]). The run stops there rather than go on with another
     /// motion; every sample before it has been observed.
-    #[error("t = {time}: {sign} {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}) near a singular position of the mechanism (constraint Jacobian nearly rank deficient; equations involved: {}): the motion left its branch there and the run stops here rather than go on along another branch; where the steps fall near that position decides the branch: retry with another step size (docs/stability.md)", list(.involved))]
+    #[error("t = {t}: {sign} {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}) near a singular position of the mechanism (constraint Jacobian nearly rank deficient; equations involved: {}): the motion left its branch there and the run stops here rather than go on along another branch; where the steps fall near that position decides the branch: retry with another step size (docs/stability.md)", list(.involved), t = dalembert_system::Shortest(*.time))]
     BranchSwitch {
         /// Time at the end of the step.
         time: f64,
@@ -75,11 +75,26 @@ pub enum IntegrationError {
     Options(String),
     /// The caller asked the run to stop (the cancellation flag of [`crate::integrate_cancellable`],
     /// e.g. set on Ctrl-C); every sample up to `time` has been observed.
-    #[error("t = {time}: interrupted")]
+    #[error("t = {t}: interrupted", t = dalembert_system::Shortest(*.time))]
     Interrupted {
         /// Time of the last accepted step.
         time: f64,
     },
+}
+
+impl IntegrationError {
+    /// The time the integration stopped at, where the error carries it.
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            IntegrationError::Dynamics(d) => d.time(),
+            IntegrationError::StepSizeTooSmall { time, .. }
+            | IntegrationError::Diverged { time, .. }
+            | IntegrationError::SingularPass { time, .. }
+            | IntegrationError::BranchSwitch { time, .. }
+            | IntegrationError::Interrupted { time } => Some(*time),
+            IntegrationError::Options(_) => None,
+        }
+    }
 }
 
 use dalembert_system::error::list;

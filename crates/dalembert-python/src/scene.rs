@@ -8,7 +8,7 @@ use crate::run::PyRun;
 use dalembert::output::Rows;
 use dalembert::scene::{method_parameter, parameter_keys, RunOverrides, Spelling};
 use dalembert::sweep::{run_one, sweep, Assignment, Output};
-use dalembert::trade::{trade, TradeGrid};
+use dalembert::trade::{trade_cancellable, TradeGrid};
 use dalembert::Scene;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
@@ -42,6 +42,30 @@ fn integration_error(py: Python<'_>, message: String, time: Option<f64>, run: Py
     value.setattr("time", time)?;
     value.setattr("run", Py::new(py, run)?)?;
     Ok(err)
+}
+
+/// The keywords of `Scene.simulate`: the run settings, then the methods' parameters.
+const SIMULATE_KEYWORDS: &[&str] = &[
+    "end",
+    "formulation",
+    "integrator",
+    "step",
+    "every",
+    "stabilization",
+    "redundant",
+    "coordinates",
+    "strict",
+];
+
+/// A `TypeError` for an unknown keyword of `method`, listing every keyword and the nearest one.
+fn unexpected_keyword(method: &str, key: &str) -> PyErr {
+    let mut keys = SIMULATE_KEYWORDS.to_vec();
+    keys.extend(parameter_keys());
+    let hint = dalembert::scene::nearest(key, &keys).map_or(String::new(), |k| format!("; did you mean '{k}'?"));
+    pyo3::exceptions::PyTypeError::new_err(format!(
+        "{method}() got an unexpected keyword '{key}' (keywords: {}){hint}",
+        keys.join(", ")
+    ))
 }
 
 /// An interrupt raised while a run went on, with the rows so far attached as `run`.
@@ -210,6 +234,9 @@ impl PyScene {
         let mut given = Vec::new();
         for (k, v) in parameters.into_iter().flatten() {
             let key: String = k.extract()?;
+            if method_parameter(&key).is_none() {
+                return Err(unexpected_keyword("simulate", &key));
+            }
             let value: f64 = v
                 .extract()
                 .map_err(|_| PyValueError::new_err(format!("{key} must be a number, got {v}")))?;
@@ -269,6 +296,8 @@ impl PyScene {
                     warning: None,
                     scene,
                 };
+                // The time the run stopped at (the failure's own; the last row's when it has none).
+                let time = e.time().or(time);
                 match raised {
                     Some(r) => Err(interrupted(py, r, run)?),
                     None => Err(integration_error(py, e.to_string(), time, run)?),
@@ -326,24 +355,18 @@ impl PyScene {
             every,
         };
         let scene = self.inner.clone();
-        let t = py
-            .detach(move || trade(&scene, &grid, &mut |_, _| {}))
-            .map_err(PyValueError::new_err)?;
-        let out = PyList::empty(py);
-        for (i, r) in t.runs.iter().enumerate() {
-            let d = PyDict::new(py);
-            d.set_item("method", &r.method)?;
-            d.set_item("parameter", r.parameter)?;
-            d.set_item("time_s", r.time_s)?;
-            d.set_item("evaluations", r.evaluations)?;
-            d.set_item("error", r.error)?;
-            d.set_item("max_constraint_violation", r.constraint)?;
-            d.set_item("max_energy_change", r.energy)?;
-            d.set_item("status", &r.status)?;
-            d.set_item("pareto", t.front.contains(&i))?;
-            out.append(d)?;
-        }
-        Ok(out)
+        // Ctrl-C stops the run in progress at its next step: KeyboardInterrupt, the rows so far in
+        // its `rows`.
+        let (t, raised) = interrupt::run(py, move |cancel| trade_cancellable(&scene, &grid, &mut |_, _| {}, cancel));
+        let t = match (t, raised) {
+            (Err(_), Some(e)) => return Err(e),
+            (t, None) => t.map_err(PyValueError::new_err)?,
+            (Ok(t), Some(e)) => {
+                e.value(py).setattr("rows", trade_rows(py, &t)?)?;
+                return Err(e);
+            }
+        };
+        trade_rows(py, &t)
     }
 
     /// Writes a self-contained HTML animation of a simulation with the scene's settings.
@@ -382,6 +405,25 @@ fn assignment(values: &Bound<'_, PyDict>) -> PyResult<Assignment> {
         .collect()
 }
 
+/// The rows of a trade as dicts (`pareto`: on the front).
+fn trade_rows<'py>(py: Python<'py>, t: &dalembert::trade::Trade) -> PyResult<Bound<'py, PyList>> {
+    let out = PyList::empty(py);
+    for (i, r) in t.runs.iter().enumerate() {
+        let d = PyDict::new(py);
+        d.set_item("method", &r.method)?;
+        d.set_item("parameter", r.parameter)?;
+        d.set_item("time_s", r.time_s)?;
+        d.set_item("evaluations", r.evaluations)?;
+        d.set_item("error", r.error)?;
+        d.set_item("max_constraint_violation", r.constraint)?;
+        d.set_item("max_energy_change", r.energy)?;
+        d.set_item("status", &r.status)?;
+        d.set_item("pareto", t.front.contains(&i))?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
 /// Runs `runs` (a list of dicts path → value) of `scene` on `threads` threads (all cores when
 /// None), the GIL released. Returns one `(outputs, wall_time_s, error)` tuple per run, in order.
 /// Raises SceneError when a path or an output name does not exist (before any run).
@@ -416,21 +458,25 @@ pub fn sweep_runs<'py>(
     for p in paths {
         s.check_path(p).map_err(scene_error)?;
     }
-    let rows = if assignments.len() == 1 && threads == Some(1) {
+    let (rows, raised) = if assignments.len() == 1 && threads == Some(1) {
         // One run on this thread: no pool to start.
         let a = &assignments[0];
-        let (row, raised) = interrupt::run(py, |_| run_one(&s, a, end, &parsed));
-        if let Some(e) = raised {
-            return Err(e);
-        }
-        vec![row]
+        let (row, raised) = interrupt::run(py, |cancel| run_one(&s, a, end, &parsed, cancel));
+        (vec![row], raised)
     } else {
         let (rows, raised) = interrupt::run(py, |cancel| sweep(&s, &assignments, end, &parsed, threads, cancel));
-        if let Some(e) = raised {
-            return Err(e);
-        }
-        rows.map_err(PyValueError::new_err)?
+        (rows.map_err(PyValueError::new_err)?, raised)
     };
+    if let Some(e) = raised {
+        // Ctrl-C stopped the runs in progress at their next step: the rows so far go with the
+        // KeyboardInterrupt (`rows`), the stopped ones marked "interrupted at t = …".
+        let list = PyList::empty(py);
+        for r in rows {
+            list.append((r.outputs, r.wall_time, r.error))?;
+        }
+        e.value(py).setattr("rows", list)?;
+        return Err(e);
+    }
     let out = PyList::empty(py);
     for r in rows {
         let item = (r.outputs, r.wall_time, r.error);

@@ -70,7 +70,7 @@ pub enum ConstraintError {
         count: usize,
     },
     /// Newton–Raphson on `C(q, t) = 0` did not converge.
-    #[error("position analysis at t = {time}: not converged after {iterations} iterations; still violated: {}", list_violated(.violated))]
+    #[error("position analysis at t = {t}: not converged after {iterations} iterations; still violated: {}", list_violated(.violated), t = crate::Shortest(*.time))]
     NotConverged {
         /// Time of the analysis.
         time: f64,
@@ -81,7 +81,7 @@ pub enum ConstraintError {
     },
     /// The constraint Jacobian lost rank where a unique solution is required, and the equations are
     /// inconsistent there (a toggle or dead-centre position, or a locked mechanism).
-    #[error("singular constraint Jacobian at t = {time} (rank {rank} of {equations_count}); equations involved: {}", list(.involved))]
+    #[error("singular constraint Jacobian at t = {t} (rank {rank} of {equations_count}); equations involved: {}", list(.involved), t = crate::Shortest(*.time))]
     Singular {
         /// Time of the analysis.
         time: f64,
@@ -106,7 +106,7 @@ pub enum ConstraintError {
         cols: usize,
     },
     /// The state or a constraint value is not finite.
-    #[error("non-finite value at t = {time}: {what}")]
+    #[error("non-finite value at t = {t}: {what}", t = crate::Shortest(*.time))]
     NonFinite {
         /// Time.
         time: f64,

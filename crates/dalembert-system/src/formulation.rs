@@ -81,7 +81,7 @@ pub enum RedundancyTreatment {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum DynamicsError {
     /// The constraint Jacobian is rank deficient (redundant constraints or a singular position).
-    #[error("t = {time}: constraint Jacobian is rank deficient (rank {rank} of {equations}); equations involved: {}", list(.involved))]
+    #[error("t = {t}: constraint Jacobian is rank deficient (rank {rank} of {equations}); equations involved: {}", list(.involved), t = crate::Shortest(*.time))]
     RedundantConstraints {
         /// Time.
         time: f64,
@@ -94,7 +94,7 @@ pub enum DynamicsError {
     },
     /// The mass matrix is singular on the motions the constraints allow (a massless body or a
     /// point mass whose rotation is free).
-    #[error("t = {time}: mass matrix singular on the admissible motions; bodies without mass or inertia: {}", .bodies.join(", "))]
+    #[error("t = {t}: mass matrix singular on the admissible motions; bodies without mass or inertia: {}", .bodies.join(", "), t = crate::Shortest(*.time))]
     SingularMass {
         /// Time.
         time: f64,
@@ -102,7 +102,7 @@ pub enum DynamicsError {
         bodies: Vec<String>,
     },
     /// A singular partition or factorization not explained by the two causes above.
-    #[error("t = {time}: singular system: {what}")]
+    #[error("t = {t}: singular system: {what}", t = crate::Shortest(*.time))]
     Singular {
         /// Time.
         time: f64,
@@ -110,7 +110,7 @@ pub enum DynamicsError {
         what: String,
     },
     /// A non-finite number in the state or the result.
-    #[error("t = {time}: non-finite {what}")]
+    #[error("t = {t}: non-finite {what}", t = crate::Shortest(*.time))]
     NonFinite {
         /// Time.
         time: f64,
@@ -119,7 +119,7 @@ pub enum DynamicsError {
     },
     /// A force element left the range where its law is defined (e.g. a rotational spring wound
     /// past half a turn, whose deflection is measured within ±π).
-    #[error("t = {time}: {element}: {what}")]
+    #[error("t = {t}: {element}: {what}", t = crate::Shortest(*.time))]
     ForceElement {
         /// Time.
         time: f64,
@@ -142,13 +142,29 @@ pub enum DynamicsError {
         got: usize,
     },
     /// A factorization reported an error.
-    #[error("t = {time}: factorization failed: {what}")]
+    #[error("t = {t}: factorization failed: {what}", t = crate::Shortest(*.time))]
     Factorization {
         /// Time.
         time: f64,
         /// The solver's message.
         what: String,
     },
+}
+
+impl DynamicsError {
+    /// The time the failure happened, where the error carries it (every variant but
+    /// `Kinematics` and `WrongLength`).
+    pub fn time(&self) -> Option<f64> {
+        match self {
+            DynamicsError::RedundantConstraints { time, .. }
+            | DynamicsError::SingularMass { time, .. }
+            | DynamicsError::Singular { time, .. }
+            | DynamicsError::NonFinite { time, .. }
+            | DynamicsError::ForceElement { time, .. }
+            | DynamicsError::Factorization { time, .. } => Some(*time),
+            DynamicsError::Kinematics(_) | DynamicsError::WrongLength { .. } => None,
+        }
+    }
 }
 
 fn list(eqs: &[EquationRef]) -> String {

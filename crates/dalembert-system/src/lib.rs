@@ -28,6 +28,7 @@ pub mod layout;
 pub mod linalg;
 pub mod minimum_norm;
 pub mod model_error;
+pub mod number;
 pub mod partition;
 pub mod sparse_pattern;
 pub mod structure;
@@ -45,6 +46,7 @@ pub use formulation::{Baumgarte, DynamicsError, Energy, Formulation, Formulation
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use layout::{BodyBlock, Layout};
 pub use model_error::ModelError;
+pub use number::Shortest;
 pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use structure::StructureReport;
 pub use system::MultibodySystem;

@@ -121,6 +121,10 @@ def sweep(
     (default: as many as take about ``CHUNK_SECONDS``, from one run timed here first), each chunk
     on one thread of its worker unless ``threads`` says otherwise.
     """
+    if isinstance(scene, (str, os.PathLike)):
+        scene = Scene.load(scene)
+    elif not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a dalembert.Scene or the path of a scene file, got {type(scene).__name__}")
     runs = [{k: _plain(v) for k, v in r.items()} for r in _runs(parameters)]
     paths: List[str] = []
     for r in runs:
@@ -134,7 +138,12 @@ def sweep(
     if not runs:
         return SweepResult(paths, outputs, [], 0.0)
     if executor is None:
-        results = sweep_runs(scene, runs, outputs, end=end, threads=threads)
+        try:
+            results = sweep_runs(scene, runs, outputs, end=end, threads=threads)
+        except KeyboardInterrupt as e:
+            # The runs in progress stopped at their next step; the rows so far go with the exception.
+            e.result = _result(paths, outputs, runs, getattr(e, "rows", []), start)
+            raise
     else:
         # One run here first: it checks paths and outputs (errors raised before anything is sent)
         # and times a run to size the chunks.
@@ -150,8 +159,21 @@ def sweep(
             for i in range(0, len(rest), chunk_size)
         ]
         results = list(first)
-        for f in futures:
-            results.extend(f.result())
+        try:
+            for f in futures:
+                results.extend(f.result())
+        except KeyboardInterrupt as e:
+            # Chunks not started are cancelled; the finished chunks' rows go with the exception
+            # (a chunk already running on a worker finishes there: an executor cannot stop it).
+            for f in futures:
+                f.cancel()
+            e.result = _result(paths, outputs, runs, results, start)
+            raise
+    return _result(paths, outputs, runs, results, start)
+
+
+def _result(paths: List[str], outputs: List[str], runs: List[Dict[str, Any]], results, start: float) -> SweepResult:
+    """The rows of the runs that have a result (all of them, unless the sweep was interrupted)."""
     rows = []
     for r, (values, wall, error) in zip(runs, results):
         row: Dict[str, Any] = {p: r.get(p) for p in paths}
