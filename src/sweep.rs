@@ -157,29 +157,29 @@ pub fn run_one(
         let stats = sim
             .run_cancellable(
                 &mut |smp| {
-                row.clear();
-                rows.push(&model, smp, &mut row);
-                for (o, a) in outputs.iter().zip(acc.iter_mut()) {
-                    if let Output::Column { index, summary } = o {
-                        let v = row[*index];
-                        a.0 = if a.1 == 0 {
-                            if *summary == Summary::MaxAbs {
-                                v.abs()
+                    row.clear();
+                    rows.push(&model, smp, &mut row);
+                    for (o, a) in outputs.iter().zip(acc.iter_mut()) {
+                        if let Output::Column { index, summary } = o {
+                            let v = row[*index];
+                            a.0 = if a.1 == 0 {
+                                if *summary == Summary::MaxAbs {
+                                    v.abs()
+                                } else {
+                                    v
+                                }
                             } else {
-                                v
-                            }
-                        } else {
-                            match summary {
-                                Summary::Final => v,
-                                Summary::Max => a.0.max(v),
-                                Summary::Min => a.0.min(v),
-                                Summary::Mean => a.0 + v,
-                                Summary::MaxAbs => a.0.max(v.abs()),
-                            }
-                        };
-                        a.1 += 1;
+                                match summary {
+                                    Summary::Final => v,
+                                    Summary::Max => a.0.max(v),
+                                    Summary::Min => a.0.min(v),
+                                    Summary::Mean => a.0 + v,
+                                    Summary::MaxAbs => a.0.max(v.abs()),
+                                }
+                            };
+                            a.1 += 1;
+                        }
                     }
-                }
                 },
                 cancel,
             )

@@ -72,7 +72,14 @@ pub fn read_columns(reader: impl Read, origin: &str, names: &[String]) -> Result
         let t = number(t_col)?;
         if let Some(&last) = table.times.last() {
             if t <= last {
-                return Err(err(line, format!("times must increase: t = {} after {}", crate::output::shortest(t), crate::output::shortest(last))));
+                return Err(err(
+                    line,
+                    format!(
+                        "times must increase: t = {} after {}",
+                        crate::output::shortest(t),
+                        crate::output::shortest(last)
+                    ),
+                ));
             }
         }
         table.times.push(t);

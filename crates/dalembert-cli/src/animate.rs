@@ -69,10 +69,9 @@ pub fn run(a: Args) -> Result<(), String> {
         viewer = viewer.trace(t);
     }
     if let Some(why) = &stopped {
-        let at = frames
-            .times
-            .last()
-            .map_or(String::new(), |&t| format!(" at t = {} s", dalembert::output::shortest(t)));
+        let at = frames.times.last().map_or(String::new(), |&t| {
+            format!(" at t = {} s", dalembert::output::shortest(t))
+        });
         viewer = viewer.note(format!("the run stopped{at}: {why}"));
     }
     std::fs::write(&output, viewer.html(&frames)).map_err(|e| format!("{}: {e}", output.display()))?;

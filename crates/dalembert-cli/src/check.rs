@@ -1,7 +1,7 @@
 //! `dalembert check`: prints [`dalembert::Scene::check`].
 
-use dalembert::scene::{RunOverrides, Spelling};
 use dalembert::output::fixed;
+use dalembert::scene::{RunOverrides, Spelling};
 use dalembert::{CheckReport, Scene};
 use std::path::PathBuf;
 

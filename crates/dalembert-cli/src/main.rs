@@ -103,10 +103,16 @@ fn usage_error(e: &clap::Error) -> String {
             .map(|c| c.get_name().to_string())
             .filter(|n| n != "help")
             .collect();
-        let given = e.get(ContextKind::InvalidSubcommand).map(|v| v.to_string()).unwrap_or_default();
+        let given = e
+            .get(ContextKind::InvalidSubcommand)
+            .map(|v| v.to_string())
+            .unwrap_or_default();
         let refs: Vec<&str> = names.iter().map(String::as_str).collect();
         let hint = dalembert::scene::nearest(&given, &refs).map_or(String::new(), |n| format!("; did you mean '{n}'?"));
-        return format!("error: unknown command '{given}'{hint} (commands: {}; see --help)", names.join(", "));
+        return format!(
+            "error: unknown command '{given}'{hint} (commands: {}; see --help)",
+            names.join(", ")
+        );
     }
     let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
     let mut out = lines
@@ -128,7 +134,11 @@ fn usage_error(e: &clap::Error) -> String {
     if !listed.is_empty() {
         // The missing arguments, listed under the first line.
         let (head, rest) = out.split_once("; ").map_or((out.as_str(), ""), |(h, r)| (h, r));
-        out = format!("{head}: {}{}{rest}", listed.join(", "), if rest.is_empty() { "" } else { "; " });
+        out = format!(
+            "{head}: {}{}{rest}",
+            listed.join(", "),
+            if rest.is_empty() { "" } else { "; " }
+        );
     }
     format!("{out} (see --help)")
 }

@@ -21,7 +21,8 @@ pub fn run(a: Args) -> Result<(), String> {
     crate::paths::refuse_overwriting(&a.output, &[&a.csv])?;
     let origin = a.csv.display().to_string();
     let open = || std::fs::File::open(&a.csv).map_err(|e| format!("{origin}: {e}"));
-    let header = dalembert::output::read_header(std::io::BufReader::new(open()?), &origin).map_err(|e| e.to_string())?;
+    let header =
+        dalembert::output::read_header(std::io::BufReader::new(open()?), &origin).map_err(|e| e.to_string())?;
     let mut columns = Vec::new();
     for arg in &a.columns {
         columns.extend(split_columns(arg, &header).map_err(|m| format!("{origin}:1: {m}"))?);
@@ -69,35 +70,35 @@ fn draw(
     // The SVG is drawn in memory and written at the end, so that a write error names the file.
     let mut svg = String::new();
     {
-    let pad = ((y1 - y0) * 0.05).max(1e-12);
-    let root = SVGBackend::with_string(&mut svg, (900, 540)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut chart = ChartBuilder::on(&root)
-        .margin(16)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(t0..t1.max(t0 + 1e-12), (y0 - pad)..(y1 + pad))
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc("t [s]")
-        .draw()
-        .map_err(|e| e.to_string())?;
-    for (i, (s, name)) in series.into_iter().zip(columns).enumerate() {
-        let color = Palette99::pick(i).to_rgba();
+        let pad = ((y1 - y0) * 0.05).max(1e-12);
+        let root = SVGBackend::with_string(&mut svg, (900, 540)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .margin(16)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(t0..t1.max(t0 + 1e-12), (y0 - pad)..(y1 + pad))
+            .map_err(|e| e.to_string())?;
         chart
-            .draw_series(LineSeries::new(s, color.stroke_width(2)))
-            .map_err(|e| e.to_string())?
-            .label(name.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-    }
-    chart
-        .configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.8))
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())?;
+            .configure_mesh()
+            .x_desc("t [s]")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (i, (s, name)) in series.into_iter().zip(columns).enumerate() {
+            let color = Palette99::pick(i).to_rgba();
+            chart
+                .draw_series(LineSeries::new(s, color.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(name.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        }
+        chart
+            .configure_series_labels()
+            .border_style(BLACK)
+            .background_style(WHITE.mix(0.8))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
     }
     std::fs::write(output, svg).map_err(|e| e.to_string())
 }
@@ -141,6 +142,9 @@ mod tests {
         assert_eq!(split_columns("f(x,y)", &header).unwrap(), ["f(x,y)"]);
         assert_eq!(split_columns("a,g,h,b", &header).unwrap(), ["a", "g,h", "b"]);
         let e = split_columns("a,nosuch", &header).unwrap_err();
-        assert!(e.starts_with("no column 'nosuch' (its columns: t, a, b, f(x,y), g,h)"), "{e}");
+        assert!(
+            e.starts_with("no column 'nosuch' (its columns: t, a, b, f(x,y), g,h)"),
+            "{e}"
+        );
     }
 }

@@ -3,8 +3,8 @@
 use crate::method_args::MethodParams;
 use dalembert::integrators::Sample;
 use dalembert::integrators::StepControl;
-use dalembert::scene::{RunOverrides, Spelling};
 use dalembert::output::fixed;
+use dalembert::scene::{RunOverrides, Spelling};
 use dalembert::{CsvOutput, Scene};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;

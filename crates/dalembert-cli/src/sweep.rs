@@ -84,7 +84,10 @@ pub fn run(a: Args) -> Result<(), String> {
         }
         None => Box::new(std::io::stdout()),
     };
-    let where_to = a.output.as_ref().map_or("stdout".to_string(), |p| p.display().to_string());
+    let where_to = a
+        .output
+        .as_ref()
+        .map_or("stdout".to_string(), |p| p.display().to_string());
     let csv = SweepCsv::new(sink, &paths, &names).map_err(|e| format!("{where_to}: {e}"))?;
     let writer: Mutex<(Option<SweepCsv<_>>, Option<std::io::Error>)> = Mutex::new((Some(csv), None));
     let write_row = |_: usize, row: &SweepRow| {

@@ -1,8 +1,8 @@
 //! `dalembert trade`: the speed–accuracy trade of every formulation × integrator × constraint
 //! treatment × step (or tolerance) on one scene, measured against a tight reference run.
 
-use dalembert::trade::{trade_cancellable, TradeGrid, TradeRun};
 use dalembert::output::shortest;
+use dalembert::trade::{trade_cancellable, TradeGrid, TradeRun};
 use dalembert::Scene;
 use plotters::prelude::*;
 use std::fmt::Write as _;

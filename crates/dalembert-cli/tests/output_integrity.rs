@@ -68,7 +68,15 @@ fn interrupt(signal: &str, every: &str) {
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(130), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
+    // One error line; before it the warning that 1e8 steps take minutes.
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.iter().filter(|l| l.starts_with("error: ")).count(), 1, "{err}");
+    assert!(
+        lines[..lines.len() - 1]
+            .iter()
+            .all(|l| l.starts_with("warning: a step of 1e-3 s over 1e5 s is 1e8 steps")),
+        "{err}"
+    );
     let rows = rows(&csv);
     let expected = format!(
         "interrupted; {} holds the {} rows up to t = {}",
@@ -148,7 +156,15 @@ fn tiny_numbers_are_written_short_and_read_back_exactly() {
 /// Starts `dalembert sweep` on the chain of eight with `set`, writing `csv`.
 fn start_sweep(csv: &std::path::Path, set: &str) -> std::process::Child {
     Command::new(env!("CARGO_BIN_EXE_dalembert"))
-        .args(["sweep", &scene("chain-8.toml"), "--set", set, "--threads", "2", "--output"])
+        .args([
+            "sweep",
+            &scene("chain-8.toml"),
+            "--set",
+            set,
+            "--threads",
+            "2",
+            "--output",
+        ])
         .arg(csv)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
@@ -191,7 +207,10 @@ fn interrupt_sweep(sig: &str) {
     let stopped_in = sent.elapsed();
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(130), "{err}");
-    assert!(stopped_in < Duration::from_secs(1), "stopped {stopped_in:?} after the signal");
+    assert!(
+        stopped_in < Duration::from_secs(1),
+        "stopped {stopped_in:?} after the signal"
+    );
     let rows = rows(&csv);
     assert_eq!(rows.len(), 4, "one row per run");
     let error = |r: &csv::StringRecord| r[r.len() - 1].to_string();
@@ -201,7 +220,9 @@ fn interrupt_sweep(sig: &str) {
     assert!(finished[0][1].parse::<f64>().unwrap().is_finite());
     let marks: Vec<String> = rows.iter().map(error).filter(|e| !e.is_empty()).collect();
     assert!(
-        marks.iter().all(|e| e.starts_with("interrupted at t = ") || e == "cancelled"),
+        marks
+            .iter()
+            .all(|e| e.starts_with("interrupted at t = ") || e == "cancelled"),
         "{marks:?}"
     );
     assert!(marks.iter().any(|e| e.starts_with("interrupted at t = ")), "{marks:?}");

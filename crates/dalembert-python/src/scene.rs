@@ -357,7 +357,9 @@ impl PyScene {
         let scene = self.inner.clone();
         // Ctrl-C stops the run in progress at its next step: KeyboardInterrupt, the rows so far in
         // its `rows`.
-        let (t, raised) = interrupt::run(py, move |cancel| trade_cancellable(&scene, &grid, &mut |_, _| {}, cancel));
+        let (t, raised) = interrupt::run(py, move |cancel| {
+            trade_cancellable(&scene, &grid, &mut |_, _| {}, cancel)
+        });
         let t = match (t, raised) {
             (Err(_), Some(e)) => return Err(e),
             (t, None) => t.map_err(PyValueError::new_err)?,
