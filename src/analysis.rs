@@ -155,7 +155,7 @@ impl Scene {
         let warning = match &outcome {
             Ok(st) if model.is_conservative() => {
                 let e0 = model.kinetic_energy(&self.q, &self.qd) + model.potential_energy(0.0, &self.q);
-                crate::energy_warning(st.max_energy_change, largest_kinetic.max(e0.abs()))
+                crate::energy_warning(st.max_energy_change, largest_kinetic.max(e0.abs()), false)
             }
             _ => None,
         };
@@ -216,6 +216,26 @@ impl Scene {
         let model = self.model.clone();
         let res = self.inverse(end, every, &mut |s| rec.record(&model, s));
         (rec.into_table(), res)
+    }
+
+    /// What does work in the scene beyond the potential energy: `force 'motor'` for each force
+    /// element that is not conservative and `driver 'crank'` for each driver, in order. Empty for
+    /// a conservative model.
+    pub fn nonconservative_elements(&self) -> Vec<String> {
+        let forces: Vec<String> = match &self.model {
+            Mechanism::Planar(m) => m
+                .forces()
+                .iter()
+                .filter(|f| !f.is_conservative())
+                .map(|f| format!("force '{}'", f.name()))
+                .collect(),
+            Mechanism::Spatial(m) => m
+                .nonconservative_force_names()
+                .map(|n| format!("force '{n}'"))
+                .collect(),
+        };
+        let drivers = self.drivers().into_iter().map(|d| format!("driver '{d}'"));
+        forces.into_iter().chain(drivers).collect()
     }
 
     /// The names of the scene's drivers, in the order of their `<driver>.effort` columns.

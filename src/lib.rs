@@ -19,6 +19,7 @@
 
 pub mod analysis;
 pub mod animation;
+pub mod energy;
 pub mod mechanism;
 pub mod output;
 pub mod scene;

@@ -112,17 +112,62 @@ impl Mechanism {
     }
 
     /// One position coordinate per body for a short printed summary, as `(column name, index in
-    /// q)`: the angle of a planar body, the height `z` of a spatial one.
-    pub fn summary_coordinates(&self) -> Vec<(String, usize)> {
-        let (label, k) = if self.is_spatial() { ("z", 2) } else { ("angle", 2) };
-        self.as_system()
+    /// q)`: the angle of a planar body, the height `z` of a spatial one; where the joints hold
+    /// that coordinate fixed at `q` (a slider's angle), the first of the body's `x`, `y` (and `z`)
+    /// that can move. A coordinate is fixed when its unit vector lies in the row space of `C_q`
+    /// (every admissible velocity leaves it still); the test runs on models of up to
+    /// [`SUMMARY_CHECK_LIMIT`] velocities (a dense SVD), larger ones keep the angle or `z`.
+    pub fn summary_coordinates(&self, t: f64, q: &[f64]) -> Vec<(String, usize)> {
+        let system = self.as_system();
+        let preferred = 2; // the planar angle and the spatial z are both third
+        let free = self.free_velocities(t, q);
+        system
             .layout()
             .bodies()
             .iter()
-            .map(|b| (format!("{}.{label}", b.name), b.q_offset + k))
+            .map(|b| {
+                let moves = |k: usize| free.as_ref().is_none_or(|f| f[b.v_offset + k]);
+                let k = [preferred, 0, 1].into_iter().find(|&k| moves(k)).unwrap_or(preferred);
+                (format!("{}.{}", b.name, b.q_labels[k]), b.q_offset + k)
+            })
             .collect()
     }
+
+    /// For each velocity coordinate, whether some admissible velocity at `(t, q)` moves it (see
+    /// [`Mechanism::summary_coordinates`]); `None` for a model too large to check.
+    fn free_velocities(&self, t: f64, q: &[f64]) -> Option<Vec<bool>> {
+        let system = self.as_system();
+        let n = self.num_velocities();
+        if n > SUMMARY_CHECK_LIMIT || q.len() != system.layout().n_q() {
+            return None;
+        }
+        let sys = system.constraints();
+        let m = sys.num_equations();
+        if m == 0 {
+            return Some(vec![true; n]);
+        }
+        let mut values = sys.values();
+        sys.evaluate(t, q, &vec![0.0; n], &mut values);
+        let dense = sys.jacobian_dense(&values);
+        let jac = nalgebra::DMatrix::from_fn(m, n, |i, j| dense[(i, j)]);
+        let svd = jac.svd(false, true);
+        let v_t = svd.v_t?;
+        let largest = svd.singular_values.iter().cloned().fold(0.0f64, f64::max);
+        let rank_rows: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&k| svd.singular_values[k] > 1e-9 * largest.max(1.0))
+            .collect();
+        // |P_row e_j|² = Σ_k (V_t[k, j])² over the row space: 1 when coordinate j is fixed.
+        Some(
+            (0..n)
+                .map(|j| rank_rows.iter().map(|&k| v_t[(k, j)].powi(2)).sum::<f64>() < 1.0 - 1e-9)
+                .collect(),
+        )
+    }
 }
+
+/// Velocities past which [`Mechanism::summary_coordinates`] does not test which coordinates the
+/// joints fix (a dense SVD of `C_q`: about 0.1 s at this size).
+pub const SUMMARY_CHECK_LIMIT: usize = 600;
 
 impl From<Arc<dalembert_constraints::Model>> for Mechanism {
     fn from(m: Arc<dalembert_constraints::Model>) -> Self {

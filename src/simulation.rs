@@ -126,22 +126,28 @@ impl Coordinates {
 }
 
 /// Fraction of a run's energy scale (the larger of its largest kinetic energy and `|T + V|` at the
-/// start) beyond which the change of `T + V` in a conservative model is reported as a numerical
-/// blow-up rather than integration error (`dalembert simulate` warns; `--strict` fails).
+/// start) beyond which the change of `T + V` in a conservative model, or of the energy balance
+/// `E − W` in another, is reported as a numerical blow-up rather than integration error
+/// (`dalembert simulate` warns; `--strict` fails).
 pub const ENERGY_WARNING_FRACTION: f64 = 1e-2;
 
-/// The warning for a run of a conservative model whose energy changed by `change` (J) while its
-/// energy scale was `scale` (J), or `None` when the change is within
-/// [`ENERGY_WARNING_FRACTION`] of the scale.
-pub fn energy_warning(change: f64, scale: f64) -> Option<String> {
+/// The warning for a run whose energy changed by `change` (J) while its energy scale was `scale`
+/// (J), or `None` when the change is within [`ENERGY_WARNING_FRACTION`] of the scale. For a
+/// conservative model `change` is that of `T + V`; for another (`balance`), that of the energy
+/// balance `E − W` ([`crate::energy::EnergyBalance`]).
+pub fn energy_warning(change: f64, scale: f64, balance: bool) -> Option<String> {
     let limit = ENERGY_WARNING_FRACTION * scale;
     // A NaN change is reported too.
     let within = change
         .partial_cmp(&limit)
         .is_some_and(|o| o != std::cmp::Ordering::Greater);
+    let what = match balance {
+        false => "the energy of this conservative model",
+        true => "the energy balance E − W of this model (energy less the work of its forces and drivers)",
+    };
     (!within).then(|| {
         format!(
-            "the energy of this conservative model changed by {change:.3e} J, more than {:.0} % of its energy scale {scale:.3e} J: the run is not trustworthy (try a smaller step, projection, or another integrator)",
+            "{what} changed by {change:.3e} J, more than {:.0} % of its energy scale {scale:.3e} J: the run is not trustworthy (try a smaller step, projection, or another integrator)",
             100.0 * ENERGY_WARNING_FRACTION
         )
     })

@@ -37,7 +37,10 @@ fn every_shipped_scene_loads_assembles_and_runs() {
 #[test]
 fn issue_example_loads_as_written() {
     let scene = Scene::from_path(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/slider-crank.toml")).unwrap();
-    assert_eq!(scene.name, "slider-crank driven by a spring");
+    assert_eq!(
+        scene.name,
+        "slider-crank: a motor torque on the crank, a spring–damper on the slider"
+    );
     assert_eq!(scene.model.planar().unwrap().bodies().len(), 3);
     assert_eq!(scene.model.planar().unwrap().num_equations(), 8);
     // Held exactly: the constraints leave the crank rate free (one degree of freedom).

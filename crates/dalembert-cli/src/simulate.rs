@@ -1,6 +1,7 @@
 //! `dalembert simulate`.
 
 use crate::method_args::MethodParams;
+use dalembert::energy::EnergyBalance;
 use dalembert::integrators::Sample;
 use dalembert::integrators::StepControl;
 use dalembert::output::fixed;
@@ -183,23 +184,27 @@ pub fn run(a: Args) -> Result<(), String> {
     };
     // A few rows for the screen: about ten evenly spaced samples.
     let every_row = (s.end / s.output_every / 10.0).ceil().max(1.0) as u64;
-    let mut rows: Vec<(f64, Vec<f64>, f64, f64)> = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
     let mut k = 0u64;
     let start = Instant::now();
     let tty = std::io::stderr().is_terminal();
     let mut last_bar = Instant::now();
     let end = s.end;
     let energy0 = model.kinetic_energy(&scene.q, &scene.qd) + model.potential_energy(0.0, &scene.q);
-    let summary = mechanism.summary_coordinates();
+    let summary = mechanism.summary_coordinates(0.0, &scene.q);
     let mut largest_kinetic = 0.0f64;
+    // A model that is not conservative: E − W, the energy less the work of its non-conservative
+    // forces and drivers, is what the exact motion keeps (docs/energy.md).
+    let mut balance = (!model.is_conservative()).then(|| EnergyBalance::new(model));
     let mut observer = |smp: &Sample<'_>| {
         largest_kinetic = largest_kinetic.max(model.kinetic_energy(smp.q, smp.qd));
+        let e_minus_w = balance.as_mut().map(|b| b.push(model, smp));
         if let Some(c) = csv.as_mut() {
             c.write(&mechanism, smp);
         }
         if k.is_multiple_of(every_row) || (smp.t - end).abs() < 1e-12 {
             let angles = summary.iter().take(6).map(|&(_, k)| smp.q[k]).collect();
-            rows.push((smp.t, angles, smp.energy, smp.constraint_violation));
+            rows.push((smp.t, angles, smp.energy, e_minus_w, smp.constraint_violation));
         }
         k += 1;
         if tty && start.elapsed().as_secs_f64() > 1.0 && last_bar.elapsed().as_millis() > 200 {
@@ -270,19 +275,40 @@ pub fn run(a: Args) -> Result<(), String> {
         stats.wall_time.as_secs_f64() * 1e3,
         stats.wall_time.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
     );
-    outln!(
-        "accuracy     largest |C| = {:.2e}, largest |Ċ| = {:.2e}, largest energy change = {:.2e} J",
-        stats.max_constraint_violation,
-        stats.max_velocity_violation,
-        stats.max_energy_change
-    );
-    if model.is_conservative() {
-        if let Some(w) = dalembert::energy_warning(stats.max_energy_change, largest_kinetic.max(energy0.abs())) {
-            if a.strict {
-                return Err(w);
-            }
-            eprintln!("warning: {w}");
+    let scale = largest_kinetic.max(energy0.abs());
+    match &balance {
+        None => outln!(
+            "accuracy     largest |C| = {:.2e}, largest |Ċ| = {:.2e}, largest energy change = {:.2e} J (a conservative model: it should be 0)",
+            stats.max_constraint_violation,
+            stats.max_velocity_violation,
+            stats.max_energy_change
+        ),
+        Some(b) => {
+            outln!(
+                "accuracy     largest |C| = {:.2e}, largest |Ċ| = {:.2e}, largest energy change = {:.2e} J",
+                stats.max_constraint_violation,
+                stats.max_velocity_violation,
+                stats.max_energy_change
+            );
+            outln!(
+                "energy       not conservative: its forces and drivers did {:.4e} J of work ({}); the energy balance E − W stays within {:.2e} J of its start ({:.1e} of the energy scale {:.3e} J)",
+                b.work(),
+                non_conservative(&scene),
+                b.largest_drift(),
+                b.largest_drift() / scale.max(f64::MIN_POSITIVE),
+                scale
+            );
         }
+    }
+    let change = match &balance {
+        None => stats.max_energy_change,
+        Some(b) => b.largest_drift(),
+    };
+    if let Some(w) = dalembert::energy_warning(change, scale, balance.is_some()) {
+        if a.strict {
+            return Err(w);
+        }
+        eprintln!("warning: {w}");
     }
     Ok(())
 }
@@ -315,23 +341,47 @@ pub fn short(x: f64) -> String {
     }
 }
 
+/// A printed row: time, summary coordinates, energy, `E − W` (models that are not
+/// conservative) and `|C|`.
+type Row = (f64, Vec<f64>, f64, Option<f64>, f64);
+
 /// Prints the sampled rows: up to six summary coordinates (`Mechanism::summary_coordinates`),
-/// energy and `|C|`.
-fn print_rows(summary: &[(String, usize)], rows: &[(f64, Vec<f64>, f64, f64)]) {
+/// energy, the energy balance `E − W` where the model is not conservative, and `|C|`.
+fn print_rows(summary: &[(String, usize)], rows: &[Row]) {
     let names: Vec<&String> = summary.iter().take(6).map(|(n, _)| n).collect();
+    let balance = rows.first().is_some_and(|r| r.3.is_some());
     out!("\n{:>9}", "t [s]");
     for n in &names {
         out!(" {:>14}", truncate(n, 14));
     }
-    outln!(" {:>15} {:>10}", "energy [J]", "|C|");
-    for (t, angles, e, c) in rows {
+    out!(" {:>15}", "energy E [J]");
+    if balance {
+        out!(" {:>15}", "E − W [J]");
+    }
+    outln!(" {:>10}", "|C|");
+    for (t, angles, e, ew, c) in rows {
         out!("{}", fixed(*t, 9, 4));
         for a in angles.iter().take(6) {
             out!(" {}", fixed(*a, 14, 6));
         }
-        outln!(" {} {c:10.2e}", fixed(*e, 15, 8));
+        out!(" {}", fixed(*e, 15, 8));
+        if let Some(ew) = ew {
+            out!(" {}", fixed(*ew, 15, 8));
+        }
+        outln!(" {c:10.2e}");
     }
     outln!();
+}
+
+/// What does work in `scene` besides its potential, in words: `force 'motor', force
+/// 'return-spring' (damper), driver 'crank'`.
+fn non_conservative(scene: &Scene) -> String {
+    let items = scene.nonconservative_elements();
+    if items.is_empty() {
+        "the work of its elements".to_string()
+    } else {
+        items.join(", ")
+    }
 }
 
 fn truncate(s: &str, n: usize) -> String {

@@ -215,6 +215,21 @@ impl MultibodySystem for Model {
             .sum()
     }
 
+    /// `Σ vᵀ Q_f + dV/dt` over the force elements: the default of the seam without the
+    /// quadratic-velocity force of offset centres of mass, an inertial term that does work in
+    /// these coordinates.
+    fn nonconservative_power(&self, t: f64, q: &[f64], qd: &[f64]) -> f64 {
+        if self.forces.iter().all(|f| f.is_conservative()) {
+            return 0.0;
+        }
+        let mut q_e = vec![0.0; qd.len()];
+        for f in &self.forces {
+            f.add_generalized_force(t, &self.bodies, q, qd, &mut q_e);
+        }
+        let applied: f64 = qd.iter().zip(&q_e).map(|(a, b)| a * b).sum();
+        applied + dalembert_system::system::potential_rate(self, t, q, qd)
+    }
+
     /// Every force element is conservative and no constraint is driven (a driver does work).
     fn is_conservative(&self) -> bool {
         self.forces.iter().all(|f| f.is_conservative())

@@ -229,6 +229,16 @@ impl Model {
         self.force_names.iter().map(|n| n.as_str())
     }
 
+    /// Names of the force elements that do work beyond their potential (dampers, actuators,
+    /// applied forces and torques), in order.
+    pub fn nonconservative_force_names(&self) -> impl Iterator<Item = &str> {
+        self.forces
+            .iter()
+            .zip(&self.force_names)
+            .filter(|(f, _)| !f.is_conservative())
+            .map(|(_, n)| n.as_str())
+    }
+
     /// Gravitational acceleration.
     pub fn gravity(&self) -> Vector3<f64> {
         self.gravity

@@ -127,6 +127,22 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// True when `T + V` is a first integral of the exact motion.
     fn is_conservative(&self) -> bool;
 
+    /// The power of the applied forces that [`MultibodySystem::potential_energy`] does not
+    /// count (dampers, actuators, applied forces and torques) at `(t, q, v)`: the rate at which
+    /// they change `T + V` (`docs/energy.md`, eq. E2). Zero for a conservative model. For the
+    /// energy balance of a run, at output samples: it may allocate.
+    ///
+    /// The default is `vᵀ Q_e + dV/dt` along the motion (`dV/dt` by a central difference through
+    /// [`MultibodySystem::integrate_positions`] over ±1e-6 s), which holds where
+    /// [`MultibodySystem::applied_forces`] carries no inertial terms that do work (the spatial
+    /// gyroscopic moment `−ω × J ω` does none); a model whose `Q_e` holds such terms overrides it.
+    fn nonconservative_power(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let mut q_e = vec![0.0; v.len()];
+        self.applied_forces(t, q, v, &mut q_e);
+        let applied: f64 = v.iter().zip(&q_e).map(|(a, b)| a * b).sum();
+        applied + potential_rate(self, t, q, v)
+    }
+
     /// Names of the bodies without mass or inertia (to explain a singular system).
     fn bodies_without_inertia(&self) -> Vec<String>;
 
@@ -200,4 +216,15 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         let what = format!("acceleration of body '{}'", self.layout().velocity_owner(i).0.name);
         DynamicsError::NonFinite { time: t, what }
     }
+}
+
+/// `dV/dt` along the motion through `(t, q, v)`: a central difference over ±`H` s, positions
+/// moved by [`MultibodySystem::integrate_positions`] (so that they stay on their manifold), with
+/// error `O(H²)` and round-off `ε V / H`.
+pub fn potential_rate<S: MultibodySystem + ?Sized>(system: &S, t: f64, q: &[f64], v: &[f64]) -> f64 {
+    const H: f64 = 1e-6;
+    let (mut ahead, mut behind) = (q.to_vec(), q.to_vec());
+    system.integrate_positions(&mut ahead, v, H);
+    system.integrate_positions(&mut behind, v, -H);
+    (system.potential_energy(t + H, &ahead) - system.potential_energy(t - H, &behind)) / (2.0 * H)
 }

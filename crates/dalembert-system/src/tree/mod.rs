@@ -224,6 +224,15 @@ impl KinematicTree {
             .map_or(0.0, |f| f.effort - f.stiffness * (q - f.rest) - f.damping * qd)
     }
 
+    /// The power of the joint dampers at the joint rates `qd`: `−Σ c q̇²`.
+    pub fn damping_power(&self, qd: &[f64]) -> f64 {
+        self.links
+            .iter()
+            .zip(qd)
+            .map(|(l, &w)| l.force.map_or(0.0, |f| -f.damping * w * w))
+            .sum()
+    }
+
     /// True when every joint force is conservative (no damping).
     pub fn is_conservative(&self) -> bool {
         self.links.iter().all(|l| l.force.is_none_or(|f| f.damping == 0.0))

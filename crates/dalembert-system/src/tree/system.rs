@@ -152,6 +152,11 @@ impl MultibodySystem for JointSpace {
         self.tree.is_conservative()
     }
 
+    /// The joint dampers' `−c q̇²` (a joint's stiffness and constant effort are in its potential).
+    fn nonconservative_power(&self, _t: f64, _q: &[f64], v: &[f64]) -> f64 {
+        self.tree.damping_power(v)
+    }
+
     fn bodies_without_inertia(&self) -> Vec<String> {
         self.tree
             .bodies()
