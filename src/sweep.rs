@@ -230,8 +230,8 @@ pub fn sweep(
 }
 
 /// [`sweep`] that hands each row to `finished(index, row)` as soon as its run ends (from the
-/// worker thread that ran it, in the order the runs finish), so that a caller can write it at
-/// once: a sweep stopped by any means keeps every row finished before.
+/// worker thread that ran it, in the order the runs finish; `index` is its place in `runs`), so
+/// that a caller can write it at once.
 pub fn sweep_streaming(
     scene: &Scene,
     runs: &[Assignment],

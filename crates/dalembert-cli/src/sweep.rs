@@ -3,6 +3,7 @@
 use dalembert::sweep::{cartesian, split_list, sweep_streaming, Output, SweepCsv, SweepRow};
 use dalembert::{Scene, SceneValue};
 use std::path::PathBuf;
+use std::collections::BTreeMap;
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -75,8 +76,9 @@ pub fn run(a: Args) -> Result<(), String> {
         .collect::<Result<Vec<_>, _>>()?;
     let runs = cartesian(&parameters);
     let paths: Vec<String> = parameters.iter().map(|(p, _)| p.clone()).collect();
-    // The CSV is streamed: the header now, each row as its run ends (in the order the runs end),
-    // so that a sweep stopped by any means leaves every finished row in a well-formed file.
+    // The CSV is streamed in the order of the runs: the header now, each row as soon as it and
+    // every row before it have ended (those that end early wait in `pending`). A sweep stopped by
+    // a signal writes every row; one killed outright leaves the rows up to its first unfinished run.
     let sink: Box<dyn std::io::Write + Send> = match &a.output {
         Some(p) => {
             crate::paths::refuse_overwriting(p, &[&a.scene])?;
@@ -89,17 +91,16 @@ pub fn run(a: Args) -> Result<(), String> {
         .as_ref()
         .map_or("stdout".to_string(), |p| p.display().to_string());
     let csv = SweepCsv::new(sink, &paths, &names).map_err(|e| format!("{where_to}: {e}"))?;
-    let writer: Mutex<(Option<SweepCsv<_>>, Option<std::io::Error>)> = Mutex::new((Some(csv), None));
-    let write_row = |_: usize, row: &SweepRow| {
-        let mut guard = writer.lock().unwrap_or_else(|p| p.into_inner());
-        let (csv, failure) = &mut *guard;
-        if let (Some(csv), None) = (csv.as_mut(), failure.as_ref()) {
-            if let Err(e) = csv.row(row) {
-                // A closed stdout (`| head`) ends the output, not the sweep; any other failure is
-                // reported at the end.
-                *failure = Some(e);
-            }
-        }
+    let writer = Mutex::new(Streamed {
+        csv: Some(csv),
+        failure: None,
+        next: 0,
+        pending: BTreeMap::new(),
+    });
+    let write_row = |k: usize, row: &SweepRow| {
+        let mut w = writer.lock().unwrap_or_else(|p| p.into_inner());
+        w.pending.insert(k, row.clone());
+        w.write_ready();
     };
     let start = Instant::now();
     let rows = sweep_streaming(
@@ -112,8 +113,8 @@ pub fn run(a: Args) -> Result<(), String> {
         &write_row,
     )?;
     let wall = start.elapsed().as_secs_f64();
-    let (csv, write_error) = writer.into_inner().unwrap_or_else(|p| p.into_inner());
-    let write_error = write_error.or_else(|| csv.and_then(|c| c.finish().err()));
+    let w = writer.into_inner().unwrap_or_else(|p| p.into_inner());
+    let write_error = w.failure.or_else(|| w.csv.and_then(|c| c.finish().err()));
     if let Some(e) = write_error {
         if e.kind() != std::io::ErrorKind::BrokenPipe || a.output.is_some() {
             return Err(format!("{where_to}: {e}"));
@@ -155,6 +156,31 @@ pub fn run(a: Args) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// The sweep's CSV as it is streamed: rows written in run order as soon as each and all before it
+/// have ended.
+struct Streamed<W: std::io::Write> {
+    csv: Option<SweepCsv<W>>,
+    /// The first write error (a closed stdout ends the output, not the sweep).
+    failure: Option<std::io::Error>,
+    /// The index of the next row to write.
+    next: usize,
+    /// Rows ended before some row ahead of them.
+    pending: BTreeMap<usize, SweepRow>,
+}
+
+impl<W: std::io::Write> Streamed<W> {
+    fn write_ready(&mut self) {
+        while let Some(row) = self.pending.remove(&self.next) {
+            self.next += 1;
+            if let (Some(csv), None) = (self.csv.as_mut(), self.failure.as_ref()) {
+                if let Err(e) = csv.row(&row) {
+                    self.failure = Some(e);
+                }
+            }
+        }
+    }
 }
 
 fn rayon_threads() -> usize {

@@ -150,8 +150,13 @@ def test_bad_keywords_name_the_keyword(scenes):
     scene = dalembert.Scene.load(scenes / "slider-crank.toml")
     with pytest.raises(ValueError, match="^step must be positive, got -0.001$"):
         scene.simulate(step=-1e-3)
-    with pytest.raises(ValueError, match=r"^unknown integrator 'rk5' \(expected symplectic-euler, rk4, dopri5, generalized-alpha\)$"):
+    with pytest.raises(ValueError, match=r"^unknown integrator 'rk5' \(expected symplectic-euler, rk4, dopri5, generalized-alpha\); did you mean 'rk4'\?$"):
         scene.simulate(integrator="rk5")
+    # A mistyped keyword: every keyword listed, the nearest suggested.
+    with pytest.raises(TypeError, match=r"^simulate\(\) got an unexpected keyword 'ende' \(keywords: end, formulation, integrator, step, every, stabilization, redundant, coordinates, strict, rtol, atol, rho_inf\); did you mean 'end'\?$"):
+        scene.simulate(ende=1.0)
+    with pytest.raises(TypeError, match=r"did you mean 'rho_inf'\?$"):
+        scene.simulate(rho_ind=0.5)
     with pytest.warns(UserWarning, match="rtol applies to dopri5 only"):
         scene.simulate(end=0.01, rtol=1e-6)
     with pytest.raises(KeyError, match="unknown column 'slider.z'"):
@@ -234,6 +239,18 @@ def test_ctrl_c_stops_a_run_and_keeps_the_rows(scenes):
     assert time.perf_counter() - start < 5.0
     run = info.value.run
     assert len(run) > 1 and 0 < run.t[-1] < 10000.0
+
+
+def test_integration_error_time_is_where_the_run_stopped(scenes):
+    """A run that fails at t = 5e305 (its first step: a spring force overflows) says so in its
+    message and in `.time`, though its only row is t = 0."""
+    scene = dalembert.Scene.load(scenes / "slider-crank.toml")
+    with pytest.raises(dalembert.IntegrationError) as info:
+        scene.simulate(end=1e308, every=1e307, step=1e306)
+    e = info.value
+    assert "t = 5e305:" in str(e)
+    assert e.time == 5e305
+    assert list(e.run.t) == [0.0]
 
 
 def test_pandas_and_plot(scenes, tmp_path):

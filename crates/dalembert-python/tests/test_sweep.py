@@ -61,6 +61,9 @@ def test_one_failure_keeps_the_other_rows(scene):
 def test_bad_paths_and_outputs_fail_before_any_run(scene):
     with pytest.raises(dalembert.SceneError, match="no force named 'spring'"):
         dalembert.sweep(scene, {"forces.spring.stiffness": [1.0]}, end=0.1)
+    # A key the element does not have: named with the element's keys and the nearest.
+    with pytest.raises(dalembert.SceneError, match=r"cannot set 'bodies.slider.masss': bodies.slider has no key 'masss' \(its keys: name, mass, .*\); did you mean 'bodies.slider.mass'\?$"):
+        dalembert.sweep(scene, {"bodies.slider.masss": [1.0, 2.0]}, end=0.1)
     with pytest.raises(dalembert.SceneError, match="unknown output 'slider.z'"):
         dalembert.sweep(scene, {"bodies.slider.mass": [1.0]}, end=0.1, outputs=["slider.z"])
 
@@ -85,6 +88,37 @@ def test_dask_local_cluster(scene):
     assert len(res) == 6
     for a, b in zip(local, res):
         assert [a[o] for o in OUTPUTS] == [b[o] for o in OUTPUTS]
+
+
+def test_a_sweep_takes_the_path_of_a_scene(scenes):
+    res = dalembert.sweep(str(scenes / "slider-crank.toml"), {"bodies.slider.mass": [1.0, 2.0]}, end=0.1, outputs=["slider.x"])
+    direct = dalembert.sweep(dalembert.Scene.load(scenes / "slider-crank.toml"), {"bodies.slider.mass": [1.0, 2.0]}, end=0.1, outputs=["slider.x"])
+    np.testing.assert_array_equal(res["slider.x"], direct["slider.x"])
+    with pytest.raises(TypeError, match="^scene: expected a dalembert.Scene or the path of a scene file, got int$"):
+        dalembert.sweep(3, {"bodies.slider.mass": [1.0]})
+
+
+def test_ctrl_c_stops_a_sweep_and_keeps_its_rows(scenes):
+    """Ctrl-C during a sweep of runs that would each take hours: the runs in progress stop at their
+    next step, KeyboardInterrupt carries the rows (`.result`), the first run (0.05 s) finished."""
+    import os
+    import signal
+    import threading
+    import time
+
+    scene = dalembert.Scene.load(scenes / "chain-8.toml")
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    start = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt) as info:
+        dalembert.sweep(scene, {"simulation.end": [0.05, 1e5, 1e5, 1e5]}, outputs=["link0.x"], threads=2)
+    assert time.perf_counter() - start < 3.0
+    res = info.value.result
+    assert len(res) == 4
+    errors = [r["error"] for r in res]
+    assert errors[0] is None and np.isfinite(res["link0.x"][0])
+    assert all(e.startswith("interrupted at t = ") or e == "cancelled" for e in errors[1:]), errors
+    assert any(e.startswith("interrupted at t = ") for e in errors[1:]), errors
 
 
 def test_cli_sweep_writes_the_same_numbers(scene, scenes, tmp_path):
