@@ -2,8 +2,8 @@
 
 use dalembert::sweep::{cartesian, split_list, sweep_streaming, Output, SweepCsv, SweepRow};
 use dalembert::{Scene, SceneValue};
-use std::path::PathBuf;
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 use std::sync::Mutex;
 use std::time::Instant;
 
