@@ -17,7 +17,7 @@ use thiserror::Error;
 /// Which formulation of the equations of motion to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FormulationKind {
-    /// Lagrange multipliers, saddle-point system (`FORMULATIONS.md` §3).
+    /// Lagrange multipliers, saddle-point system (`docs/equations.md` §3).
     #[default]
     Augmented,
     /// Velocity transformation, one equation per degree of freedom (§4–§5); with projection it is
@@ -28,7 +28,7 @@ pub enum FormulationKind {
 }
 
 impl FormulationKind {
-    /// Every formulation, in the order of `FORMULATIONS.md`.
+    /// Every formulation, in the order of `docs/equations.md`.
     pub const ALL: [FormulationKind; 3] = [
         FormulationKind::Augmented,
         FormulationKind::Embedding,

@@ -5,7 +5,7 @@
 //!
 //! What is checked, and why the tolerances:
 //! * `C_q B_i = 0` and `C_q γ_i = Q_d`, the identity on the independent rows (exactly): the
-//!   definition of the transformation (`FORMULATIONS.md` §4). The LU solves are backward stable,
+//!   definition of the transformation (`docs/equations.md` §4). The LU solves are backward stable,
 //!   so the residual is a few `n ε ‖C_q‖ ‖B_i‖`: 1e-12 relative (measured ≈ 1e-15).
 //! * `B_i x`, `B_iᵀ f` and `B_iᵀ M B_i` against dense products of the same `B_i`: the sparse
 //!   kernels skip exact zeros only, so they differ from the dense sums by summation order:

@@ -1,4 +1,4 @@
-//! The amalgamated formulation (`FORMULATIONS.md` §6): accelerations `q̈`, generalized constraint
+//! The amalgamated formulation (`docs/equations.md` §6): accelerations `q̈`, generalized constraint
 //! forces `Q_c` and independent accelerations `q̈_i` are all unknowns of one symmetric system,
 //!
 //! ```text

@@ -1,4 +1,4 @@
-//! The augmented formulation (`FORMULATIONS.md` §3): redundant absolute coordinates and Lagrange
+//! The augmented formulation (`docs/equations.md` §3): redundant absolute coordinates and Lagrange
 //! multipliers, solved as one saddle-point system per evaluation:
 //!
 //! ```text

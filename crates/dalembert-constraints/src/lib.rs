@@ -1,4 +1,4 @@
-//! Joints, drivers and their assembly for dalembert (`FORMULATIONS.md` §2 and §7).
+//! Joints, drivers and their assembly for dalembert (`docs/equations.md` §2 and §7).
 //!
 //! A constraint touches at most two bodies and writes, per equation `k`:
 //!

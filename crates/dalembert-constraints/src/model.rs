@@ -75,7 +75,7 @@ impl MultibodySystem for Model {
         &self.constraints
     }
 
-    /// `M_i` of `FORMULATIONS.md` §1 per body (`dalembert_kinematics::mass`).
+    /// `M_i` of `docs/equations.md` §1 per body (`dalembert_kinematics::mass`).
     fn mass(&self, q: &[f64], out: &mut BlockDiagonal) {
         for (i, b) in self.bodies.iter().enumerate() {
             let blk = MassMatrix::block(b, q[3 * i + 2]);

@@ -1,7 +1,7 @@
 //! Scalar constraint equations shared by the joints and drivers.
 //!
 //! Each primitive returns a [`Row`]: the value, both Jacobian blocks, `C_t` and `Q_d` of one scalar
-//! equation. Body kinematics follow `FORMULATIONS.md` §1 with `A_θ u = perp(A u)`; the quadratic
+//! equation. Body kinematics follow `docs/equations.md` §1 with `A_θ u = perp(A u)`; the quadratic
 //! part of a point's acceleration is `−θ̇² A u`. `Q_d` is minus the part of `C̈` that does not
 //! contain `q̈`, plus the driver's `f''(t)`.
 

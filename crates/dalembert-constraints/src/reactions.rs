@@ -1,7 +1,7 @@
 //! Joint reactions and driver efforts from the Lagrange multipliers.
 //!
 //! The generalized constraint force of constraint `k` on a moving body `b` is `Q_c,b = −C_q,bᵀ λ_k`
-//! (`FORMULATIONS.md` §2): its first two entries are the force on `b`, the third the torque about
+//! (`docs/equations.md` §2): its first two entries are the force on `b`, the third the torque about
 //! `b`'s reference point. The reported **reaction** is the force the second body exerts on the
 //! first, with its moment taken about the constraint's reaction point `P`:
 //! `T_P = T_R − (P − R) × F`. When the first body is the ground, the reaction is computed on the

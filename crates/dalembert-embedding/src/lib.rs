@@ -1,4 +1,4 @@
-//! The embedding formulation (`FORMULATIONS.md` §4–§5): with the velocity transformation
+//! The embedding formulation (`docs/equations.md` §4–§5): with the velocity transformation
 //! `q̇ = B_i q̇_i + …`, `q̈ = B_i q̈_i + γ_i`, premultiplying `M q̈ + C_qᵀ λ = Q_e` by `B_iᵀ` removes
 //! the constraint forces:
 //!
@@ -12,7 +12,7 @@
 //! `[M B_i  C_qᵀ] [q̈_i; λ] = Q_e − M γ_i` ([`Multipliers::Elimination`]).
 //!
 //! The partition is chosen by LU with full pivoting of `C_q` and re-chosen when the dependent block
-//! becomes ill-conditioned (see `dalembert_constraints::partition`); each change is logged with its
+//! becomes ill-conditioned (see `dalembert_system::partition`); each change is logged with its
 //! time. [`Formulation::project`] is **coordinate partitioning**: it keeps the independent
 //! coordinates and recovers the dependent ones by Newton–Raphson on `C(q, t) = 0` and their
 //! velocities from the velocity equation, so an integrator that projects after every step integrates

@@ -44,7 +44,7 @@ impl From<BodyId> for BodyRef {
 ///
 /// Its coordinates `[x, y, θ]` locate its *reference point* and orient its frame. By default the
 /// reference point is the centre of mass; [`Body::with_center_of_mass`] moves the centre of mass to
-/// a local offset `c`, and the mass matrix then gains the coupling of `FORMULATIONS.md` §1.
+/// a local offset `c`, and the mass matrix then gains the coupling of `docs/equations.md` §1.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Body {
     /// Name used in error messages and output columns.

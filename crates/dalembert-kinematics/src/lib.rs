@@ -12,7 +12,7 @@
 //! * applied forces mapped to generalized forces by virtual work ([`forces`]), with potential energy;
 //! * time functions with exact first and second derivatives ([`TimeFunction`]).
 //!
-//! Equations follow `FORMULATIONS.md` §1 and `docs/coordinates.md`.
+//! Equations follow `docs/equations.md` §1 and `docs/coordinates.md`.
 
 pub mod body;
 pub mod coordinates;

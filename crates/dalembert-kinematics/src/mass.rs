@@ -1,4 +1,4 @@
-//! The block-diagonal system mass matrix (`FORMULATIONS.md` §1).
+//! The block-diagonal system mass matrix (`docs/equations.md` §1).
 //!
 //! Body `i` contributes the 3×3 block
 //!

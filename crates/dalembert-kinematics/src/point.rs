@@ -1,4 +1,4 @@
-//! Kinematics of a point fixed on a body (`FORMULATIONS.md` §1).
+//! Kinematics of a point fixed on a body (`docs/equations.md` §1).
 //!
 //! ```text
 //! r = R + A u

@@ -3,7 +3,7 @@
 //!
 //! Quantities of two bodies are differentiated with respect to `p = [x_i, y_i, θ_i, x_j, y_j, θ_j]`.
 //! With `a = A u` a point's arm, `∂(R + a)/∂θ = perp(a)` and `∂perp(a)/∂θ = −a`, so the only second
-//! derivative of a body point is `∂²r/∂θ² = −a` (`FORMULATIONS.md` §1).
+//! derivative of a body point is `∂²r/∂θ² = −a` (`docs/equations.md` §1).
 
 use crate::rotation::perp;
 use crate::{BodyRef, PointState, Vec2};

@@ -1,5 +1,5 @@
 //! Constraints as the formulations see them: a fixed sparsity pattern of `C_q` plus values
-//! (`FORMULATIONS.md` §2), and the analyses written once on that view.
+//! (`docs/equations.md` §2), and the analyses written once on that view.
 //!
 //! The Jacobian's columns are the **velocity** coordinates. Its entries come in *segments*: a row of
 //! a constraint that touches a body has an entry for each of that body's velocity coordinates,

@@ -2,7 +2,7 @@
 //!
 //! A formulation turns `(t, q, q̇)` into accelerations `q̈` and multipliers `λ` (so that reactions
 //! follow from the multipliers); it reports the constraint residuals and the
-//! energy, offers a Baumgarte-stabilized right-hand side (`FORMULATIONS.md` §3), and projects a
+//! energy, offers a Baumgarte-stabilized right-hand side (`docs/equations.md` §3), and projects a
 //! state back onto the constraint manifold. Implementations create their workspaces once, at
 //! construction: the methods allocate nothing.
 
@@ -11,7 +11,7 @@ use thiserror::Error;
 
 /// Baumgarte gains: the acceleration-level constraint equation `C_q q̈ = Q_d` becomes
 /// `C_q q̈ = Q_d − 2α Ċ − β² C`, so that the violation obeys `C̈ + 2α Ċ + β² C = 0`
-/// (`FORMULATIONS.md` §3). A formulation takes `Option<Baumgarte>`: `None` leaves `Q_d` as is.
+/// (`docs/equations.md` §3). A formulation takes `Option<Baumgarte>`: `None` leaves `Q_d` as is.
 /// (The integrators' `Stabilization` chooses between no treatment, these gains and projection.)
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Baumgarte {

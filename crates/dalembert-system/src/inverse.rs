@@ -1,4 +1,4 @@
-//! Inverse dynamics of kinematically driven systems (`FORMULATIONS.md` §7).
+//! Inverse dynamics of kinematically driven systems (`docs/equations.md` §7).
 //!
 //! When drivers fix every degree of freedom (`rank C_q = n`), position, velocity and acceleration
 //! analysis give `q, v, v̇` from the constraints alone, and `C_qᵀ λ = Q − M v̇` gives the

@@ -1,5 +1,5 @@
 //! Kinematic analysis: position (Newton–Raphson), velocity and acceleration analysis
-//! (`FORMULATIONS.md` §2, §7).
+//! (`docs/equations.md` §2, §7).
 //!
 //! All three solve `C_q Δ = r` for the **minimum-norm** correction Δ over a maximal independent set
 //! of rows (QR of `C_q,Rᵀ`, so no normal equations are formed):

@@ -12,7 +12,7 @@
 //!   integrator consumes, with its errors ([`DynamicsError`]) and settings.
 //!
 //! Nothing here knows whether a body is planar or spatial: `dalembert-constraints` implements the
-//! seam for planar bodies, `dalembert-spatial` for spatial ones. Equations follow `FORMULATIONS.md`; `docs/architecture.md` shows where
+//! seam for planar bodies, `dalembert-spatial` for spatial ones. Equations follow `docs/equations.md`; `docs/architecture.md` shows where
 //! each part lives.
 
 pub mod blocks;

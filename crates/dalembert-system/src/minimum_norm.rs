@@ -9,7 +9,7 @@
 //! λ = λ_p − N (NᵀN)⁻¹ Nᵀ λ_p,      α_d = (C_R C_Rᵀ)⁻¹ C_R C_dᵀ
 //! ```
 //!
-//! (`FORMULATIONS.md` §2: the reactions of a redundant set are not unique; this is the distribution
+//! (`docs/equations.md` §2: the reactions of a redundant set are not unique; this is the distribution
 //! `docs/sign-conventions.md` reports). `C_R C_Rᵀ` is the sparse Gram matrix of the independent rows
 //! ([`SparseGram`], symbolic analysis once), well conditioned because `R` is independent; the
 //! near-null direction of the whole `C_q` never enters a factorization. The cost per evaluation is

@@ -1,4 +1,4 @@
-//! Applied forces as generalized forces (`FORMULATIONS.md` §1).
+//! Applied forces as generalized forces (`docs/equations.md` §1).
 //!
 //! By virtual work, a global force `F` at local point `u` of body `i` contributes
 //! `Q_i = [F_x, F_y, (A_θ u)·F]` and a torque `T` contributes `[0, 0, T]`. Each element adds its

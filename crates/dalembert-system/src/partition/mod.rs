@@ -1,4 +1,4 @@
-//! Generalized coordinate partitioning and the velocity transformation (`FORMULATIONS.md` §4).
+//! Generalized coordinate partitioning and the velocity transformation (`docs/equations.md` §4).
 //!
 //! `q` is split into `r` dependent coordinates `q_d` (the pivot columns of an LU factorization of
 //! `C_q` with full pivoting, over a maximal independent set of `r` equations) and `n − r` independent

@@ -1,4 +1,4 @@
-//! The velocity transformation `B_i`, `γ_i` at one state (`FORMULATIONS.md` §4), computed with the
+//! The velocity transformation `B_i`, `γ_i` at one state (`docs/equations.md` §4), computed with the
 //! sparsity of the constraints:
 //!
 //! * `C_qd` is factored by an unblocked dense LU up to [`DENSE_LIMIT`] dependent coordinates and by

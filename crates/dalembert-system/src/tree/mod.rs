@@ -9,7 +9,7 @@
 //! coordinates, the velocities their rates (`n_q = n_v` = number of joints); [`JointSpace`] is the
 //! seam's implementation, so every formulation and integrator runs a tree in joint coordinates.
 //!
-//! The equations are `FORMULATIONS.md` §5 with the joint coordinates as the independent set: the
+//! The equations are `docs/equations.md` §5 with the joint coordinates as the independent set: the
 //! tree has no constraint equations, `M(q) q̈ = Q(t, q, q̇)`. Every formulation then reduces to that
 //! one equation, which [`Articulated`] solves without forming `M` by the articulated-body
 //! algorithm (Featherstone, *Rigid Body Dynamics Algorithms*, 2008, table 7.1): the tree's O(n)

@@ -9,7 +9,8 @@
 //! constraint equation or a force element) and factored by [`PatternLu`] (dense LU up to
 //! [`PatternLu::DENSE_LIMIT`] unknowns, sparse LU with its symbolic analysis done once above).
 //!
-//! The tangent `∂r/∂q` (along the velocity coordinates, `q ⊕ ε e_j`) and `∂r/∂v` is formed by
+//! The tangent `∂r/∂q` (along the velocity coordinates, `q ⊕ ε e_j`) and `∂r/∂v` is the system's
+//! analytic one where it has it ([`MultibodySystem::residual_tangent`]); otherwise it is formed by
 //! central differences of the residual, with the columns that share no row perturbed together
 //! (the pattern's passes: `4 × passes` residuals, 36 for any planar chain instead of `4 n`). It is
 //! kept between refactorizations: [`IterationMatrix::refresh`] rebuilds the matrix from the mass

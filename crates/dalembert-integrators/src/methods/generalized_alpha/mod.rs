@@ -21,9 +21,10 @@
 //!
 //! `β' = h² β (1 − α_f)/(1 − α_m)`, `γ' = h γ (1 − α_f)/(1 − α_m)`, `K = ∂(M q̈ + C_qᵀ λ − Q_e)/∂q`,
 //! `D = −∂Q_e/∂v` (`∂/∂q` along the velocity coordinates: `q ⊕ ε e_j`). The matrix is sparse, on
-//! the pattern the system declares, and `K`, `D` are formed by finite differences of the residual
-//! with structurally independent columns perturbed together ([`iteration_matrix`]; analytic force
-//! and constraint Jacobians are future work). Newton is modified: the factors are reused across
+//! the pattern the system declares, and `K`, `D` come from the system's analytic tangent
+//! ([`dalembert_system::MultibodySystem::residual_tangent`]) where it gives one, otherwise from
+//! central differences of the residual with structurally independent columns perturbed together
+//! ([`iteration_matrix`]). Newton is modified: the factors are reused across
 //! iterations and steps while they contract fast; a slow contraction first refreshes the matrix
 //! (mass and `C_q` at the current state, kept `K`, `D`), then differentiates again. Newton stops
 //! when the position update and `‖C‖∞` are below the tolerance **and** the acceleration update is

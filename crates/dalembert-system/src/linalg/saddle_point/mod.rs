@@ -1,4 +1,4 @@
-//! Storage and factorization of the saddle-point ("KKT") matrix `[M C_qᵀ; C_q 0]` (`FORMULATIONS.md`
+//! Storage and factorization of the saddle-point ("KKT") matrix `[M C_qᵀ; C_q 0]` (`docs/equations.md`
 //! §3), chosen once per system by [`Backend`] and refactored in place each evaluation.
 
 mod dense;
