@@ -1,7 +1,7 @@
 //! The model of a scene or a simulation: planar or spatial.
 //!
 //! Formulations and integrators see either through the system seam
-//! ([`MultibodySystem`](dalembert_system::MultibodySystem)); what differs between the two is only
+//! ([`MultibodySystem`]); what differs between the two is only
 //! what a user reads: the output columns ([`crate::output`]), the reactions (a planar joint
 //! carries `fx, fy` and perhaps a torque, a spatial one a force and a moment) and the drawing.
 

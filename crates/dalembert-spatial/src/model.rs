@@ -402,8 +402,8 @@ impl MultibodySystem for Model {
     /// Analytic unless a force element is user-written (which makes the integrator difference the
     /// residual): `−∂Q/∂ω'` of the gyroscopic
     /// `−ω' × J ω'` is `[ω']× J − [J ω']×`, and each constraint primitive's wrench derivatives
-    /// and each force element's ([`crate::joints::second_derivatives::WrenchDerivative`]) are
-    /// mapped to the velocity coordinates by [`crate::joints::second_derivatives::add_wrench`].
+    /// and each force element's (`joints::second_derivatives::WrenchDerivative`) are
+    /// mapped to the velocity coordinates by `joints::second_derivatives::add_wrench`.
     fn residual_tangent(
         &self,
         t: f64,
