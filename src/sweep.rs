@@ -129,8 +129,8 @@ pub fn cartesian(parameters: &[(String, Vec<SceneValue>)]) -> Vec<Assignment> {
     out
 }
 
-/// The error of a run stopped by a cancellation: `interrupted at t = …` (the time it reached), or
-/// `cancelled` for a run that never started.
+/// The error of a sweep's run that never started because the sweep was cancelled (a run stopped
+/// part way says `interrupted at t = …`, the time it reached).
 pub const CANCELLED: &str = "cancelled";
 
 /// Runs `scene` with `assignment` to `end` (the scene's end when `None`) and summarizes `outputs`.

@@ -308,3 +308,32 @@ fn a_sweep_with_failed_runs_exits_non_zero() {
     assert_eq!(out.lines().count(), 3, "header and two rows:\n{out}");
     assert!(out.contains("mass must be finite and non-negative"), "{out}");
 }
+
+/// The README's first command: the screen shows the energy balance of its non-conservative model
+/// (the motor and the damper did work), which stays put while the energy falls, and the slider's
+/// free coordinate `x` rather than its angle, which the prismatic joint holds at 0.
+#[test]
+fn the_first_screen_shows_that_the_result_is_right() {
+    let (ok, out, err) = dalembert(&["simulate", &scene("slider-crank.toml")]);
+    assert!(ok, "{err}");
+    let header = out.lines().find(|l| l.trim_start().starts_with("t [s]")).unwrap();
+    assert!(header.contains("E − W [J]"), "{header}");
+    assert!(header.contains("slider.x") && !header.contains("slider.angle"), "{header}");
+    let energy = out.lines().find(|l| l.starts_with("energy ")).unwrap();
+    assert!(energy.contains("force 'return-spring', force 'motor'"), "{energy}");
+    // "stays within X J of its start": X below 1e-3 J, while E itself moves by 4.6 J.
+    let within: f64 = energy
+        .split("stays within ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap();
+    assert!(within < 1e-3, "{energy}");
+    let work: f64 = energy
+        .split("did ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap();
+    assert!(work.abs() > 1.0, "{energy}");
+}
