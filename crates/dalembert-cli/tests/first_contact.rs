@@ -318,7 +318,10 @@ fn the_first_screen_shows_that_the_result_is_right() {
     assert!(ok, "{err}");
     let header = out.lines().find(|l| l.trim_start().starts_with("t [s]")).unwrap();
     assert!(header.contains("E − W [J]"), "{header}");
-    assert!(header.contains("slider.x") && !header.contains("slider.angle"), "{header}");
+    assert!(
+        header.contains("slider.x") && !header.contains("slider.angle"),
+        "{header}"
+    );
     let energy = out.lines().find(|l| l.starts_with("energy ")).unwrap();
     assert!(energy.contains("force 'return-spring', force 'motor'"), "{energy}");
     // "stays within X J of its start": X below 1e-3 J, while E itself moves by 4.6 J.
