@@ -65,9 +65,13 @@ pub fn unknown_name(what: &str, value: &str, names: &[&str]) -> String {
 
 /// The one of `names` nearest to `value` by edit distance (insertions, deletions, substitutions
 /// and swaps of neighbouring characters, case ignored), when it is near enough to be a typo of
-/// it: at most one edit in three characters of the longer, and at least one. `None` when no
-/// name is that near or two are equally near.
+/// it: at most one edit in three characters of the longer (a name differing only in case is
+/// near). `None` when no name is that near, `value` is itself one of `names`, or two are equally
+/// near.
 pub fn nearest<'a>(value: &str, names: &[&'a str]) -> Option<&'a str> {
+    if names.contains(&value) {
+        return None;
+    }
     let value: Vec<char> = value.to_lowercase().chars().collect();
     let mut best: Option<(usize, &'a str)> = None;
     let mut tie = false;
@@ -75,7 +79,7 @@ pub fn nearest<'a>(value: &str, names: &[&'a str]) -> Option<&'a str> {
         let candidate: Vec<char> = name.to_lowercase().chars().collect();
         let d = edit_distance(&value, &candidate);
         let limit = (value.len().max(candidate.len()) / 3).max(1);
-        if d == 0 || d > limit {
+        if d > limit {
             continue;
         }
         match best {
