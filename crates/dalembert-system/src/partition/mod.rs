@@ -39,11 +39,27 @@ impl Partition {
     /// Chooses the partition by LU with full pivoting of `C_q` (rows) and of the selected rows'
     /// columns: the pivot columns become the dependent coordinates.
     pub fn choose(sys: &(impl ConstraintSet + ?Sized), values: &ConstraintValues, rank_tolerance: f64) -> Partition {
+        Self::choose_ranked(sys, values, rank_tolerance, None)
+    }
+
+    /// [`Partition::choose`] with `rank` independent equations where given: the `rank` first pivots
+    /// of the full pivoting, whatever the rank that the tolerance would find at this state. Along
+    /// a regular motion the number of degrees of freedom does not change; a redundancy that holds
+    /// only on the mechanism's motion (Bricard's loop, `docs/stability.md`) looks like full rank at
+    /// a state slightly off it (an integrator's stage), and a partition chosen there with one
+    /// equation more would have one degree of freedom less.
+    pub fn choose_ranked(
+        sys: &(impl ConstraintSet + ?Sized),
+        values: &ConstraintValues,
+        rank_tolerance: f64,
+        rank: Option<usize>,
+    ) -> Partition {
         let jac = sys.jacobian_dense(values);
         let n = jac.ncols();
         // Independent rows: pivot columns of C_qᵀ.
         let jt = jac.transpose().to_owned();
-        let (rank, row_order) = column_rank(jt.as_ref(), rank_tolerance);
+        let (found, row_order) = column_rank(jt.as_ref(), rank_tolerance);
+        let rank = rank.map_or(found, |r| r.min(row_order.len()));
         let rows: Vec<usize> = row_order[..rank].to_vec();
         // Dependent coordinates: pivot columns of the selected rows.
         let sel = Mat::from_fn(rank, n, |i, j| jac[(rows[i], j)]);
@@ -167,8 +183,16 @@ impl PartitionTracker {
             kept = vt.refactor(values) && vt.condition <= self.threshold;
         }
         if !kept {
-            let fresh = Partition::choose(sys, values, self.rank_tolerance);
+            // A new partition keeps the number of independent equations of the one it replaces;
+            // only where that is singular (a rank loss of the mechanism itself) is the rank found
+            // again at this state.
+            let same_rank = self.current.as_ref().map(|p| p.rows.len());
+            let mut fresh = Partition::choose_ranked(sys, values, self.rank_tolerance, same_rank);
             let mut vt = VelocityTransform::new(&fresh, sys);
+            if !vt.refactor(values) && same_rank.is_some() {
+                fresh = Partition::choose(sys, values, self.rank_tolerance);
+                vt = VelocityTransform::new(&fresh, sys);
+            }
             if !vt.refactor(values) {
                 return None;
             }
