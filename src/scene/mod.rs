@@ -23,7 +23,7 @@ pub use run_settings::{method_parameter, parameter_keys, RunSettings};
 pub use values::SceneValue;
 
 use crate::mechanism::Mechanism;
-use crate::simulation::{FormulationKind, Simulation};
+use crate::simulation::{FormulationKind, Simulation, SimulationError};
 use dalembert_constraints::RedundancyTreatment;
 use std::path::Path;
 
@@ -160,13 +160,21 @@ pub(crate) fn joint_coordinates_problem(mechanism: &Mechanism) -> Option<String>
 }
 
 impl Scene {
-    /// `Ok` unless the settings ask for joint coordinates that the model cannot take: then one
-    /// line naming the setting as `spelling` writes it and the joint, force or body at fault (for
-    /// settings changed after loading, by the command line or Python; a scene file's own are
-    /// checked when it loads).
+    /// `Ok` unless the settings ask for joint coordinates that the model cannot take (one line
+    /// naming the setting as `spelling` writes it and the joint, force or body at fault), or for a
+    /// method the formulation cannot take (generalized-α with a formulation other than the
+    /// augmented one): for settings changed after loading, by the command line or Python, checked
+    /// before a run writes anything.
     pub fn check_settings(&self, spelling: Spelling) -> Result<(), String> {
         if self.settings.coordinates != crate::Coordinates::Joint {
-            return Ok(());
+            // A method the formulation cannot take, refused before anything (a CSV) is written.
+            let f = self.settings.formulation;
+            let why = self
+                .settings
+                .method
+                .entry()
+                .refuses(f.name(), f == crate::FormulationKind::Augmented);
+            return why.map_or(Ok(()), |w| Err(format!("invalid integrator options: {w}")));
         }
         match joint_coordinates_problem(&self.model) {
             None => Ok(()),
@@ -178,6 +186,28 @@ impl Scene {
                 Err(format!("{setting}: {what}"))
             }
         }
+    }
+
+    /// What to do about a run's failure `e`, where the scene's settings are the likely cause: a
+    /// rank-deficient constraint Jacobian under `redundant = "error"` (the default) gets the
+    /// setting that solves on an independent set. `None` otherwise.
+    pub fn advice(&self, e: &SimulationError) -> Option<&'static str> {
+        use dalembert_integrators::IntegrationError;
+        let dynamics = match e {
+            SimulationError::Setup(d) => d,
+            SimulationError::Integration(f) => match &f.error {
+                IntegrationError::Dynamics(d) => d,
+                _ => return None,
+            },
+            _ => return None,
+        };
+        let redundant = matches!(
+            dynamics,
+            dalembert_constraints::DynamicsError::RedundantConstraints { .. }
+        );
+        (redundant && self.settings.redundancy == RedundancyTreatment::Error).then_some(
+            "if the mechanism moves with these equations dependent (a redundant joint, as in Bricard's loop or a parallelogram with a third crank), set redundant = \"minimum-norm\" in [simulation] (--redundant minimum-norm; redundant=\"minimum-norm\" in Python): the run then solves on an independent set and shares the reactions by least norm",
+        )
     }
 
     /// Reads, builds and assembles a scene file.

@@ -247,7 +247,8 @@ pub fn run(a: Args) -> Result<(), String> {
                 }
                 _ => String::new(),
             };
-            return Err(format!("{e}{kept}"));
+            let advice = scene.advice(&e).map_or(String::new(), |a| format!("; {a}"));
+            return Err(format!("{e}{advice}{kept}"));
         }
     };
     if let Some(c) = csv {

@@ -340,3 +340,55 @@ fn the_first_screen_shows_that_the_result_is_right() {
         .unwrap();
     assert!(work.abs() > 1.0, "{energy}");
 }
+
+/// A method the formulation cannot take is refused before the CSV is opened: no header-only file
+/// is left behind (issue #36, "also found there").
+#[test]
+fn an_incompatible_method_is_refused_before_the_output_is_opened() {
+    let csv = tmp("refused.csv");
+    let _ = std::fs::remove_file(&csv);
+    let (ok, out, err) = dalembert(&[
+        "simulate",
+        &scene("pendulum.toml"),
+        "--formulation",
+        "embedding",
+        "--integrator",
+        "generalized-alpha",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("generalized-alpha integrates the augmented index-3 equations"),
+        "{err}"
+    );
+    assert_eq!(out, "", "nothing printed before the error");
+    assert!(!csv.exists(), "no file written");
+}
+
+/// Bricard's loop without `redundant = "minimum-norm"`: the error names the rank deficiency and
+/// the setting that runs it.
+#[test]
+fn a_redundant_loop_gets_the_setting_that_runs_it() {
+    let text = std::fs::read_to_string(scene("bricard.toml"))
+        .unwrap()
+        .replace("redundant = \"minimum-norm\"", "");
+    let path = tmp("bricard-plain.toml");
+    std::fs::write(&path, text).unwrap();
+    let (ok, _, err) = dalembert(&["simulate", path.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(err.contains("rank deficient (rank 29 of 30)"), "{err}");
+    assert!(
+        err.contains("set redundant = \"minimum-norm\" in [simulation] (--redundant minimum-norm"),
+        "{err}"
+    );
+    let (ok, _, err) = dalembert(&[
+        "simulate",
+        path.to_str().unwrap(),
+        "--redundant",
+        "minimum-norm",
+        "--end",
+        "0.1",
+    ]);
+    assert!(ok, "{err}");
+}

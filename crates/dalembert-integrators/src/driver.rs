@@ -2,7 +2,7 @@
 
 use crate::branch::{near_singular, BranchMonitor};
 use crate::stepper::{Setup, StepControl, Stepper};
-use crate::{Applies, IntegrationError, IntegrationFailure, IntegratorOptions, Stabilization, Statistics};
+use crate::{IntegrationError, IntegrationFailure, IntegratorOptions, Stabilization, Statistics};
 use bridge::Bridge;
 use dalembert_system::{Baumgarte, DynamicsError, Formulation, FormulationStats};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -297,12 +297,8 @@ fn run_loop(
 ) -> Result<(), IntegrationError> {
     check_options(t0, t_end, opts)?;
     let entry = opts.method.entry();
-    if entry.applies == Applies::AugmentedIndex3 && !f.is_index3_augmented() {
-        return Err(IntegrationError::Options(format!(
-            "{0} integrates the augmented index-3 equations and the {1} formulation has no implicit form of its own yet: use formulation augmented with {0}, or rk4 / dopri5 with {1}",
-            entry.name,
-            f.name()
-        )));
+    if let Some(why) = entry.refuses(f.name(), f.is_index3_augmented()) {
+        return Err(IntegrationError::Options(why));
     }
     // A method that keeps the constraints itself is not projected.
     let stabilization = if entry.keeps_constraints {

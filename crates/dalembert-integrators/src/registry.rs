@@ -51,6 +51,20 @@ pub enum Applies {
     AugmentedIndex3,
 }
 
+impl MethodEntry {
+    /// Why this method cannot integrate a formulation named `formulation` whose equations are
+    /// (`index3_augmented`) or are not the augmented index-3 system, or `None` when it can. One
+    /// message for the run's refusal and for settings checked before a run starts.
+    pub fn refuses(&self, formulation: &str, index3_augmented: bool) -> Option<String> {
+        (self.applies == Applies::AugmentedIndex3 && !index3_augmented).then(|| {
+            format!(
+                "{0} integrates the augmented index-3 equations and the {1} formulation has no implicit form of its own yet: use formulation augmented with {0}, or rk4 / dopri5 with {1}",
+                self.name, formulation
+            )
+        })
+    }
+}
+
 /// A method's constructor: builds its stepper for one run.
 pub type Build = fn(&Method, Setup<'_>) -> Result<Box<dyn Stepper>, IntegrationError>;
 

@@ -290,6 +290,7 @@ impl PyScene {
                 Ok(run)
             }
             Err(e) => {
+                let advice = scene.advice(&e).map_or(String::new(), |a| format!("; {a}"));
                 let run = PyRun {
                     table: rec.table,
                     statistics: None,
@@ -300,7 +301,7 @@ impl PyScene {
                 let time = e.time().or(time);
                 match raised {
                     Some(r) => Err(interrupted(py, r, run)?),
-                    None => Err(integration_error(py, e.to_string(), time, run)?),
+                    None => Err(integration_error(py, format!("{e}{advice}"), time, run)?),
                 }
             }
         }
