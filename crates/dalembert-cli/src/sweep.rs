@@ -92,7 +92,7 @@ pub fn run(a: Args) -> Result<(), String> {
         .map_or("stdout".to_string(), |p| p.display().to_string());
     let csv = SweepCsv::new(sink, &paths, &names).map_err(|e| format!("{where_to}: {e}"))?;
     let writer = Mutex::new(Streamed {
-        csv: Some(csv),
+        csv,
         failure: None,
         next: 0,
         pending: BTreeMap::new(),
@@ -114,7 +114,7 @@ pub fn run(a: Args) -> Result<(), String> {
     )?;
     let wall = start.elapsed().as_secs_f64();
     let w = writer.into_inner().unwrap_or_else(|p| p.into_inner());
-    let write_error = w.failure.or_else(|| w.csv.and_then(|c| c.finish().err()));
+    let write_error = w.failure.or_else(|| w.csv.finish().err());
     if let Some(e) = write_error {
         if e.kind() != std::io::ErrorKind::BrokenPipe || a.output.is_some() {
             return Err(format!("{where_to}: {e}"));
@@ -161,7 +161,7 @@ pub fn run(a: Args) -> Result<(), String> {
 /// The sweep's CSV as it is streamed: rows written in run order as soon as each and all before it
 /// have ended.
 struct Streamed<W: std::io::Write> {
-    csv: Option<SweepCsv<W>>,
+    csv: SweepCsv<W>,
     /// The first write error (a closed stdout ends the output, not the sweep).
     failure: Option<std::io::Error>,
     /// The index of the next row to write.
@@ -174,8 +174,8 @@ impl<W: std::io::Write> Streamed<W> {
     fn write_ready(&mut self) {
         while let Some(row) = self.pending.remove(&self.next) {
             self.next += 1;
-            if let (Some(csv), None) = (self.csv.as_mut(), self.failure.as_ref()) {
-                if let Err(e) = csv.row(&row) {
+            if self.failure.is_none() {
+                if let Err(e) = self.csv.row(&row) {
                     self.failure = Some(e);
                 }
             }
