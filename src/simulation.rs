@@ -35,13 +35,29 @@ impl FormulationKind {
         FormulationKind::Amalgamated,
     ];
 
-    /// Name used in reports and scene files.
-    pub fn name(&self) -> &'static str {
+    /// Name used in reports and scene files: the one place the names are written.
+    pub const fn name(&self) -> &'static str {
         match self {
             FormulationKind::Augmented => "augmented",
             FormulationKind::Embedding => "embedding",
             FormulationKind::Amalgamated => "amalgamated",
         }
+    }
+
+    /// The names a scene or the command line may use, in the order of [`FormulationKind::ALL`].
+    pub const NAMES: &'static [&'static str] = &{
+        let mut names = [""; 3];
+        let mut k = 0;
+        while k < names.len() {
+            names[k] = FormulationKind::ALL[k].name();
+            k += 1;
+        }
+        names
+    };
+
+    /// Parses a scene or command-line name.
+    pub fn parse(s: &str) -> Option<Self> {
+        FormulationKind::ALL.into_iter().find(|k| k.name() == s)
     }
 }
 
@@ -419,5 +435,22 @@ impl Simulation {
             (Err(e), Some(cause)) => failure(IntegrationError::Dynamics(cause), *e.statistics),
             (Err(e), None) => failure(e.error, *e.statistics),
         }
+    }
+}
+
+#[cfg(test)]
+mod formulation_names {
+    use super::FormulationKind;
+
+    /// The names, the list and the parser agree: each name parses back to its formulation, and
+    /// nothing else does.
+    #[test]
+    fn names_parse_back() {
+        assert_eq!(FormulationKind::NAMES, ["augmented", "embedding", "amalgamated"]);
+        for k in FormulationKind::ALL {
+            assert_eq!(FormulationKind::parse(k.name()), Some(k));
+        }
+        assert_eq!(FormulationKind::parse("Augmented"), None);
+        assert_eq!(FormulationKind::parse(""), None);
     }
 }

@@ -23,24 +23,9 @@ pub use run_settings::{method_parameter, parameter_keys, RunSettings};
 pub use values::SceneValue;
 
 use crate::mechanism::Mechanism;
-use crate::simulation::{FormulationKind, Simulation, SimulationError};
+use crate::simulation::{Simulation, SimulationError};
 use dalembert_constraints::RedundancyTreatment;
 use std::path::Path;
-
-impl FormulationKind {
-    /// The names a scene or the command line may use.
-    pub const NAMES: &'static [&'static str] = &["augmented", "embedding", "amalgamated"];
-
-    /// Parses a scene or command-line name.
-    pub fn parse(s: &str) -> Option<Self> {
-        Some(match s {
-            "augmented" => FormulationKind::Augmented,
-            "embedding" => FormulationKind::Embedding,
-            "amalgamated" => FormulationKind::Amalgamated,
-            _ => return None,
-        })
-    }
-}
 
 /// The names of the redundancy treatments in scenes and on the command line.
 pub const REDUNDANCY_NAMES: &[&str] = &["error", "minimum-norm"];
