@@ -25,8 +25,6 @@ pub struct EnergyBalance {
     first: Option<f64>,
     /// The largest `|E − W − (E₀ − W₀)|` so far.
     largest_drift: f64,
-    /// The largest `|W|` so far.
-    largest_work: f64,
 }
 
 impl EnergyBalance {
@@ -41,7 +39,6 @@ impl EnergyBalance {
             work: 0.0,
             first: None,
             largest_drift: 0.0,
-            largest_work: 0.0,
         }
     }
 
@@ -81,7 +78,6 @@ impl EnergyBalance {
         let balance = s.energy - self.work;
         let first = *self.first.get_or_insert(balance);
         self.largest_drift = self.largest_drift.max((balance - first).abs());
-        self.largest_work = self.largest_work.max(self.work.abs());
         balance
     }
 
@@ -93,11 +89,6 @@ impl EnergyBalance {
     /// The largest change of `E − W` from its first value (J).
     pub fn largest_drift(&self) -> f64 {
         self.largest_drift
-    }
-
-    /// The largest `|W|` reached (J).
-    pub fn largest_work(&self) -> f64 {
-        self.largest_work
     }
 }
 

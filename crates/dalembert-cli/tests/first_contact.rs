@@ -14,6 +14,21 @@ fn copy_of(name: &str, as_name: &str) -> std::path::PathBuf {
     path
 }
 
+/// The CSV of 0.05 s of `scene_path`, written to `name` in the test folder.
+fn simulated(scene_path: &str, name: &str) -> std::path::PathBuf {
+    let csv = tmp(name);
+    let (ok, _, err) = dalembert(&[
+        "simulate",
+        scene_path,
+        "--end",
+        "0.05",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    csv
+}
+
 fn refused(args: &[&str], input: &Path) {
     let before = std::fs::read(input).unwrap();
     let (ok, _, err) = dalembert(args);
@@ -44,9 +59,7 @@ fn an_output_that_is_the_input_is_refused_however_spelled() {
         refused(&["sweep", p, "--set", "simulation.end=0.01", "--output", o], &s);
     }
     // plot's output over its CSV, and animate's page over the CSV it replays.
-    let csv = tmp("own.csv");
-    let (ok, _, err) = dalembert(&["simulate", p, "--end", "0.05", "--output", csv.to_str().unwrap()]);
-    assert!(ok, "{err}");
+    let csv = simulated(p, "own.csv");
     let c = csv.to_str().unwrap();
     refused(&["plot", c, "--columns", "crank.angle", "--output", c], &csv);
     refused(&["animate", p, "--from", c, "--output", c], &csv);
@@ -94,16 +107,7 @@ fn a_mistyped_command_is_suggested_and_no_command_lists_them() {
 
 #[test]
 fn plot_lists_the_columns_of_the_file_for_an_unknown_one() {
-    let csv = tmp("plot-names.csv");
-    let (ok, _, err) = dalembert(&[
-        "simulate",
-        &scene("pendulum.toml"),
-        "--end",
-        "0.05",
-        "--output",
-        csv.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
+    let csv = simulated(&scene("pendulum.toml"), "plot-names.csv");
     let svg = tmp("plot-names.svg");
     let (ok, _, err) = dalembert(&[
         "plot",
@@ -128,16 +132,7 @@ fn plot_takes_a_column_name_with_a_comma() {
         .replace("[\"ground\", \"rod\"]", "[\"ground\", \"rod,a\"]");
     let path = tmp("comma.toml");
     std::fs::write(&path, text).unwrap();
-    let csv = tmp("comma.csv");
-    let (ok, _, err) = dalembert(&[
-        "simulate",
-        path.to_str().unwrap(),
-        "--end",
-        "0.05",
-        "--output",
-        csv.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
+    let csv = simulated(path.to_str().unwrap(), "comma.csv");
     let svg = tmp("comma.svg");
     let (ok, out, err) = dalembert(&[
         "plot",
@@ -235,16 +230,7 @@ fn write_errors_name_the_file() {
     ]);
     assert!(!ok);
     assert!(err.starts_with("error: /dev/full: "), "{err}");
-    let csv = tmp("write-errors.csv");
-    let (ok, _, e) = dalembert(&[
-        "simulate",
-        &scene("pendulum.toml"),
-        "--end",
-        "0.05",
-        "--output",
-        csv.to_str().unwrap(),
-    ]);
-    assert!(ok, "{e}");
+    let csv = simulated(&scene("pendulum.toml"), "write-errors.csv");
     let blocker = tmp("not-a-folder");
     std::fs::write(&blocker, "").unwrap();
     let svg = blocker.join("p.svg");
