@@ -124,6 +124,11 @@ impl BranchMonitor {
         }
     }
 
+    /// Whether the energy check applies (conservative model, fixed step).
+    pub(crate) fn watches_energy(&self) -> bool {
+        self.energy_check
+    }
+
     /// Keeps the stepped velocities `v` before the projection.
     pub(crate) fn before_projection(&mut self, v: &[f64]) {
         self.v_stepped.copy_from_slice(v);

@@ -39,7 +39,7 @@ mod stepper;
 mod vector_state;
 
 pub use branch::{BRANCH_SWITCH_ENERGY, BRANCH_SWITCH_JUMP, BRANCH_SWITCH_SHARE};
-pub use driver::{integrate, integrate_cancellable, Sample};
+pub use driver::{integrate, integrate_cancellable, Integration, Sample};
 pub use error::{IntegrationError, IntegrationFailure};
 pub use options::IntegratorOptions;
 pub use registry::{method_names, Applies, Build, Method, MethodEntry, Parameter, TradeAxis, MAX_PARAMETERS, METHODS};

@@ -5,7 +5,8 @@
 //! * [`ConstraintSet`]: constraints as a fixed sparsity pattern of `C_q` plus values, and the
 //!   analyses written once on it (structure, kinematic analysis, coordinate partitioning);
 //! * [`MultibodySystem`]: mass, forces, constraints, position update and energy;
-//! * [`TimeFunction`]: prescribed functions of time (drivers, time-varying forces) of any model;
+//! * [`TimeFunction`]: prescribed functions of time (drivers, time-varying forces) of any model,
+//!   and named [`inputs`] a run sets between steps;
 //! * [`tree`]: kinematic trees in joint coordinates ([`JointSpace`]) and the articulated-body
 //!   algorithm that solves them in O(n);
 //! * [`Formulation`]: the forward-dynamics interface every formulation implements and every
@@ -22,6 +23,7 @@ pub mod evaluated_at;
 pub mod finite;
 pub mod formulation;
 pub mod gram;
+pub mod inputs;
 pub mod inverse;
 pub mod kinematics;
 pub mod layout;

@@ -45,6 +45,16 @@ pub enum TimeFunction {
     },
     /// A user closure returning `[f, f', f'']`; its derivatives are the user's responsibility.
     Custom(TimeClosure),
+    /// Named input `index` of the model plus `offset`: `f(t) = offset + u`, where `u` is the value
+    /// the run last set (held between sets, 0 before the first; [`crate::inputs`]). Its
+    /// derivatives are zero: a change of the value is a step, and an implicit method's tangent
+    /// holds it constant over a step.
+    Input {
+        /// The input's index in the model's list of inputs.
+        index: usize,
+        /// Added to the input's value (a driver's value in the file).
+        offset: f64,
+    },
 }
 
 impl fmt::Debug for TimeFunction {
@@ -65,6 +75,7 @@ impl fmt::Debug for TimeFunction {
                 write!(f, "SmoothStep({from} at {t0} → {to} at {t1})")
             }
             TimeFunction::Custom(_) => write!(f, "Custom(..)"),
+            TimeFunction::Input { index, offset } => write!(f, "Input({index}) + {offset}"),
         }
     }
 }
@@ -123,6 +134,7 @@ impl TimeFunction {
                 [from + h * p, h * dp / d, h * ddp / (d * d)]
             }
             TimeFunction::Custom(f) => f(t),
+            TimeFunction::Input { index, offset } => [offset + crate::inputs::input_value(*index), 0.0, 0.0],
         }
     }
 
@@ -158,6 +170,10 @@ impl TimeFunction {
                 from: from + c,
                 to: to + c,
             },
+            TimeFunction::Input { index, offset } => TimeFunction::Input {
+                index,
+                offset: offset + c,
+            },
             TimeFunction::Custom(f) => TimeFunction::custom(move |t| {
                 let [v, d1, d2] = f(t);
                 [v + c, d1, d2]
@@ -176,6 +192,7 @@ impl TimeFunction {
         let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
         match self {
             TimeFunction::Constant(v) if !v.is_finite() => bad("constant value must be finite"),
+            TimeFunction::Input { offset, .. } if !offset.is_finite() => bad("an input's offset must be finite"),
             TimeFunction::Linear { initial, rate } if !finite(&[*initial, *rate]) => {
                 bad("linear function parameters must be finite")
             }

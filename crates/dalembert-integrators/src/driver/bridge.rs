@@ -11,15 +11,15 @@
 //!   fifth-order method): landing on one branch with one step size and on the other with the
 //!   other is a difference of the order of the state, far above it;
 //! - each trial step's projection may remove at most [`FAR_OFF`] of the kinetic energy;
-//! - on agreement the two half steps are taken again with output (dense output, monitors), and the
-//!   run goes on adaptively from `t + H`; otherwise `H` is halved, down to
+//! - on agreement the two half steps are taken again as steps of the run (dense output, monitors),
+//!   and the run goes on adaptively from `t + H`; otherwise `H` is halved, down to
 //!   [`SMALLEST`] of the first, after which the run stops with the guard's `SingularPass`.
 //!
 //! A run that collapses more than [`MAX_CONSECUTIVE`] times without an accepted step of its own
 //! between stops too (a dead point is no pass).
 
-use super::{emit_dense, normalize, project, Run, Schedule};
-use crate::{IntegrationError, Method, Stabilization, Stepper};
+use super::{normalize, project};
+use crate::{Method, Stabilization, Stepper};
 use dalembert_system::Formulation;
 
 /// The smallest bridge step, as a fraction of the first tried.
@@ -66,56 +66,43 @@ impl Bridge {
         self.consecutive = 0;
     }
 
-    /// From `(t, y)` across the singular position: `Some(step)` with `y` at `t + step`, every
-    /// output time up to there observed; `None` (with `y` unchanged) when no checked step passed.
+    /// From `(t, y)` across the singular position: `Some(h)` when one step of `h` and two of
+    /// `h/2` agree (the caller then takes the two half steps again, as steps of its own with dense
+    /// output and monitors: [`super::integration`]); `None` when no checked step passed. Either
+    /// way `y` is back at the state it was given and the method is told so.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn across(
+    pub(super) fn find(
         &mut self,
         f: &mut dyn Formulation,
         stepper: &mut dyn Stepper,
         y: &mut [f64],
         t: f64,
         first: f64,
-        run: &mut Run<'_>,
-        schedule: &Schedule,
-        k_out: &mut u64,
+        n_q: usize,
         stabilization: Stabilization,
-    ) -> Result<Option<f64>, IntegrationError> {
+    ) -> Option<f64> {
         self.consecutive += 1;
         if self.consecutive > MAX_CONSECUTIVE || first.is_nan() || first <= 0.0 {
-            return Ok(None);
+            return None;
         }
         self.saved.copy_from_slice(y);
         let mut h = first;
+        let mut found = None;
         while h >= first * SMALLEST {
-            if self.agree(f, stepper, y, t, h, run.n, stabilization) {
-                // Again with output: the same steps from the same state.
-                y.copy_from_slice(&self.saved);
-                stepper.state_changed();
-                for k in 0..2 {
-                    let ts = t + k as f64 * 0.5 * h;
-                    let te = ts + 0.5 * h;
-                    if !stepper.step_unchecked(f, ts, 0.5 * h, y)? {
-                        y.copy_from_slice(&self.saved);
-                        return Ok(None);
-                    }
-                    emit_dense(f, stepper, run, schedule, k_out, stabilization, (ts, 0.5 * h, te))?;
-                    normalize(f, y, run.n);
-                    // Checked by the agreement above, not by the branch monitor's projection
-                    // share: a step across the singular instant drifts more than the steps it
-                    // watches (2.1e-2 of the kinetic energy on the driven four-bar, on the branch).
-                    project(f, te, y, run.n, stabilization)?;
-                    stepper.state_changed();
-                    run.monitor(f, te, y, 0.5 * h)?;
-                }
-                run.stats.bridges += 1;
-                return Ok(Some(h));
+            if self.agree(f, stepper, y, t, h, n_q, stabilization) {
+                found = Some(h);
+                break;
             }
             h *= 0.5;
         }
         y.copy_from_slice(&self.saved);
         stepper.state_changed();
-        Ok(None)
+        found
+    }
+
+    /// The state before the last [`Bridge::find`].
+    pub(super) fn saved(&self) -> &[f64] {
+        &self.saved
     }
 
     /// Whether one step of `h` and two of `h/2` from the saved state agree; leaves `y` scratch.

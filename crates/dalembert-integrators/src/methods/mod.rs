@@ -2,7 +2,7 @@
 //! [`MethodEntry`](crate::MethodEntry) and its typed [`Method`](crate::Method) constructor.
 
 pub(crate) mod dopri5;
-mod first_order;
+pub(crate) mod first_order;
 pub(crate) mod generalized_alpha;
 pub(crate) mod rk4;
 pub(crate) mod symplectic_euler;

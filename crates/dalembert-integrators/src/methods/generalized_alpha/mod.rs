@@ -153,6 +153,9 @@ impl Stepper for GeneralizedAlpha {
         y: &mut [f64],
     ) -> Result<StepOutcome, IntegrationError> {
         let (q, qd) = y.split_at_mut(y.len() - self.qdd.len());
+        if self.restart {
+            self.start_at(f, t, q, qd)?;
+        }
         Ok(match self.advance(f.system(), t, h, q, qd) {
             Ok(()) => StepOutcome::taken(h),
             Err(NotConverged) => StepOutcome {
@@ -176,6 +179,13 @@ impl Stepper for GeneralizedAlpha {
         } else {
             "generalized-alpha has no stability limit on linear problems: the model's own motion grows here, or Newton followed a wrong solution; a smaller step tells which".into()
         }
+    }
+
+    /// The state was set from outside (a simulator's `set_state`, or an input changed between
+    /// two steps): the next step starts again from consistent `q̈`, `λ` there, as at the start
+    /// of a run, without the history of the steps before.
+    fn state_changed(&mut self) {
+        self.restart = true;
     }
 
     fn work(&self) -> FormulationStats {
@@ -234,6 +244,8 @@ struct GeneralizedAlpha {
     /// served (modified Newton: kept across steps while Newton contracts fast).
     matrix_h: f64,
     matrix_age: u32,
+    /// The next step starts from consistent `q̈`, `λ` at its state ([`Stepper::state_changed`]).
+    restart: bool,
     /// Newton tolerance on the position update and on `‖C‖∞`.
     pub tolerance: f64,
     /// Newton iterations spent (cumulative).
@@ -326,6 +338,7 @@ impl GeneralizedAlpha {
             mass,
             values: model.constraints().values(),
             work: Work::new(q0.len(), qdd0.len(), m),
+            restart: false,
             tolerance: 1e-10,
             iterations: 0,
             factorizations: 0,
@@ -333,6 +346,20 @@ impl GeneralizedAlpha {
             matrix_age: 0,
             evaluations: 0,
         })
+    }
+
+    /// Starts again at `(t, q, q̇)` as [`GeneralizedAlpha::new`] does: `a = q̈`, no history.
+    fn start_at(&mut self, f: &mut dyn Formulation, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
+        f.accelerations(t, q, qd, None, &mut self.qdd, &mut self.lambda)?;
+        for &d in self.matrix.dropped() {
+            self.lambda[d] = 0.0;
+        }
+        self.a.copy_from_slice(&self.qdd);
+        self.qdd_prev.copy_from_slice(&self.qdd);
+        self.lambda_prev.copy_from_slice(&self.lambda);
+        self.h_prev = f64::NAN;
+        self.restart = false;
+        Ok(())
     }
 
     /// Positions and velocities for the trial `q̈_{n+1}` in `work.qdd` (into `work.q1`, `work.qd1`).
