@@ -58,6 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         velocity_weights: None,
         independent: None,
         coordinates: Default::default(),
+        inputs: Vec::new(),
     };
     sim.assemble()?;
 

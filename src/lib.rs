@@ -24,6 +24,7 @@ pub mod mechanism;
 pub mod output;
 pub mod scene;
 pub mod simulation;
+pub mod simulator;
 pub mod sweep;
 pub mod trade;
 
@@ -43,3 +44,4 @@ pub use scene::{Scene, SceneError, SceneValue};
 pub use simulation::{
     energy_warning, Coordinates, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION,
 };
+pub use simulator::{Moved, Simulator, SimulatorError};

@@ -241,6 +241,9 @@ pub struct Simulation {
     pub independent: Option<Vec<usize>>,
     /// The coordinates integrated (default: the model's absolute ones).
     pub coordinates: Coordinates,
+    /// The names of the model's inputs: [`TimeFunction::Input`](dalembert_system::TimeFunction)
+    /// `k` is `inputs[k]`, set by a [`crate::Simulator`] (0 in a run from start to end).
+    pub inputs: Vec<String>,
 }
 
 impl Simulation {

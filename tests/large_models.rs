@@ -163,6 +163,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
         velocity_weights: None,
         independent: None,
         coordinates: Default::default(),
+        inputs: Vec::new(),
     };
     for kind in [FormulationKind::Embedding, FormulationKind::Amalgamated] {
         sim.formulation = kind;
@@ -201,6 +202,7 @@ fn generalized_alpha_steps_a_chain_of_forty_thousand_links() {
         velocity_weights: None,
         independent: None,
         coordinates: Default::default(),
+        inputs: Vec::new(),
     };
     let stats = sim.run(&mut |_| {}).unwrap();
     assert_eq!(stats.steps, 2);

@@ -37,6 +37,7 @@ fn every_method_runs_on_every_formulation() {
                 velocity_weights: None,
                 independent: None,
                 coordinates: Default::default(),
+                inputs: Vec::new(),
             };
             let mut f = sim.formulation().unwrap();
             let mut last = Vec::new();

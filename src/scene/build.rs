@@ -19,6 +19,7 @@ use dalembert_kinematics::{
     Body, BodyId, BodyRef, BodyState, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper,
     TimeFunction, Torque, Vec2,
 };
+use std::cell::RefCell;
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::Arc;
@@ -134,7 +135,12 @@ fn draw_body(b: BodyRef) -> DrawBody {
 }
 
 pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
-    let ctx = Ctx { file: origin, text };
+    let inputs = std::cell::RefCell::new(Vec::new());
+    let ctx = Ctx {
+        file: origin,
+        text,
+        inputs: &inputs,
+    };
     let mut b = Builder {
         ctx,
         names: Names::new(BodyRef::Ground),
@@ -373,6 +379,7 @@ pub(crate) fn assembled(
         velocity_weights: Some(weights),
         independent: settings.independent.clone(),
         coordinates: settings.coordinates,
+        inputs: ctx.input_names(),
     };
     sim.assemble()
         .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
@@ -405,6 +412,7 @@ pub(crate) fn assembled(
         q: sim.q,
         qd: sim.qd,
         settings,
+        inputs: sim.inputs,
         drawing,
         source: ctx.text.to_string(),
         origin: ctx.file.to_string(),
@@ -419,7 +427,7 @@ fn driver(
 ) -> Result<Box<dyn Constraint>, SceneError> {
     let owner = format!("driver '{}'", d.name);
     let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
-    let func = |v0: f64| time_function(&d.function, Some(v0)).map_err(err);
+    let func = |v0: f64| time_function(&d.function, Some(v0), b.ctx.inputs).map_err(err);
     let joint = |kind: &str| -> Result<&JointInfo, SceneError> {
         let name = d
             .joint
@@ -501,10 +509,10 @@ fn driver(
     })
 }
 
-fn value_function(v: &ValueDef) -> Result<TimeFunction, String> {
+fn value_function(v: &ValueDef, inputs: &RefCell<Vec<String>>) -> Result<TimeFunction, String> {
     match v {
         ValueDef::Number(x) => Ok(TimeFunction::Constant(*x)),
-        ValueDef::Function(f) => time_function(f, None),
+        ValueDef::Function(f) => time_function(f, None, inputs),
         ValueDef::Vector(_) => Err("expected a number or a function, got a vector".into()),
     }
 }
@@ -538,10 +546,14 @@ fn force(
                 }
                 (None, fx, fy) if fx.is_some() || fy.is_some() => (
                     fx.as_ref()
-                        .map_or(Ok(TimeFunction::Constant(0.0)), |f| time_function(f, None))
+                        .map_or(Ok(TimeFunction::Constant(0.0)), |f| {
+                            time_function(f, None, b.ctx.inputs)
+                        })
                         .map_err(err)?,
                     fy.as_ref()
-                        .map_or(Ok(TimeFunction::Constant(0.0)), |f| time_function(f, None))
+                        .map_or(Ok(TimeFunction::Constant(0.0)), |f| {
+                            time_function(f, None, b.ctx.inputs)
+                        })
                         .map_err(err)?,
                 ),
                 _ => return Err(err("give 'value = [fx, fy]' or functions 'fx' / 'fy'".into())),
@@ -555,7 +567,11 @@ fn force(
             })
         }
         "torque" => {
-            let value = value_function(d.value.as_ref().ok_or_else(|| err("needs 'value'".into()))?).map_err(err)?;
+            let value = value_function(
+                d.value.as_ref().ok_or_else(|| err("needs 'value'".into()))?,
+                b.ctx.inputs,
+            )
+            .map_err(err)?;
             let (body, reaction_body) = match (&d.body, &d.joint) {
                 (Some(n), None) => (b.body(n, span, &owner)?, BodyRef::Ground),
                 (None, Some(j)) => {
@@ -582,7 +598,7 @@ fn force(
             let actuator = d
                 .actuator
                 .as_ref()
-                .map(|f| time_function(f, None))
+                .map(|f| time_function(f, None, b.ctx.inputs))
                 .transpose()
                 .map_err(err)?;
             let points = (local_point_of(pr[0], &b.q, v2(p0)), local_point_of(pr[1], &b.q, v2(p1)));

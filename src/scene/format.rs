@@ -74,7 +74,8 @@ pub(crate) struct JointDef {
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FunctionDef {
-    pub kind: String,
+    pub kind: Option<String>,
+    pub input: Option<String>,
     pub value: Option<f64>,
     pub initial: Option<f64>,
     pub rate: Option<f64>,

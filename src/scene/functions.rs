@@ -1,16 +1,76 @@
-//! Time functions written in a scene: `{ kind = "...", ... }`.
+//! Time functions written in a scene: `{ kind = "...", ... }`, or `{ input = "NAME" }` for a named
+//! input the run sets (held between sets, 0 before the first).
 //!
 //! For **drivers** a function describes the change from the value the driven quantity has in the
 //! file, `f(t) = v₀ + g(t) − g(0)`, so the motion starts where the file puts it; `constant` holds an
-//! absolute `value`; `absolute = true` uses `g(t)` as written. For **forces** functions are absolute.
+//! absolute `value`; `absolute = true` uses `g(t)` as written. An input drives the change from the
+//! file's value too (`v₀ + u`; `u` itself with `absolute = true`). For **forces** functions are
+//! absolute.
 
 use super::format::FunctionDef;
 use dalembert_kinematics::TimeFunction;
+use std::cell::RefCell;
 
-/// Converts a function table; `start` is `Some(v₀)` for drivers. Errors name the missing key.
-pub(crate) fn time_function(def: &FunctionDef, start: Option<f64>) -> Result<TimeFunction, String> {
-    let need = |v: Option<f64>, key: &str| v.ok_or_else(|| format!("function of kind '{}' needs '{key}'", def.kind));
-    let g = match def.kind.as_str() {
+/// The index of input `name` in `inputs`, added when first met.
+fn input_index(inputs: &RefCell<Vec<String>>, name: &str) -> usize {
+    let mut names = inputs.borrow_mut();
+    names.iter().position(|n| n == name).unwrap_or_else(|| {
+        names.push(name.to_string());
+        names.len() - 1
+    })
+}
+
+/// The keys a function table sets besides `kind`, `input` and `absolute`.
+fn shape_keys(def: &FunctionDef) -> Vec<&'static str> {
+    let keys = [
+        ("value", def.value.is_some()),
+        ("initial", def.initial.is_some()),
+        ("rate", def.rate.is_some()),
+        ("amplitude", def.amplitude.is_some()),
+        ("frequency", def.frequency.is_some()),
+        ("phase", def.phase.is_some()),
+        ("offset", def.offset.is_some()),
+        ("coefficients", def.coefficients.is_some()),
+        ("t0", def.t0.is_some()),
+        ("t1", def.t1.is_some()),
+        ("from", def.from.is_some()),
+        ("to", def.to.is_some()),
+    ];
+    keys.into_iter().filter(|(_, set)| *set).map(|(k, _)| k).collect()
+}
+
+/// Converts a function table; `start` is `Some(v₀)` for drivers; input names are collected in
+/// `inputs`. Errors name the missing or conflicting key.
+pub(crate) fn time_function(
+    def: &FunctionDef,
+    start: Option<f64>,
+    inputs: &RefCell<Vec<String>>,
+) -> Result<TimeFunction, String> {
+    let kind = match (&def.kind, &def.input) {
+        (Some(_), Some(_)) => return Err("give 'kind' (a function of time) or 'input' (a named input), not both".into()),
+        (None, Some(name)) => {
+            if name.trim().is_empty() {
+                return Err("'input' needs a name".into());
+            }
+            if let Some(key) = shape_keys(def).first() {
+                return Err(format!("input '{name}': '{key}' belongs to a function of time, not to an input"));
+            }
+            let offset = if def.absolute.unwrap_or(false) { 0.0 } else { start.unwrap_or(0.0) };
+            return Ok(TimeFunction::Input {
+                index: input_index(inputs, name),
+                offset,
+            });
+        }
+        (None, None) => {
+            return Err(
+                "a function needs 'kind' (constant, linear, harmonic, polynomial or smooth-step) or 'input' (a named input)"
+                    .into(),
+            )
+        }
+        (Some(kind), None) => kind.as_str(),
+    };
+    let need = |v: Option<f64>, key: &str| v.ok_or_else(|| format!("function of kind '{kind}' needs '{key}'"));
+    let g = match kind {
         "constant" => return Ok(TimeFunction::Constant(need(def.value, "value")?)),
         "linear" => TimeFunction::Linear {
             initial: def.initial.unwrap_or(0.0),
@@ -35,12 +95,12 @@ pub(crate) fn time_function(def: &FunctionDef, start: Option<f64>) -> Result<Tim
         },
         other => {
             return Err(format!(
-                "unknown function kind '{other}' (expected constant, linear, harmonic, polynomial or smooth-step)"
+                "unknown function kind '{other}' (expected constant, linear, harmonic, polynomial or smooth-step; or give 'input' for a named input)"
             ))
         }
     };
     g.validate("function").map_err(|e| e.to_string())?;
-    match (start, def.absolute.unwrap_or(false), def.kind.as_str()) {
+    match (start, def.absolute.unwrap_or(false), kind) {
         // A smooth step already starts from the file's value (its `from`) unless `to` is relative.
         (Some(_), false, "smooth-step") | (None, _, _) | (_, true, _) => Ok(g),
         (Some(v0), false, _) => {

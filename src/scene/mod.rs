@@ -126,6 +126,9 @@ pub struct Scene {
     pub qd: Vec<f64>,
     /// The run settings.
     pub settings: RunSettings,
+    /// The scene's named inputs (`{ input = "NAME" }`), in the order first met in the file: what a
+    /// [`crate::Simulator`] sets between steps (0 until set, and in a run from start to end).
+    pub inputs: Vec<String>,
     /// What the scene looks like (shapes, attachment points, pins, guides, springs), for
     /// [`crate::animation`].
     pub drawing: crate::animation::Drawing,
@@ -229,6 +232,7 @@ impl Scene {
             velocity_weights: None,
             independent: self.settings.independent.clone(),
             coordinates: self.settings.coordinates,
+            inputs: self.inputs.clone(),
         }
     }
 }

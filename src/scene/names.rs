@@ -5,16 +5,23 @@ use super::error::SceneError;
 use std::collections::HashMap;
 use std::ops::Range;
 
-/// The file's name and text, for errors placed at a span.
+/// The file's name and text, for errors placed at a span, and the named inputs the scene's
+/// functions declare (`{ input = "NAME" }`), in the order first met.
 #[derive(Clone, Copy)]
 pub(crate) struct Ctx<'a> {
     pub file: &'a str,
     pub text: &'a str,
+    pub inputs: &'a std::cell::RefCell<Vec<String>>,
 }
 
 impl Ctx<'_> {
     pub fn err(&self, span: Option<Range<usize>>, msg: impl Into<String>) -> SceneError {
         SceneError::at(self.file, self.text, span, msg)
+    }
+
+    /// The scene's named inputs, in the order first met.
+    pub fn input_names(&self) -> Vec<String> {
+        self.inputs.borrow().clone()
     }
 }
 

@@ -326,7 +326,12 @@ pub(crate) fn planar_body_in_spatial_scene(text: &str, origin: &str) -> Option<S
 
 /// Builds and assembles a spatial scene.
 pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
-    let ctx = Ctx { file: origin, text };
+    let inputs = std::cell::RefCell::new(Vec::new());
+    let ctx = Ctx {
+        file: origin,
+        text,
+        inputs: &inputs,
+    };
     let g = file.scene.gravity;
     if !g.iter().all(|x| x.is_finite()) {
         return Err(ctx.err(None, format!("[scene] gravity must be finite, got {g:?}")));
@@ -458,7 +463,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         if d.kind != "body-coordinate" && (d.body.is_some() || d.coordinate.is_some()) {
             return Err(err("'body' and 'coordinate' belong to a body-coordinate driver".into()));
         }
-        let function = time_function(&d.function, Some(start)).map_err(err)?;
+        let function = time_function(&d.function, Some(start), ctx.inputs).map_err(err)?;
         model.driver(Driver::new(&d.name, target, function));
     }
     for sf in &file.forces {

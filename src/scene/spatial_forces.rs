@@ -12,6 +12,7 @@ use dalembert_spatial::{BodyRef, Force};
 use dalembert_system::TimeFunction;
 use nalgebra::Vector3;
 use serde::Deserialize;
+use std::cell::RefCell;
 use std::ops::Range;
 
 #[derive(Debug, Deserialize)]
@@ -41,10 +42,10 @@ pub(crate) struct ForceDef {
 }
 
 /// A number or a function (a vector is refused).
-fn scalar(v: &ValueDef<3>, key: &str) -> Result<TimeFunction, String> {
+fn scalar(v: &ValueDef<3>, key: &str, inputs: &RefCell<Vec<String>>) -> Result<TimeFunction, String> {
     match v {
         ValueDef::Number(x) => Ok(TimeFunction::Constant(*x)),
-        ValueDef::Function(f) => time_function(f, None).map_err(|m| format!("'{key}': {m}")),
+        ValueDef::Function(f) => time_function(f, None, inputs).map_err(|m| format!("'{key}': {m}")),
         ValueDef::Vector(_) => Err(format!("'{key}' is one number or a function, got a vector")),
     }
 }
@@ -52,7 +53,7 @@ fn scalar(v: &ValueDef<3>, key: &str) -> Result<TimeFunction, String> {
 impl ForceDef {
     /// The three components of a force (`f`) or a torque (`t`): `value = [x, y, z]` (constants) or
     /// the component keys, each a number or a function (missing ones are 0).
-    fn components(&self, letter: &str) -> Result<[TimeFunction; 3], String> {
+    fn components(&self, letter: &str, inputs: &RefCell<Vec<String>>) -> Result<[TimeFunction; 3], String> {
         let keys = if letter == "f" {
             [&self.fx, &self.fy, &self.fz]
         } else {
@@ -65,7 +66,7 @@ impl ForceDef {
                 let mut out = [0, 1, 2].map(|_| TimeFunction::Constant(0.0));
                 for ((o, k), axis) in out.iter_mut().zip(keys).zip(["x", "y", "z"]) {
                     if let Some(v) = k {
-                        *o = scalar(v, &named(axis))?;
+                        *o = scalar(v, &named(axis), inputs)?;
                     }
                 }
                 Ok(out)
@@ -144,7 +145,7 @@ pub(crate) fn force(
                 name,
                 body,
                 point,
-                force: d.components("f").map_err(|m| err(&m))?,
+                force: d.components("f", ctx.inputs).map_err(|m| err(&m))?,
                 frame: d.axes().map_err(|m| err(&m))?,
             }
         }
@@ -157,7 +158,7 @@ pub(crate) fn force(
             Force::JointTorque {
                 name,
                 joint: d.joint.clone().unwrap_or_default(),
-                torque: scalar(value, "value").map_err(|m| err(&m))?,
+                torque: scalar(value, "value", ctx.inputs).map_err(|m| err(&m))?,
             }
         }
         "torque" => {
@@ -165,7 +166,7 @@ pub(crate) fn force(
             Force::Torque {
                 name,
                 body: body()?,
-                torque: d.components("t").map_err(|m| err(&m))?,
+                torque: d.components("t", ctx.inputs).map_err(|m| err(&m))?,
                 frame: d.axes().map_err(|m| err(&m))?,
             }
         }
@@ -191,7 +192,7 @@ pub(crate) fn force(
                 actuator: d
                     .actuator
                     .as_ref()
-                    .map(|f| time_function(f, None))
+                    .map(|f| time_function(f, None, ctx.inputs))
                     .transpose()
                     .map_err(|m| err(&format!("'actuator': {m}")))?,
             }
