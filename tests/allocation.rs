@@ -340,3 +340,66 @@ fn stepping_allocates_nothing_after_setup() {
         peak >> 20
     );
 }
+
+/// The simulator's loop (an input set, an advance to a time between two steps, a reaction read, a
+/// step) allocates nothing after construction either: every formulation × method × stabilization,
+/// on a planar slider-crank and a spatial one, each with a motor torque that is an input. Counted
+/// as above: twice the iterations cost no more allocations.
+#[test]
+fn the_simulator_loop_allocates_nothing() {
+    COUNTED.with(|c| c.set(true));
+    let with_motor = |path: &str, torque: &str| {
+        let text = std::fs::read_to_string(path).unwrap();
+        let text = format!("{text}\n[[forces]]\nname = \"commanded\"\ntype = \"torque\"\nbody = \"crank\"\n{torque}\n");
+        dalembert::Scene::from_toml(&text, path).unwrap()
+    };
+    let scenes = [
+        with_motor("scenes/slider-crank.toml", "value = { input = \"motor\" }"),
+        with_motor("scenes/slider-crank-3d.toml", "tx = { input = \"motor\" }"),
+    ];
+    let mut failures = Vec::new();
+    for base in &scenes {
+        assert_eq!(base.inputs, ["motor"]);
+        let reaction = base.check().unwrap().reactions[0].0.clone();
+        for formulation in dalembert::FormulationKind::ALL {
+            for entry in METHODS {
+                if entry.applies == Applies::AugmentedIndex3 && formulation != dalembert::FormulationKind::Augmented {
+                    continue;
+                }
+                let names: &[&str] = if entry.keeps_constraints {
+                    &["none"]
+                } else {
+                    Stabilization::NAMES
+                };
+                for name in names {
+                    let mut scene = base.clone();
+                    scene.settings.formulation = formulation;
+                    scene.settings.method = Method::of(entry);
+                    scene.settings.stabilization = Stabilization::parse(name).unwrap();
+                    scene.settings.step = 1e-3;
+                    let count = |iterations: usize| {
+                        let mut sim = scene.simulator().unwrap();
+                        let before = ALLOCATIONS.load(Ordering::Relaxed);
+                        for k in 1..=iterations {
+                            sim.set_input("motor", (k as f64).sin()).unwrap();
+                            sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
+                            sim.value(&reaction).unwrap();
+                            sim.step().unwrap();
+                        }
+                        ALLOCATIONS.load(Ordering::Relaxed) - before
+                    };
+                    let (short, long) = (count(50), count(100));
+                    if long > short {
+                        failures.push(format!(
+                            "{}, {}, {} + {name}: {short} allocations for 50 iterations, {long} for 100",
+                            scene.origin,
+                            formulation.name(),
+                            entry.name
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
