@@ -46,6 +46,12 @@ pub fn run(a: Args) -> Result<(), String> {
         };
         outln!("redundant    {}{treated}", r.redundant.join(", "));
     }
+    if !scene.inputs.is_empty() {
+        outln!(
+            "inputs       {} (held at the value last set; 0 until set, and in a run from start to end)",
+            scene.inputs.join(", ")
+        );
+    }
     outln!("assembled    largest |C| = {:.2e}", r.max_violation);
     if let Ok(qdd) = &r.accelerations {
         if scene.model.is_spatial() {
