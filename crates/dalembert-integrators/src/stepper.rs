@@ -55,7 +55,7 @@ pub struct Setup<'a> {
 }
 
 /// One integration method. It allocates its storage when it is built and nothing while stepping.
-pub trait Stepper {
+pub trait Stepper: Send {
     /// Attempts a step of size `h` from `(t, y = [q; v])`. When the outcome is accepted `y` holds
     /// the state at `t + h` (before normalization and projection, which the loop does); when it
     /// is rejected `y` is unchanged. Errors stop the run.

@@ -10,6 +10,7 @@ mod errors;
 mod interrupt;
 mod run;
 mod scene;
+mod simulator;
 
 /// The native module.
 #[pymodule]
@@ -17,6 +18,7 @@ fn _dalembert(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add_class::<scene::PyScene>()?;
     m.add_class::<run::PyRun>()?;
+    m.add_class::<simulator::PySimulator>()?;
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add("IntegrationError", py.get_type::<errors::IntegrationError>())?;
     m.add_function(wrap_pyfunction!(scene::sweep_runs, m)?)?;

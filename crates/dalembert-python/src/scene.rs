@@ -5,6 +5,7 @@ use crate::convert::scene_value;
 use crate::errors::{IntegrationError, SceneError};
 use crate::interrupt;
 use crate::run::PyRun;
+use crate::simulator::PySimulator;
 use dalembert::output::Rows;
 use dalembert::scene::{method_parameter, parameter_keys, RunOverrides, Spelling};
 use dalembert::sweep::{run_one, sweep, Assignment, Output};
@@ -74,6 +75,42 @@ fn interrupted(py: Python<'_>, e: PyErr, run: PyRun) -> PyResult<PyErr> {
         e.value(py).setattr("run", Py::new(py, run)?)?;
     }
     Ok(e)
+}
+
+/// The methods' parameters among the keywords of `method` (`rtol=1e-8`), checked against the
+/// registry (a `TypeError` for an unknown keyword).
+fn method_parameters(method: &str, parameters: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(String, f64)>> {
+    let mut given = Vec::new();
+    for (k, v) in parameters.into_iter().flatten() {
+        let key: String = k.extract()?;
+        if method_parameter(&key).is_none() {
+            return Err(unexpected_keyword(method, &key));
+        }
+        let value: f64 = v
+            .extract()
+            .map_err(|_| PyValueError::new_err(format!("{key} must be a number, got {v}")))?;
+        given.push((key, value));
+    }
+    Ok(given)
+}
+
+impl PyScene {
+    /// This scene with the run settings `o` changes (warnings issued as Python warnings), checked
+    /// before anything runs.
+    fn overridden(&self, py: Python<'_>, o: RunOverrides) -> PyResult<Scene> {
+        let (settings, warnings) = o
+            .apply(&self.inner.settings, Spelling::Keywords)
+            .map_err(PyValueError::new_err)?;
+        for w in &warnings {
+            warn(py, w)?;
+        }
+        let mut scene = (*self.inner).clone();
+        scene.settings = settings;
+        scene
+            .check_settings(Spelling::Keywords)
+            .map_err(PyValueError::new_err)?;
+        Ok(scene)
+    }
 }
 
 #[pymethods]
@@ -231,21 +268,10 @@ impl PyScene {
         strict: bool,
         parameters: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<PyRun> {
-        let mut given = Vec::new();
-        for (k, v) in parameters.into_iter().flatten() {
-            let key: String = k.extract()?;
-            if method_parameter(&key).is_none() {
-                return Err(unexpected_keyword("simulate", &key));
-            }
-            let value: f64 = v
-                .extract()
-                .map_err(|_| PyValueError::new_err(format!("{key} must be a number, got {v}")))?;
-            given.push((key, value));
-        }
         let o = RunOverrides {
             formulation,
             integrator,
-            parameters: given,
+            parameters: method_parameters("simulate", parameters)?,
             step,
             end,
             every,
@@ -253,17 +279,7 @@ impl PyScene {
             redundant,
             coordinates,
         };
-        let (settings, warnings) = o
-            .apply(&self.inner.settings, Spelling::Keywords)
-            .map_err(PyValueError::new_err)?;
-        for w in &warnings {
-            warn(py, w)?;
-        }
-        let mut scene = (*self.inner).clone();
-        scene.settings = settings;
-        scene
-            .check_settings(Spelling::Keywords)
-            .map_err(PyValueError::new_err)?;
+        let scene = self.overridden(py, o)?;
         let scene = Arc::new(scene);
         let (rec, raised) = {
             let scene = scene.clone();
@@ -305,6 +321,43 @@ impl PyScene {
                 }
             }
         }
+    }
+
+    /// A Simulator of this scene: the same keywords as `simulate` (but `strict`), stepped from
+    /// Python with `step()`, `advance_to(t)` and `set_input(name, value)`.
+    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, redundant=None, coordinates=None, **parameters))]
+    fn simulator(
+        &self,
+        py: Python<'_>,
+        end: Option<f64>,
+        formulation: Option<String>,
+        integrator: Option<String>,
+        step: Option<f64>,
+        every: Option<f64>,
+        stabilization: Option<String>,
+        redundant: Option<String>,
+        coordinates: Option<String>,
+        parameters: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<PySimulator> {
+        let o = RunOverrides {
+            formulation,
+            integrator,
+            parameters: method_parameters("simulator", parameters)?,
+            step,
+            end,
+            every,
+            stabilization,
+            redundant,
+            coordinates,
+        };
+        let scene = self.overridden(py, o)?;
+        PySimulator::new(Arc::new(scene))
+    }
+
+    /// The scene's named inputs (`{ input = "NAME" }`), in the order first met in the file.
+    #[getter]
+    fn inputs(&self) -> Vec<String> {
+        self.inner.inputs.clone()
     }
 
     /// Inverse dynamics of a fully driven scene on the grid 0, every, …, end (the scene's end and

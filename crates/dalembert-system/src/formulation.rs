@@ -188,7 +188,7 @@ pub struct FormulationStats {
 }
 
 /// The forward-dynamics interface shared by all formulations.
-pub trait Formulation {
+pub trait Formulation: Send {
     /// Short name, e.g. `"augmented"`.
     fn name(&self) -> &'static str;
 
