@@ -59,7 +59,7 @@ struct Adaptive {
 
 enum Control {
     Fixed(Grid),
-    Adaptive(Adaptive),
+    Adaptive(Box<Adaptive>),
 }
 
 /// A run of a method on a formulation, advanced step by step or to any time
@@ -178,7 +178,7 @@ impl Integration {
             }),
             StepControl::Adaptive => {
                 let max_step = opts.max_step.min(t_end - t0).max(opts.min_step);
-                Control::Adaptive(Adaptive {
+                Control::Adaptive(Box::new(Adaptive {
                     h: opts.step.min(max_step),
                     max_step,
                     guard: SingularPassGuard::default(),
@@ -186,7 +186,7 @@ impl Integration {
                     pending: None,
                     forced: None,
                     dense: None,
-                })
+                }))
             }
         };
         mon.stats.min_step_taken = f64::INFINITY;
@@ -194,7 +194,7 @@ impl Integration {
         Ok(Integration {
             mon,
             stepper,
-            opts: opts.clone(),
+            opts: *opts,
             stabilization,
             schedule,
             control,
