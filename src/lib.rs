@@ -19,6 +19,7 @@
 
 pub mod analysis;
 pub mod animation;
+pub mod builder;
 pub mod energy;
 pub mod mechanism;
 pub mod output;
@@ -38,6 +39,7 @@ pub use dalembert_spatial as spatial;
 pub use dalembert_system as system;
 
 pub use analysis::{CheckReport, Recording};
+pub use builder::ModelBuilder;
 pub use mechanism::Mechanism;
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError, SceneValue};

@@ -35,6 +35,9 @@ fn counted() -> bool {
 }
 
 static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+/// The counter is shared: the tests of this file run one at a time.
+static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 static LIVE_BYTES: AtomicUsize = AtomicUsize::new(0);
 static PEAK_BYTES: AtomicUsize = AtomicUsize::new(0);
 
@@ -102,6 +105,7 @@ fn allocations(case: &Case, kind: &str, backend: Backend, opts: &IntegratorOptio
 
 #[test]
 fn stepping_allocates_nothing_after_setup() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     COUNTED.with(|c| c.set(true));
     let planar = |m: mechanisms::Mechanism| Case {
         sys: m.model,
@@ -347,6 +351,7 @@ fn stepping_allocates_nothing_after_setup() {
 /// as above: twice the iterations cost no more allocations.
 #[test]
 fn the_simulator_loop_allocates_nothing() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     COUNTED.with(|c| c.set(true));
     let with_motor = |path: &str, torque: &str| {
         let text = std::fs::read_to_string(path).unwrap();
