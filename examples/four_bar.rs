@@ -59,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         independent: None,
         coordinates: Default::default(),
         inputs: Vec::new(),
+        code_forces: Vec::new(),
     };
     sim.assemble()?;
 

@@ -20,6 +20,7 @@
 pub mod analysis;
 pub mod animation;
 pub mod builder;
+pub mod code_force;
 pub mod energy;
 pub mod mechanism;
 pub mod output;

@@ -244,6 +244,9 @@ pub struct Simulation {
     /// The names of the model's inputs: [`TimeFunction::Input`](dalembert_system::TimeFunction)
     /// `k` is `inputs[k]`, set by a [`crate::Simulator`] (0 in a run from start to end).
     pub inputs: Vec<String>,
+    /// The names of the model's code forces (`type = "code"`): element `k` asks the
+    /// [`crate::Simulator`]'s function `k` for its wrench (nothing in a run from start to end).
+    pub code_forces: Vec<String>,
 }
 
 impl Simulation {

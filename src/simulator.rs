@@ -54,8 +54,9 @@ use crate::scene::unknown_name;
 use crate::simulation::{Coordinates, Simulation, SimulationError};
 use dalembert_constraints::{ConstraintError, Formulation, KinematicOptions};
 use dalembert_integrators::{Integration, IntegrationFailure, Sample, Statistics};
-use dalembert_system::inputs::with_inputs;
+use dalembert_system::inputs::{with_code_forces, with_inputs, BodyMotion, Wrench};
 use dalembert_system::Shortest;
+use std::cell::RefCell;
 use std::sync::atomic::AtomicBool;
 use thiserror::Error;
 
@@ -74,6 +75,14 @@ pub enum SimulatorError {
         name: String,
         /// The model's inputs.
         inputs: Vec<String>,
+    },
+    /// No code force of that name.
+    #[error("{}", unknown_code_force(.name, .forces))]
+    UnknownCodeForce {
+        /// The name asked for.
+        name: String,
+        /// The model's code forces.
+        forces: Vec<String>,
     },
     /// An input value that is NaN or infinite.
     #[error("input '{name}': {value} is not a finite value")]
@@ -118,6 +127,14 @@ fn unknown_input(name: &str, inputs: &[String]) -> String {
     unknown_name("input", name, &names)
 }
 
+fn unknown_code_force(name: &str, forces: &[String]) -> String {
+    if forces.is_empty() {
+        return format!("unknown code force '{name}': the model has none (a force element of type \"code\" in a scene declares one)");
+    }
+    let names: Vec<&str> = forces.iter().map(String::as_str).collect();
+    unknown_name("code force", name, &names)
+}
+
 /// How far [`Simulator::set_state`] moved the given state to satisfy the constraints: the largest
 /// change of a position and of a velocity.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -128,12 +145,34 @@ pub struct Moved {
     pub velocities: f64,
 }
 
+/// The function of a code force: time and the body's motion to its wrench.
+pub type ForceFn = Box<dyn FnMut(f64, &BodyMotion) -> Wrench + Send>;
+
+/// The functions of the model's code forces (`None`: not set, nothing applied).
+struct Forces(RefCell<Vec<Option<ForceFn>>>);
+
+impl Forces {
+    /// The wrench of code force `k`.
+    fn call(&self, k: usize, t: f64, motion: &BodyMotion) -> Wrench {
+        match self.0.borrow_mut().get_mut(k) {
+            Some(Some(f)) => f(t, motion),
+            _ => Wrench::default(),
+        }
+    }
+}
+
+/// Runs `f` with the simulator's inputs and code forces lent to the model's evaluations.
+fn lent<R>(values: &[f64], forces: &Forces, f: impl FnOnce() -> R) -> R {
+    with_inputs(values, || with_code_forces(&|k, t, m| forces.call(k, t, m), f))
+}
+
 /// A model driven step by step (see the module documentation).
 pub struct Simulator {
     simulation: Simulation,
     formulation: Box<dyn Formulation>,
     run: Integration,
     values: Vec<f64>,
+    forces: Forces,
     rows: Rows,
     row: Vec<f64>,
     row_valid: bool,
@@ -175,7 +214,8 @@ impl Simulator {
         }
         let mut formulation = simulation.formulation()?;
         let values = vec![0.0; simulation.inputs.len()];
-        let run = with_inputs(&values, || {
+        let forces = Forces(RefCell::new(simulation.code_forces.iter().map(|_| None).collect()));
+        let run = lent(&values, &forces, || {
             Integration::new(
                 formulation.as_mut(),
                 simulation.start,
@@ -193,6 +233,7 @@ impl Simulator {
             formulation,
             run,
             values,
+            forces,
             rows,
             row,
             row_valid: false,
@@ -240,6 +281,33 @@ impl Simulator {
         Ok(self.values[self.input_index(name)?])
     }
 
+    /// The model's code forces (a scene's `type = "code"` elements).
+    pub fn code_forces(&self) -> &[String] {
+        &self.simulation.code_forces
+    }
+
+    /// Computes code force `name` with `f` from now on: at every stage of every step, `f(t,
+    /// motion)` gives the force at the body's centre of mass and the torque, global components
+    /// ([`crate::code_force`]). It must not allocate if the stepping is to allocate nothing, and
+    /// it is called only from the thread that steps. Between two steps the state shown becomes the
+    /// run's own first, as for an input.
+    pub fn set_force(
+        &mut self,
+        name: &str,
+        f: impl FnMut(f64, &BodyMotion) -> Wrench + Send + 'static,
+    ) -> Result<(), SimulatorError> {
+        let Some(k) = self.simulation.code_forces.iter().position(|n| n == name) else {
+            return Err(SimulatorError::UnknownCodeForce {
+                name: name.to_string(),
+                forces: self.simulation.code_forces.clone(),
+            });
+        };
+        self.run.commit();
+        self.forces.0.borrow_mut()[k] = Some(Box::new(f));
+        self.row_valid = false;
+        Ok(())
+    }
+
     /// The current time.
     pub fn time(&self) -> f64 {
         self.run.time()
@@ -257,11 +325,12 @@ impl Simulator {
             formulation,
             run,
             values,
+            forces,
             never,
             ..
         } = self;
         self.row_valid = false;
-        let result = with_inputs(values, || run.step(formulation.as_mut(), never));
+        let result = lent(values, forces, || run.step(formulation.as_mut(), never));
         result.map_err(|error| failure(error, run.statistics(formulation.as_ref())))
     }
 
@@ -285,10 +354,11 @@ impl Simulator {
             formulation,
             run,
             values,
+            forces,
             ..
         } = self;
         self.row_valid = false;
-        let result = with_inputs(values, || run.advance_to(formulation.as_mut(), t, cancel));
+        let result = lent(values, forces, || run.advance_to(formulation.as_mut(), t, cancel));
         result.map_err(|error| failure(error, run.statistics(formulation.as_ref())))
     }
 
@@ -306,11 +376,12 @@ impl Simulator {
                 formulation,
                 run,
                 values,
+                forces,
                 rows,
                 row,
                 ..
             } = self;
-            let sample = with_inputs(values, || {
+            let sample = lent(values, forces, || {
                 run.sample(formulation.as_mut()).map(|s: Sample<'_>| {
                     row.clear();
                     rows.push(&simulation.model, &s, row);
@@ -358,7 +429,7 @@ impl Simulator {
         let (mut q_new, mut qd_new) = (q.to_vec(), qd.to_vec());
         let opts = KinematicOptions::default();
         let sys = self.simulation.model.as_system().constraints();
-        with_inputs(&self.values, || -> Result<(), ConstraintError> {
+        lent(&self.values, &self.forces, || -> Result<(), ConstraintError> {
             sys.solve_positions(t, &mut q_new, &opts)?;
             sys.solve_velocities_weighted(t, &q_new, &mut qd_new, None, &opts)?;
             Ok(())
@@ -373,17 +444,21 @@ impl Simulator {
             formulation,
             run,
             values,
+            forces,
             ..
         } = self;
-        with_inputs(values, || run.set_state(formulation.as_mut(), &q_new, &qd_new))
+        lent(values, forces, || run.set_state(formulation.as_mut(), &q_new, &qd_new))
             .map_err(|error| failure(error, run.statistics(formulation.as_ref())))?;
         self.row_valid = false;
         Ok(moved)
     }
 
-    /// Back to the initial state at the start time, inputs at 0, as newly built.
+    /// Back to the initial state at the start time, inputs at 0, as newly built; the code
+    /// forces keep their functions.
     pub fn reset(&mut self) -> Result<(), SimulatorError> {
-        *self = Simulator::new(self.simulation.clone())?;
+        let mut fresh = Simulator::new(self.simulation.clone())?;
+        std::mem::swap(&mut fresh.forces, &mut self.forces);
+        *self = fresh;
         Ok(())
     }
 

@@ -164,6 +164,7 @@ fn dense_formulations_refuse_models_they_cannot_hold() {
         independent: None,
         coordinates: Default::default(),
         inputs: Vec::new(),
+        code_forces: Vec::new(),
     };
     for kind in [FormulationKind::Embedding, FormulationKind::Amalgamated] {
         sim.formulation = kind;
@@ -203,6 +204,7 @@ fn generalized_alpha_steps_a_chain_of_forty_thousand_links() {
         independent: None,
         coordinates: Default::default(),
         inputs: Vec::new(),
+        code_forces: Vec::new(),
     };
     let stats = sim.run(&mut |_| {}).unwrap();
     assert_eq!(stats.steps, 2);

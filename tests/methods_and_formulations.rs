@@ -38,6 +38,7 @@ fn every_method_runs_on_every_formulation() {
                 independent: None,
                 coordinates: Default::default(),
                 inputs: Vec::new(),
+                code_forces: Vec::new(),
             };
             let mut f = sim.formulation().unwrap();
             let mut last = Vec::new();

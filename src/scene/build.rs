@@ -135,11 +135,12 @@ fn draw_body(b: BodyRef) -> DrawBody {
 }
 
 pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
-    let inputs = std::cell::RefCell::new(Vec::new());
+    let (inputs, code_forces) = (std::cell::RefCell::new(Vec::new()), std::cell::RefCell::new(Vec::new()));
     let ctx = Ctx {
         file: origin,
         text,
         inputs: &inputs,
+        code_forces: &code_forces,
     };
     let mut b = Builder {
         ctx,
@@ -380,6 +381,7 @@ pub(crate) fn assembled(
         independent: settings.independent.clone(),
         coordinates: settings.coordinates,
         inputs: ctx.input_names(),
+        code_forces: ctx.code_force_names(),
     };
     sim.assemble()
         .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
@@ -413,6 +415,7 @@ pub(crate) fn assembled(
         qd: sim.qd,
         settings,
         inputs: sim.inputs,
+        code_forces: sim.code_forces,
         drawing,
         source: ctx.text.to_string(),
         origin: ctx.file.to_string(),
@@ -627,9 +630,36 @@ fn force(
                 free_angle: d.free_angle.unwrap_or(b.angle(pr[1]) - b.angle(pr[0])),
             })
         }
+        "code" => {
+            let extra = [
+                ("bodies", d.bodies.is_some()),
+                ("joint", d.joint.is_some()),
+                ("at", d.at.is_some()),
+                ("point", d.point.is_some()),
+                ("value", d.value.is_some()),
+                ("fx", d.fx.is_some()),
+                ("fy", d.fy.is_some()),
+                ("stiffness", d.stiffness.is_some()),
+                ("damping", d.damping.is_some()),
+                ("free_length", d.free_length.is_some()),
+                ("free_angle", d.free_angle.is_some()),
+                ("actuator", d.actuator.is_some()),
+            ];
+            if let Some((key, _)) = extra.iter().find(|(_, set)| *set) {
+                return Err(err(format!(
+                    "'{key}' does not belong to a code element (its force comes from code: give 'body' only)"
+                )));
+            }
+            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+            Box::new(crate::code_force::PlanarCodeForce {
+                name: d.name.clone(),
+                body: b.body(name, span, &owner)?,
+                index: b.ctx.code_force(&d.name),
+            })
+        }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, code)"
             )))
         }
     };

@@ -129,6 +129,9 @@ pub struct Scene {
     /// The scene's named inputs (`{ input = "NAME" }`), in the order first met in the file: what a
     /// [`crate::Simulator`] sets between steps (0 until set, and in a run from start to end).
     pub inputs: Vec<String>,
+    /// The scene's force elements of type `code`, in the file's order: their wrench comes from a
+    /// function a [`crate::Simulator`] is given (`code_force.rs`; nothing without one).
+    pub code_forces: Vec<String>,
     /// What the scene looks like (shapes, attachment points, pins, guides, springs), for
     /// [`crate::animation`].
     pub drawing: crate::animation::Drawing,
@@ -233,6 +236,7 @@ impl Scene {
             independent: self.settings.independent.clone(),
             coordinates: self.settings.coordinates,
             inputs: self.inputs.clone(),
+            code_forces: self.code_forces.clone(),
         }
     }
 }

@@ -12,11 +12,25 @@ pub(crate) struct Ctx<'a> {
     pub file: &'a str,
     pub text: &'a str,
     pub inputs: &'a std::cell::RefCell<Vec<String>>,
+    /// The force elements of type `code`, in the file's order.
+    pub code_forces: &'a std::cell::RefCell<Vec<String>>,
 }
 
 impl Ctx<'_> {
     pub fn err(&self, span: Option<Range<usize>>, msg: impl Into<String>) -> SceneError {
         SceneError::at(self.file, self.text, span, msg)
+    }
+
+    /// Registers code force `name`; its index among the scene's code forces.
+    pub fn code_force(&self, name: &str) -> usize {
+        let mut names = self.code_forces.borrow_mut();
+        names.push(name.to_string());
+        names.len() - 1
+    }
+
+    /// The scene's code forces, in the file's order.
+    pub fn code_force_names(&self) -> Vec<String> {
+        self.code_forces.borrow().clone()
     }
 
     /// The scene's named inputs, in the order first met.

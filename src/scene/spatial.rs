@@ -326,11 +326,12 @@ pub(crate) fn planar_body_in_spatial_scene(text: &str, origin: &str) -> Option<S
 
 /// Builds and assembles a spatial scene.
 pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene, SceneError> {
-    let inputs = std::cell::RefCell::new(Vec::new());
+    let (inputs, code_forces) = (std::cell::RefCell::new(Vec::new()), std::cell::RefCell::new(Vec::new()));
     let ctx = Ctx {
         file: origin,
         text,
         inputs: &inputs,
+        code_forces: &code_forces,
     };
     let g = file.scene.gravity;
     if !g.iter().all(|x| x.is_finite()) {

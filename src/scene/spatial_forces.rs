@@ -209,9 +209,20 @@ pub(crate) fn force(
                 free_angle: d.free_angle.unwrap_or(0.0),
             }
         }
+        "code" => {
+            check(
+                d.only(&["body"])
+                    .map_err(|m| format!("{m} (its force comes from code: give 'body' only)")),
+            )?;
+            Force::User(std::sync::Arc::new(crate::code_force::SpatialCodeForce {
+                name: name.clone(),
+                body: body()?,
+                index: ctx.code_force(&name),
+            }))
+        }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, code)"
             )))
         }
     })

@@ -19,6 +19,7 @@ fn _dalembert(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::PyScene>()?;
     m.add_class::<run::PyRun>()?;
     m.add_class::<simulator::PySimulator>()?;
+    m.add_class::<simulator::PyBodyMotion>()?;
     m.add("SceneError", py.get_type::<errors::SceneError>())?;
     m.add("IntegrationError", py.get_type::<errors::IntegrationError>())?;
     m.add_function(wrap_pyfunction!(scene::sweep_runs, m)?)?;

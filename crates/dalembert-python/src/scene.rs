@@ -360,6 +360,13 @@ impl PyScene {
         self.inner.inputs.clone()
     }
 
+    /// The scene's code forces (`type = "code"` elements), whose wrench a Simulator's function
+    /// gives (`Simulator.set_force`).
+    #[getter]
+    fn code_forces(&self) -> Vec<String> {
+        self.inner.code_forces.clone()
+    }
+
     /// Inverse dynamics of a fully driven scene on the grid 0, every, …, end (the scene's end and
     /// output interval by default): a Run whose `<driver>.effort` columns are the driving forces
     /// and whose reaction columns are the joint reactions. Raises IntegrationError (with `.run`)

@@ -4,6 +4,7 @@ use crate::errors::IntegrationError;
 use crate::interrupt;
 use crate::run::statistics_dict;
 use dalembert::integrators::IntegrationError as RunError;
+use dalembert::system::inputs::{BodyMotion, Wrench};
 use dalembert::{Scene, SimulationError, Simulator, SimulatorError};
 use numpy::PyArray1;
 use pyo3::exceptions::{PyKeyError, PyKeyboardInterrupt, PyValueError};
@@ -26,6 +27,77 @@ pub struct PySimulator {
     /// work buffers are `Send` only); uncontended, as every method holds the object mutably.
     inner: Mutex<Simulator>,
     scene: Arc<Scene>,
+    /// The first exception a force function raised during the last call (the run then fails on
+    /// the NaN wrench it was given, and the exception is raised in its place).
+    raised: Arc<Mutex<Option<PyErr>>>,
+    /// True once a force function is set: the simulator then steps on the calling thread with the
+    /// GIL held (the functions need it at every stage; handing it to a helper thread and back
+    /// cost 15 µs per call, measured), and Ctrl-C reaches it through the functions themselves.
+    python_forces: bool,
+}
+
+/// The motion of the body a code force acts on, global components: `position` (centre of mass),
+/// `rotation` (3 × 3, body to global, rows), `velocity`, `angular_velocity`; a planar body moves
+/// in the x–y plane and its `angle` is given too.
+#[pyclass(name = "BodyMotion", module = "dalembert", frozen)]
+pub struct PyBodyMotion {
+    #[pyo3(get)]
+    position: (f64, f64, f64),
+    #[pyo3(get)]
+    rotation: (Triple, Triple, Triple),
+    #[pyo3(get)]
+    velocity: (f64, f64, f64),
+    #[pyo3(get)]
+    angular_velocity: (f64, f64, f64),
+    /// The angle of a planar body (rad); `None` for a spatial one.
+    #[pyo3(get)]
+    angle: Option<f64>,
+}
+
+/// Three components, as Python sees them (a tuple).
+type Triple = (f64, f64, f64);
+
+fn triple(v: [f64; 3]) -> Triple {
+    (v[0], v[1], v[2])
+}
+
+/// `function(t, motion)` as a wrench: `(fx, fy, torque)` for a planar body, `(fx, fy, fz, tx, ty,
+/// tz)` for either.
+fn call_force(
+    py: Python<'_>,
+    function: &Py<PyAny>,
+    name: &str,
+    planar: bool,
+    t: f64,
+    m: &BodyMotion,
+) -> PyResult<Wrench> {
+    let motion = PyBodyMotion {
+        position: triple(m.position),
+        rotation: (triple(m.rotation[0]), triple(m.rotation[1]), triple(m.rotation[2])),
+        velocity: triple(m.velocity),
+        angular_velocity: triple(m.angular_velocity),
+        angle: planar.then(|| m.rotation[1][0].atan2(m.rotation[0][0])),
+    };
+    let out = function.call1(py, (t, motion))?;
+    let values: Vec<f64> = out.extract(py).map_err(|_| {
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "code force '{name}': the function must return numbers (fx, fy, torque) or (fx, fy, fz, tx, ty, tz)"
+        ))
+    })?;
+    match (values.len(), planar) {
+        (3, true) => Ok(Wrench {
+            force: [values[0], values[1], 0.0],
+            torque: [0.0, 0.0, values[2]],
+        }),
+        (6, _) => Ok(Wrench {
+            force: [values[0], values[1], values[2]],
+            torque: [values[3], values[4], values[5]],
+        }),
+        (n, _) => Err(PyValueError::new_err(format!(
+            "code force '{name}': the function returned {n} numbers; expected {}(fx, fy, fz, tx, ty, tz)",
+            if planar { "(fx, fy, torque) or " } else { "" }
+        ))),
+    }
 }
 
 impl PySimulator {
@@ -34,11 +106,18 @@ impl PySimulator {
         Ok(PySimulator {
             inner: Mutex::new(inner),
             scene,
+            raised: Arc::new(Mutex::new(None)),
+            python_forces: false,
         })
     }
 }
 
 impl PySimulator {
+    /// The exception a force function raised during the last call, if any.
+    fn take_raised(&self) -> Option<PyErr> {
+        self.raised.lock().unwrap_or_else(|p| p.into_inner()).take()
+    }
+
     fn sim(&self) -> MutexGuard<'_, Simulator> {
         // A panic while stepping poisons the lock; the simulator's state is then whatever the
         // step left, as after any failed step.
@@ -96,6 +175,43 @@ impl PySimulator {
         }
     }
 
+    /// The scene's code forces (`type = "code"` elements).
+    #[getter]
+    fn code_forces(&self) -> Vec<String> {
+        self.sim().code_forces().to_vec()
+    }
+
+    /// Computes code force `name` with `function(t, motion)` from now on, at every stage of every
+    /// step: `motion` is a `BodyMotion` (global components), the result `(fx, fy, torque)` for a
+    /// planar body or `(fx, fy, fz, tx, ty, tz)`, a force at the centre of mass and a torque,
+    /// global. An exception it raises stops the run and is raised by `step` or `advance_to`.
+    fn set_force(&mut self, py: Python<'_>, name: &str, function: Py<PyAny>) -> PyResult<()> {
+        let planar = !self.scene.model.is_spatial();
+        let raised = self.raised.clone();
+        let owner = name.to_string();
+        let closure = move |t: f64, m: &BodyMotion| -> Wrench {
+            Python::attach(|py| match call_force(py, &function, &owner, planar, t, m) {
+                Ok(w) => w,
+                Err(e) => {
+                    let mut first = raised.lock().unwrap_or_else(|p| p.into_inner());
+                    first.get_or_insert(e);
+                    Wrench {
+                        force: [f64::NAN; 3],
+                        torque: [f64::NAN; 3],
+                    }
+                }
+            })
+        };
+        let result = self.sim().set_force(name, closure);
+        match result {
+            Ok(()) => {
+                self.python_forces = true;
+                Ok(())
+            }
+            Err(e) => Err(error(py, e, None)?),
+        }
+    }
+
     /// The current time (s).
     #[getter]
     fn t(&self) -> f64 {
@@ -106,9 +222,15 @@ impl PySimulator {
     fn step(&mut self, py: Python<'_>) -> PyResult<()> {
         let mut guard = self.sim();
         let inner = &mut *guard;
-        match py.detach(|| inner.step()) {
-            Ok(()) => Ok(()),
-            Err(e) => Err(error(py, e, None)?),
+        let result = if self.python_forces {
+            inner.step()
+        } else {
+            py.detach(|| inner.step())
+        };
+        match (result, self.take_raised()) {
+            (Ok(()), _) => Ok(()),
+            (Err(_), Some(raised)) => Err(raised),
+            (Err(e), None) => Err(error(py, e, None)?),
         }
     }
 
@@ -118,23 +240,29 @@ impl PySimulator {
         let mut guard = self.sim();
         let steps = (t - guard.time()) / self.scene.settings.step;
         let inner = &mut *guard;
-        let (result, raised) = if steps.is_finite() && steps <= INLINE_STEPS {
+        let (result, raised) = if self.python_forces {
+            (inner.advance_to(t), None)
+        } else if steps.is_finite() && steps <= INLINE_STEPS {
             (py.detach(|| inner.advance_to(t)), None)
         } else {
             interrupt::run(py, |cancel| inner.advance_to_cancellable(t, cancel))
         };
-        match (result, raised) {
-            (Ok(()), None) => Ok(()),
-            (Ok(()), Some(r)) => Err(r),
-            (Err(e), raised) => Err(error(py, e, raised)?),
+        drop(guard);
+        match (result, raised, self.take_raised()) {
+            (Ok(()), None, _) => Ok(()),
+            (Ok(()), Some(r), _) => Err(r),
+            (Err(_), None, Some(from_function)) => Err(from_function),
+            (Err(e), raised, _) => Err(error(py, e, raised)?),
         }
     }
 
     /// The value of output column `column` at the current time (`KeyError` for an unknown one).
     fn __getitem__(&mut self, py: Python<'_>, column: &str) -> PyResult<f64> {
-        match self.sim().value(column) {
-            Ok(v) => Ok(v),
-            Err(e) => Err(error(py, e, None)?),
+        let result = self.sim().value(column);
+        match (result, self.take_raised()) {
+            (Ok(v), _) => Ok(v),
+            (Err(_), Some(raised)) => Err(raised),
+            (Err(e), None) => Err(error(py, e, None)?),
         }
     }
 
@@ -150,7 +278,10 @@ impl PySimulator {
         let names = sim.columns().to_vec();
         let row = match sim.row() {
             Ok(r) => r.to_vec(),
-            Err(e) => return Err(error(py, e, None)?),
+            Err(e) => {
+                drop(sim);
+                return Err(self.take_raised().map_or_else(|| error(py, e, None), Ok)?);
+            }
         };
         let d = PyDict::new(py);
         for (name, value) in names.iter().zip(row) {

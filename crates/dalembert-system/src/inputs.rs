@@ -8,6 +8,10 @@
 //! `values[k]`. Outside any such scope (a run without inputs set, a check, another thread) every
 //! input reads 0, the value an input has before its first set. Scopes nest: the inner one's values
 //! are seen inside it, the outer one's again after it.
+//!
+//! Forces computed by the caller's code (a Rust closure, a Python function) reach the model the
+//! same way: a model's code-force element `k` asks [`code_force`] for its wrench, which calls the
+//! function lent by the innermost [`with_code_forces`] scope (a zero wrench outside every scope).
 
 use std::cell::Cell;
 use std::marker::PhantomData;
@@ -59,6 +63,77 @@ pub fn input_value(k: usize) -> f64 {
     })
 }
 
+/// The motion of one body at a stage, global components: what a code force is computed from. A
+/// planar body moves in the x–y plane (`position[2] = 0`, rotation about z by its angle,
+/// `angular_velocity = [0, 0, ω]`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct BodyMotion {
+    /// Centre of mass.
+    pub position: [f64; 3],
+    /// Rotation matrix, body frame to global frame (rows).
+    pub rotation: [[f64; 3]; 3],
+    /// Velocity of the centre of mass.
+    pub velocity: [f64; 3],
+    /// Angular velocity.
+    pub angular_velocity: [f64; 3],
+}
+
+/// A force at a body's centre of mass and a torque, global components (a planar body takes
+/// `force[0]`, `force[1]` and `torque[2]`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Wrench {
+    /// Force (N).
+    pub force: [f64; 3],
+    /// Torque (N m).
+    pub torque: [f64; 3],
+}
+
+/// The function a run lends its code forces through: element index, time, the body's motion.
+pub type CodeForceFn<'a> = dyn Fn(usize, f64, &BodyMotion) -> Wrench + 'a;
+
+thread_local! {
+    /// The code forces of the innermost [`with_code_forces`] scope on this thread.
+    static CODE: Cell<Option<*const CodeForceFn<'static>>> = const { Cell::new(None) };
+}
+
+/// Restores the enclosing scope's code forces when a scope ends, also by a panic.
+struct CodeScope<'a> {
+    previous: Option<*const CodeForceFn<'static>>,
+    _forces: PhantomData<&'a CodeForceFn<'a>>,
+}
+
+impl Drop for CodeScope<'_> {
+    fn drop(&mut self) {
+        CODE.with(|c| c.set(self.previous));
+    }
+}
+
+/// Runs `f` with code-force element `k` computed by `forces(k, t, motion)` on this thread.
+pub fn with_code_forces<R>(forces: &CodeForceFn<'_>, f: impl FnOnce() -> R) -> R {
+    let ptr: *const CodeForceFn<'_> = forces;
+    // SAFETY: only the lifetime bound of the trait object is erased; the pointer is read only
+    // while this scope lives (`code_force` runs inside `f`, and `CodeScope` puts the enclosing
+    // scope's pointer back when `f` returns or unwinds), during which `forces` is borrowed.
+    let ptr: *const CodeForceFn<'static> = unsafe { std::mem::transmute(ptr) };
+    let previous = CODE.with(|c| c.replace(Some(ptr)));
+    let _scope = CodeScope {
+        previous,
+        _forces: PhantomData,
+    };
+    f()
+}
+
+/// The wrench of code-force element `k` at time `t` for a body moving as `motion`: the innermost
+/// [`with_code_forces`] scope's function, or zero outside every scope.
+pub fn code_force(k: usize, t: f64, motion: &BodyMotion) -> Wrench {
+    match CODE.with(|c| c.get()) {
+        // SAFETY: set by `with_code_forces` from a reference borrowed for the whole scope and
+        // replaced when the scope ends (see there), so the function is alive here.
+        Some(ptr) => unsafe { (*ptr)(k, t, motion) },
+        None => Wrench::default(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -78,6 +153,15 @@ mod tests {
             assert_eq!(input_value(0), 1.5, "the panic left the outer scope's values");
         });
         assert_eq!(input_value(0), 0.0);
+        // Code forces: seen inside their scope only.
+        let motion = BodyMotion::default();
+        assert_eq!(code_force(0, 0.0, &motion), Wrench::default());
+        let push = |k: usize, t: f64, _: &BodyMotion| Wrench {
+            force: [k as f64 + t, 0.0, 0.0],
+            torque: [0.0; 3],
+        };
+        with_code_forces(&push, || assert_eq!(code_force(2, 0.5, &motion).force[0], 2.5));
+        assert_eq!(code_force(2, 0.5, &motion), Wrench::default());
         // Another thread sees none of this thread's values.
         with_inputs(&outer, || {
             assert_eq!(std::thread::spawn(|| input_value(0)).join().unwrap(), 0.0);

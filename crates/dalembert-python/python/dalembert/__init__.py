@@ -15,7 +15,7 @@ arrays, and ``sweep`` runs many variants of a scene on all local cores or on any
 ``IntegrationError`` with the command line's one-line messages.
 """
 
-from ._dalembert import IntegrationError, Run, Scene, SceneError, Simulator, __version__
+from ._dalembert import BodyMotion, IntegrationError, Run, Scene, SceneError, Simulator, __version__
 from ._sweep import SweepResult, sweep
 
-__all__ = ["Scene", "Run", "Simulator", "SceneError", "IntegrationError", "sweep", "SweepResult", "__version__"]
+__all__ = ["Scene", "Run", "Simulator", "BodyMotion", "SceneError", "IntegrationError", "sweep", "SweepResult", "__version__"]
