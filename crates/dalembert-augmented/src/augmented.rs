@@ -3,10 +3,9 @@
 use crate::diagnosis::{diagnose, independent_rows};
 use crate::redundant::{checked_solve, Independent};
 use dalembert_system::linalg::SaddlePoint;
-use dalembert_system::tree::Articulated;
 use dalembert_system::{
-    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
-    MultibodySystem, RedundancyTreatment,
+    Baumgarte, ConstraintValues, Data, DynamicsError, Formulation, FormulationStats, MultibodySystem,
+    RedundancyTreatment, Stage,
 };
 use std::sync::Arc;
 
@@ -50,21 +49,13 @@ pub struct Augmented {
     model: Arc<dyn MultibodySystem>,
     options: AugmentedOptions,
     solver: SaddlePoint,
-    mass: BlockDiagonal,
-    mass_loaded: bool,
-    values: ConstraintValues,
-    /// The state `values` hold (the monitor's evaluation reused by the next step's first stage).
-    evaluated_at: EvaluatedAt,
-    q_e: Vec<f64>,
-    cdot: Vec<f64>,
+    /// `M`, `Q`, the constraint values and the right-hand side (the stages before the solve).
+    data: Data,
     x: Vec<f64>,
     b: Vec<f64>,
     r: Vec<f64>,
     /// The independent equations of a redundant system (minimum-norm treatment), once found.
     independent: Option<Independent>,
-    /// A tree in joint coordinates without constraint equations, under `Backend::Auto`: `M q̈ = Q`
-    /// solved by the articulated-body algorithm.
-    articulated: Option<Articulated>,
     stats: FormulationStats,
 }
 
@@ -82,11 +73,13 @@ impl Augmented {
     pub fn new(model: Arc<dyn MultibodySystem>, options: AugmentedOptions) -> Result<Self, DynamicsError> {
         let n = model.layout().n_v();
         let m = model.num_equations();
-        let mut mass = model.mass_storage();
-        model.mass(&model.reference_positions(), &mut mass);
+        // A tree in joint coordinates without constraint equations, under `Backend::Auto`:
+        // `M q̈ = Q` solved by the articulated-body algorithm.
+        let mut data = Data::new(&*model, options.backend == Backend::Auto);
+        model.mass(&model.reference_positions(), &mut data.mass);
         let solver = SaddlePoint::new(
             options.backend,
-            &mass,
+            &data.mass,
             model.mass_is_constant(),
             model.constraints(),
             options.dense_limit,
@@ -97,20 +90,11 @@ impl Augmented {
             what: e.to_string(),
         })?;
         Ok(Augmented {
-            mass,
-            mass_loaded: false,
-            values: model.constraints().values(),
-            evaluated_at: EvaluatedAt::new(model.layout().n_q(), model.layout().n_v()),
-            q_e: vec![0.0; n],
-            cdot: vec![0.0; m],
+            data,
             x: vec![0.0; n + m],
             b: vec![0.0; n + m],
             r: vec![0.0; n + m],
             independent: None,
-            articulated: match options.backend {
-                Backend::Auto => Articulated::for_system(&*model),
-                _ => None,
-            },
             solver,
             options,
             model,
@@ -130,7 +114,7 @@ impl Augmented {
 
     /// The constraint values of the last evaluation (`C`, `C_q`, `C_t`, `Q_d`).
     pub fn values(&self) -> &ConstraintValues {
-        &self.values
+        &self.data.values
     }
 
     /// Factors and solves `K x = b` (b in `self.b`), checking the residual. On success `self.x` holds
@@ -144,8 +128,8 @@ impl Augmented {
         self.stats.factorizations += 1;
         if let Some(ind) = &mut self.independent {
             if ind.solve(
-                &self.mass,
-                &self.values,
+                &self.data.mass,
+                &self.data.values,
                 &self.b,
                 &mut self.x,
                 self.options.residual_tolerance,
@@ -154,10 +138,13 @@ impl Augmented {
             }
             self.independent = None;
         }
-        if self.solver.factor(&self.mass, sys.pattern(), &self.values).is_ok()
+        if self
+            .solver
+            .factor(&self.data.mass, sys.pattern(), &self.data.values)
+            .is_ok()
             && checked_solve(
                 &mut self.solver,
-                (&self.mass, sys.pattern(), &self.values),
+                (&self.data.mass, sys.pattern(), &self.data.values),
                 &self.b,
                 (&mut self.x, &mut self.r),
                 self.options.residual_tolerance,
@@ -168,16 +155,16 @@ impl Augmented {
         match self.options.redundancy {
             RedundancyTreatment::MinimumNorm => {
                 let n = self.model.layout().n_v();
-                let rows = independent_rows(t, &*self.model, &self.mass, &self.values, &self.b, n)?;
-                let mut ind = Independent::new(&*self.model, &self.mass, rows, &self.options).map_err(|e| {
+                let rows = independent_rows(t, &*self.model, &self.data.mass, &self.data.values, &self.b, n)?;
+                let mut ind = Independent::new(&*self.model, &self.data.mass, rows, &self.options).map_err(|e| {
                     DynamicsError::Factorization {
                         time: t,
                         what: e.to_string(),
                     }
                 })?;
                 if !ind.solve(
-                    &self.mass,
-                    &self.values,
+                    &self.data.mass,
+                    &self.data.values,
                     &self.b,
                     &mut self.x,
                     self.options.residual_tolerance,
@@ -189,23 +176,18 @@ impl Augmented {
                 self.independent = Some(ind);
                 Ok(())
             }
-            RedundancyTreatment::Error => Err(diagnose(t, &*self.model, &self.values, self.options.pivot_tolerance)),
+            RedundancyTreatment::Error => Err(diagnose(
+                t,
+                &*self.model,
+                &self.data.values,
+                self.options.pivot_tolerance,
+            )),
         }
     }
 
     /// Evaluates `M`, `Q_e` and the constraints at `(t, q, q̇)` into the workspaces.
     fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
-        self.model.check_state(t, q, qd)?;
-        if !(self.mass_loaded && self.model.mass_is_constant()) {
-            self.model.mass(q, &mut self.mass);
-            self.mass_loaded = true;
-        }
-        self.model.applied_forces(t, q, qd, &mut self.q_e);
-        self.model.check_forces(t, q, qd, &self.q_e)?;
-        self.evaluated_at
-            .evaluate(self.model.constraints(), t, q, qd, &mut self.values);
-        self.model.constraints().check_values(t, &self.values)?;
-        Ok(())
+        self.data.load(&*self.model, t, q, qd)
     }
 }
 
@@ -228,19 +210,13 @@ impl Formulation for Augmented {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
-        self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
-        if let Some(tree) = &mut self.articulated {
-            return tree.solve(&*self.model, t, q, qd, qdd);
+        if self.data.start(&*self.model, t, q, qd, baumgarte, qdd, lambda)? == Stage::Solved {
+            return Ok(());
         }
-        self.load(t, q, qd)?;
         let n = qd.len();
-        let sys = self.model.constraints();
-        if baumgarte.is_some() {
-            sys.velocity_residual(&self.values, qd, &mut self.cdot);
-        }
         let (bt, bb) = self.b.split_at_mut(n);
-        bt.copy_from_slice(&self.q_e);
-        Baumgarte::apply(baumgarte, &self.values.gamma, &self.values.c, &self.cdot, bb);
+        bt.copy_from_slice(&self.data.q_e);
+        bb.copy_from_slice(&self.data.rhs);
         self.factor_and_solve(t)?;
         qdd.copy_from_slice(&self.x[..n]);
         lambda.copy_from_slice(&self.x[n..]);
@@ -251,8 +227,7 @@ impl Formulation for Augmented {
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
-        self.evaluated_at
-            .residuals(self.model.constraints(), (t, q, qd), &mut self.values, c, cdot);
+        self.data.residuals(&*self.model, (t, q, qd), c, cdot);
     }
 
     /// Mass-weighted projection with the same saddle-point matrix:
@@ -264,7 +239,7 @@ impl Formulation for Augmented {
         let mut iterations = 0;
         loop {
             self.load(t, q, qd)?;
-            let res = self.values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let res = self.data.values.c.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             if res <= tolerance {
                 break;
             }
@@ -272,7 +247,7 @@ impl Formulation for Augmented {
                 let sys = self.model.constraints();
                 return Err(dalembert_system::ConstraintError::not_converged(
                     sys,
-                    &self.values.c,
+                    &self.data.values.c,
                     t,
                     iterations,
                     tolerance,
@@ -280,7 +255,7 @@ impl Formulation for Augmented {
                 .into());
             }
             self.b[..n].iter_mut().for_each(|v| *v = 0.0);
-            for (bi, ci) in self.b[n..].iter_mut().zip(&self.values.c) {
+            for (bi, ci) in self.b[n..].iter_mut().zip(&self.data.values.c) {
                 *bi = -ci;
             }
             self.factor_and_solve(t)?;
@@ -289,9 +264,9 @@ impl Formulation for Augmented {
         }
         self.stats.newton_iterations += iterations as u64;
         let sys = self.model.constraints();
-        sys.velocity_residual(&self.values, qd, &mut self.cdot);
+        sys.velocity_residual(&self.data.values, qd, &mut self.data.cdot);
         self.b[..n].iter_mut().for_each(|v| *v = 0.0);
-        for (bi, ci) in self.b[n..].iter_mut().zip(&self.cdot) {
+        for (bi, ci) in self.b[n..].iter_mut().zip(&self.data.cdot) {
             *bi = -ci;
         }
         self.factor_and_solve(t)?;

@@ -21,10 +21,9 @@
 use dalembert_system::linalg::{DenseCholesky, DenseLu};
 use dalembert_system::minimum_norm::{scatter_minimum_norm, MinimumNorm};
 use dalembert_system::partition::{Partition, Repartition};
-use dalembert_system::tree::Articulated;
 use dalembert_system::{
-    Baumgarte, BlockDiagonal, ConstraintValues, DynamicsError, EvaluatedAt, Formulation, FormulationStats,
-    MultibodySystem, PartitionTracker, RedundancyTreatment,
+    Baumgarte, Data, DynamicsError, Formulation, FormulationStats, MultibodySystem, PartitionTracker,
+    RedundancyTreatment, Stage,
 };
 use std::sync::Arc;
 
@@ -69,20 +68,14 @@ pub struct Embedding {
     model: Arc<dyn MultibodySystem>,
     options: EmbeddingOptions,
     tracker: PartitionTracker,
-    mass: BlockDiagonal,
-    values: ConstraintValues,
-    /// The state `values` hold (the monitor's evaluation reused by the next step's first stage).
-    evaluated_at: EvaluatedAt,
-    q_e: Vec<f64>,
-    cdot: Vec<f64>,
-    rhs: Vec<f64>,
+    /// `M`, `Q`, the constraint values and the right-hand side (the stages before the solve; a
+    /// tree in joint coordinates without constraint equations, `M q̈ = Q` with `B_i = I`, is
+    /// solved there by the articulated-body algorithm).
+    data: Data,
     stats: FormulationStats,
     /// The minimum-norm multipliers of a redundant system, for the current independent equations.
     minimum_norm: Option<MinimumNorm>,
     work: Work,
-    /// A tree in joint coordinates without constraint equations: `M q̈ = Q` (`B_i = I`) solved by
-    /// the articulated-body algorithm.
-    articulated: Option<Articulated>,
 }
 
 /// Storage of one evaluation, sized for a partition with `ni` independent coordinates (rebuilt only
@@ -144,16 +137,8 @@ impl Embedding {
         }
         // Without the hand-over (its setup failed) coordinate partitioning projects everywhere.
         let _ = tracker.set_up_handover(&*model);
-        let n = model.layout().n_v();
-        let m = model.num_equations();
         Embedding {
-            articulated: Articulated::for_system(&*model),
-            mass: model.mass_storage(),
-            values: model.constraints().values(),
-            evaluated_at: EvaluatedAt::new(model.layout().n_q(), model.layout().n_v()),
-            q_e: vec![0.0; n],
-            cdot: vec![0.0; m],
-            rhs: vec![0.0; m],
+            data: Data::new(&*model, true),
             tracker,
             options,
             model,
@@ -177,17 +162,6 @@ impl Embedding {
     pub fn repartitions(&self) -> &[Repartition] {
         &self.tracker.log
     }
-
-    fn load(&mut self, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
-        self.model.check_state(t, q, qd)?;
-        self.model.mass(q, &mut self.mass);
-        self.model.applied_forces(t, q, qd, &mut self.q_e);
-        self.model.check_forces(t, q, qd, &self.q_e)?;
-        self.evaluated_at
-            .evaluate(self.model.constraints(), t, q, qd, &mut self.values);
-        self.model.constraints().check_values(t, &self.values)?;
-        Ok(())
-    }
 }
 
 impl Formulation for Embedding {
@@ -209,17 +183,11 @@ impl Formulation for Embedding {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         self.stats.evaluations += 1;
-        self.model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
-        if let Some(tree) = &mut self.articulated {
-            return tree.solve(&*self.model, t, q, qd, qdd);
+        if self.data.start(&*self.model, t, q, qd, baumgarte, qdd, lambda)? == Stage::Solved {
+            return Ok(());
         }
-        self.load(t, q, qd)?;
         let sys = self.model.constraints();
         let n = qd.len();
-        if baumgarte.is_some() {
-            sys.velocity_residual(&self.values, qd, &mut self.cdot);
-        }
-        Baumgarte::apply(baumgarte, &self.values.gamma, &self.values.c, &self.cdot, &mut self.rhs);
         let before = self.tracker.log.len();
         let m = sys.num_equations();
         let model = Arc::clone(&self.model);
@@ -227,15 +195,15 @@ impl Formulation for Embedding {
         let Embedding {
             tracker,
             work,
-            mass,
-            q_e,
-            values,
+            data,
             options,
             stats,
-            rhs,
             minimum_norm,
             ..
         } = self;
+        let Data {
+            mass, q_e, values, rhs, ..
+        } = data;
         let transformed = tracker.transform(t, sys, values, rhs).is_some();
         stats.repartitions += (tracker.log.len() - before) as u64;
         let (true, Some((partition, vt))) = (transformed, tracker.last()) else {
@@ -323,8 +291,7 @@ impl Formulation for Embedding {
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
-        self.evaluated_at
-            .residuals(self.model.constraints(), (t, q, qd), &mut self.values, c, cdot);
+        self.data.residuals(&*self.model, (t, q, qd), c, cdot);
     }
 
     /// Coordinate partitioning (`PartitionTracker::project`): independent coordinates held,
@@ -332,9 +299,15 @@ impl Formulation for Embedding {
     /// singular positions, where no partition is well conditioned, the mass-orthogonal projection
     /// (`PartitionTracker::project_or_hand_over`, counted in `FormulationStats::handovers`).
     fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
-        self.evaluated_at.invalidate();
-        self.tracker
-            .project_or_hand_over(t, &*self.model, &mut self.values, (q, qd), tolerance, &mut self.stats)
+        self.data.invalidate();
+        self.tracker.project_or_hand_over(
+            t,
+            &*self.model,
+            &mut self.data.values,
+            (q, qd),
+            tolerance,
+            &mut self.stats,
+        )
     }
 
     fn stats(&self) -> FormulationStats {
