@@ -45,6 +45,6 @@ pub use mechanism::Mechanism;
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError, SceneValue};
 pub use simulation::{
-    energy_warning, Coordinates, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION,
+    energy_warning, Coordinates, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION, FORMULATIONS,
 };
 pub use simulator::{Moved, Simulator, SimulatorError};

@@ -1,55 +1,90 @@
 //! A model, a formulation and an integrator, run together.
 
 use crate::mechanism::Mechanism;
-use dalembert_amalgamated::Amalgamated;
-use dalembert_augmented::{Augmented, AugmentedOptions};
 use dalembert_constraints::structure::dense_fits;
 use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, RedundancyTreatment};
-use dalembert_embedding::{Embedding, EmbeddingOptions};
 use dalembert_integrators::{
     integrate_cancellable, IntegrationError, IntegrationFailure, IntegratorOptions, Sample, Statistics,
 };
-use dalembert_system::{ModelError, MultibodySystem};
+use dalembert_system::{FormulationEntry, FormulationSettings, ModelError, MultibodySystem};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use thiserror::Error;
 
-/// Which formulation of the equations of motion to use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum FormulationKind {
+/// The registry of formulations: every place that offers a choice of formulation (scenes, the
+/// command line, Python, `dalembert trade`, the tests that run every formulation) reads it. A new
+/// formulation is a crate that implements [`Formulation`] and defines its
+/// [`FormulationEntry`], plus one line here.
+pub const FORMULATIONS: [&FormulationEntry; 3] = [
+    &dalembert_augmented::ENTRY,
+    &dalembert_embedding::ENTRY,
+    &dalembert_amalgamated::ENTRY,
+];
+
+/// Which formulation of the equations of motion to use: an entry of [`FORMULATIONS`].
+#[derive(Clone, Copy)]
+pub struct FormulationKind(&'static FormulationEntry);
+
+#[allow(non_upper_case_globals)]
+impl FormulationKind {
     /// Lagrange multipliers, saddle-point system (`docs/equations.md` §3).
-    #[default]
-    Augmented,
+    pub const Augmented: FormulationKind = FormulationKind(&dalembert_augmented::ENTRY);
     /// Velocity transformation, one equation per degree of freedom (§4–§5); with projection it is
     /// coordinate partitioning.
-    Embedding,
+    pub const Embedding: FormulationKind = FormulationKind(&dalembert_embedding::ENTRY);
     /// One symmetric system in accelerations, constraint forces and independent accelerations (§6).
-    Amalgamated,
+    pub const Amalgamated: FormulationKind = FormulationKind(&dalembert_amalgamated::ENTRY);
+}
+
+impl PartialEq for FormulationKind {
+    fn eq(&self, other: &Self) -> bool {
+        self.0.name == other.0.name
+    }
+}
+
+impl Eq for FormulationKind {}
+
+impl std::fmt::Debug for FormulationKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.0.name)
+    }
+}
+
+impl Default for FormulationKind {
+    /// The first of [`FORMULATIONS`] (augmented).
+    fn default() -> Self {
+        FormulationKind(FORMULATIONS[0])
+    }
 }
 
 impl FormulationKind {
-    /// Every formulation, in the order of `docs/equations.md`.
-    pub const ALL: [FormulationKind; 3] = [
-        FormulationKind::Augmented,
-        FormulationKind::Embedding,
-        FormulationKind::Amalgamated,
-    ];
-
-    /// Name used in reports and scene files: the one place the names are written.
-    pub const fn name(&self) -> &'static str {
-        match self {
-            FormulationKind::Augmented => "augmented",
-            FormulationKind::Embedding => "embedding",
-            FormulationKind::Amalgamated => "amalgamated",
+    /// Every formulation, in the order of [`FORMULATIONS`].
+    pub const ALL: [FormulationKind; FORMULATIONS.len()] = {
+        let mut all = [FormulationKind(FORMULATIONS[0]); FORMULATIONS.len()];
+        let mut k = 0;
+        while k < all.len() {
+            all[k] = FormulationKind(FORMULATIONS[k]);
+            k += 1;
         }
+        all
+    };
+
+    /// Name used in reports and scene files (the entry's).
+    pub const fn name(&self) -> &'static str {
+        self.0.name
     }
 
-    /// The names a scene or the command line may use, in the order of [`FormulationKind::ALL`].
+    /// The registry entry.
+    pub fn entry(&self) -> &'static FormulationEntry {
+        self.0
+    }
+
+    /// The names a scene or the command line may use, in the order of [`FORMULATIONS`].
     pub const NAMES: &'static [&'static str] = &{
-        let mut names = [""; 3];
+        let mut names = [""; FORMULATIONS.len()];
         let mut k = 0;
         while k < names.len() {
-            names[k] = FormulationKind::ALL[k].name();
+            names[k] = FORMULATIONS[k].name;
             k += 1;
         }
         names
@@ -282,12 +317,16 @@ impl Simulation {
         // C_q (m × n) and both store B_i by rows (n × dof) and the reduced mass matrix (dof ×
         // dof): refuse models whose dense matrices would not fit, naming the size, instead of
         // failing in the allocator.
+        let entry = self.formulation.entry();
         let (n, m) = (system.layout().n_v(), system.num_equations());
-        let too_large = match self.formulation {
-            FormulationKind::Augmented => None,
-            _ if !dense_fits(m, n) => Some((m, n)),
-            _ if !dense_fits(n, n.saturating_sub(m)) => Some((n, n - m)),
-            _ => None,
+        let too_large = if !entry.dense_partitioning {
+            None
+        } else if !dense_fits(m, n) {
+            Some((m, n))
+        } else if !dense_fits(n, n.saturating_sub(m)) {
+            Some((n, n - m))
+        } else {
+            None
         };
         if let Some((rows, cols)) = too_large {
             return Err(SimulationError::Setup(DynamicsError::Kinematics(
@@ -302,25 +341,11 @@ impl Simulation {
                 },
             )));
         }
-        let redundancy = self.redundancy;
-        Ok(match self.formulation {
-            FormulationKind::Augmented => Box::new(Augmented::new(
-                system,
-                AugmentedOptions {
-                    redundancy,
-                    ..Default::default()
-                },
-            )?),
-            FormulationKind::Embedding => Box::new(Embedding::new(
-                system,
-                EmbeddingOptions {
-                    redundancy,
-                    independent,
-                    ..Default::default()
-                },
-            )),
-            FormulationKind::Amalgamated => Box::new(Amalgamated::new(system, redundancy)),
-        })
+        let settings = FormulationSettings {
+            redundancy: self.redundancy,
+            independent,
+        };
+        Ok((entry.build)(system, &settings)?)
     }
 
     /// Runs from the current initial state, handing every output sample to `observer`.

@@ -15,12 +15,12 @@ use dalembert_testkit::mechanisms;
 use nalgebra::Vector3;
 use std::sync::Arc;
 
+/// Every registered formulation with its defaults.
 fn formulations(sys: &Arc<dyn MultibodySystem>) -> Vec<Box<dyn Formulation>> {
-    vec![
-        Box::new(Augmented::with_defaults(sys.clone()).unwrap()),
-        Box::new(Embedding::with_defaults(sys.clone())),
-        Box::new(Amalgamated::with_defaults(sys.clone())),
-    ]
+    dalembert::FORMULATIONS
+        .iter()
+        .map(|e| (e.build)(sys.clone(), &Default::default()).unwrap_or_else(|err| panic!("{}: {err}", e.name)))
+        .collect()
 }
 
 fn solve(f: &mut dyn Formulation, q: &[f64], v: &[f64]) -> (Vec<f64>, Vec<f64>) {

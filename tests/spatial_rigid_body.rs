@@ -12,9 +12,6 @@
 //!   the tilt nutates between `θ₀` and the root `u = cos θ₁` of `(Cω₃)²(u₀ − u) = 2 A_p m g l (1 − u²)`.
 //! - Spherical pendulum: energy and the vertical angular momentum about the pivot are conserved.
 
-use dalembert::amalgamated::Amalgamated;
-use dalembert::augmented::Augmented;
-use dalembert::embedding::Embedding;
 use dalembert::integrators::{integrate, IntegratorOptions, Method, Sample};
 use dalembert::spatial::euler_parameters::{from_axis_angle, rotation};
 use dalembert::spatial::{Body, BodyRef, Joint, Model, ModelBuilder};
@@ -22,13 +19,13 @@ use dalembert::system::{Formulation, MultibodySystem};
 use nalgebra::Vector3;
 use std::sync::Arc;
 
+/// Every registered formulation with its defaults.
 fn formulations(model: &Arc<Model>) -> Vec<Box<dyn Formulation>> {
     let sys: Arc<dyn MultibodySystem> = model.clone();
-    vec![
-        Box::new(Augmented::with_defaults(sys.clone()).unwrap()),
-        Box::new(Embedding::with_defaults(sys.clone())),
-        Box::new(Amalgamated::with_defaults(sys)),
-    ]
+    dalembert::FORMULATIONS
+        .iter()
+        .map(|e| (e.build)(sys.clone(), &Default::default()).unwrap_or_else(|err| panic!("{}: {err}", e.name)))
+        .collect()
 }
 
 fn run(

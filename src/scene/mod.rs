@@ -164,7 +164,7 @@ impl Scene {
                 .settings
                 .method
                 .entry()
-                .refuses(f.name(), f == crate::FormulationKind::Augmented);
+                .refuses(f.name(), f.entry().index3_augmented);
             return why.map_or(Ok(()), |w| Err(format!("invalid integrator options: {w}")));
         }
         match joint_coordinates_problem(&self.model) {

@@ -274,3 +274,12 @@ impl Formulation for Amalgamated {
         self.stats
     }
 }
+
+/// The registry entry of the amalgamated formulation.
+pub static ENTRY: dalembert_system::FormulationEntry = dalembert_system::FormulationEntry {
+    name: "amalgamated",
+    summary: "one symmetric system in accelerations, constraint forces and independent accelerations",
+    dense_partitioning: true,
+    index3_augmented: false,
+    build: |system, settings| Ok(Box::new(Amalgamated::new(system, settings.redundancy))),
+};

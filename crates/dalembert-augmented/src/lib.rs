@@ -28,3 +28,18 @@ mod redundant;
 
 pub use augmented::{Augmented, AugmentedOptions, Backend};
 pub use dalembert_system::inverse::{InverseDynamics, InverseSolution};
+
+/// The registry entry of the augmented formulation.
+pub static ENTRY: dalembert_system::FormulationEntry = dalembert_system::FormulationEntry {
+    name: "augmented",
+    summary: "Lagrange multipliers: the sparse saddle-point system [M C_qᵀ; C_q 0]",
+    dense_partitioning: false,
+    index3_augmented: true,
+    build: |system, settings| {
+        let options = AugmentedOptions {
+            redundancy: settings.redundancy,
+            ..Default::default()
+        };
+        Ok(Box::new(Augmented::new(system, options)?))
+    },
+};

@@ -314,3 +314,20 @@ impl Formulation for Embedding {
         self.stats
     }
 }
+
+/// The registry entry of the embedding formulation.
+pub static ENTRY: dalembert_system::FormulationEntry = dalembert_system::FormulationEntry {
+    name: "embedding",
+    summary:
+        "the velocity transformation: one equation per degree of freedom (with projection: coordinate partitioning)",
+    dense_partitioning: true,
+    index3_augmented: false,
+    build: |system, settings| {
+        let options = EmbeddingOptions {
+            redundancy: settings.redundancy,
+            independent: settings.independent.clone(),
+            ..Default::default()
+        };
+        Ok(Box::new(Embedding::new(system, options)))
+    },
+};

@@ -7,6 +7,7 @@
 //! construction: the methods allocate nothing.
 
 use crate::{EquationRef, MultibodySystem};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Baumgarte gains: the acceleration-level constraint equation `C_q q̈ = Q_d` becomes
@@ -63,6 +64,45 @@ impl Energy {
     /// `T + V`.
     pub fn total(&self) -> f64 {
         self.kinetic + self.potential
+    }
+}
+
+/// What a formulation is built with: the settings a run gives every formulation (each takes what
+/// applies to it).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FormulationSettings {
+    /// Redundant constraint equations: an error naming them, or minimum-norm multipliers.
+    pub redundancy: RedundancyTreatment,
+    /// Independent coordinates (velocity indices) a partitioning formulation keeps while they
+    /// stay independent; `None`: its own choice.
+    pub independent: Option<Vec<usize>>,
+}
+
+/// A formulation as the facade's registry lists it (`dalembert::FORMULATIONS`): its name in
+/// scenes, flags and reports, what it is, and its constructor. A new formulation is a crate that
+/// implements [`Formulation`] and defines its entry, plus one line in that registry.
+pub struct FormulationEntry {
+    /// Name in scenes, on the command line, in reports.
+    pub name: &'static str,
+    /// One line for help texts and the docs.
+    pub summary: &'static str,
+    /// True when it partitions the coordinates on dense matrices (`C_q`, `B_i` and the reduced
+    /// mass matrix), which the run refuses to build beyond what memory holds.
+    pub dense_partitioning: bool,
+    /// True when its equations are the augmented index-3 system an implicit method integrates
+    /// ([`Formulation::is_index3_augmented`]), known before it is built.
+    pub index3_augmented: bool,
+    /// Builds it on a system.
+    pub build: BuildFormulation,
+}
+
+/// A formulation's constructor: builds it on a system with the run's settings.
+pub type BuildFormulation =
+    fn(Arc<dyn MultibodySystem>, &FormulationSettings) -> Result<Box<dyn Formulation>, DynamicsError>;
+
+impl std::fmt::Debug for FormulationEntry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
     }
 }
 

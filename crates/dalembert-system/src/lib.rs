@@ -46,7 +46,10 @@ pub use data::{Data, Stage};
 pub use error::{ConstraintError, EquationRef};
 pub use evaluated_at::EvaluatedAt;
 pub use finite::all_finite;
-pub use formulation::{Baumgarte, DynamicsError, Energy, Formulation, FormulationStats, RedundancyTreatment};
+pub use formulation::{
+    Baumgarte, DynamicsError, Energy, Formulation, FormulationEntry, FormulationSettings, FormulationStats,
+    RedundancyTreatment,
+};
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use layout::{BodyBlock, Layout};
 pub use model_error::ModelError;
