@@ -11,9 +11,9 @@
 //! `cargo bench --bench chain3d_budget` (about 10 s); `ANCHORS_MUJOCO_RK4_S=0.645 cargo bench …`.
 
 use dalembert::augmented::Augmented;
-use dalembert::constraints::Formulation;
 use dalembert::integrators::{integrate, IntegratorOptions, Method};
 use dalembert::system::linalg::{Backend, SaddlePoint};
+use dalembert::system::Formulation;
 use dalembert::system::{BlockDiagonal, ConstraintSet, MultibodySystem};
 use std::hint::black_box;
 use std::time::Instant;

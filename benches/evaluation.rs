@@ -8,9 +8,9 @@
 use criterion::{BenchmarkId, Criterion};
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
-use dalembert::constraints::Formulation;
-use dalembert::constraints::MultibodySystem as _;
 use dalembert::embedding::Embedding;
+use dalembert::system::Formulation;
+use dalembert::system::MultibodySystem as _;
 use dalembert_testkit::closed_form::DoublePendulum;
 use dalembert_testkit::mechanisms::{self, Mechanism};
 use std::hint::black_box;

@@ -21,8 +21,8 @@
 //! ```
 
 use dalembert::augmented::Augmented;
-use dalembert::constraints::Formulation;
 use dalembert::integrators::{integrate, IntegratorOptions, Method, Stabilization};
+use dalembert::system::Formulation;
 use dalembert::system::MultibodySystem;
 use dalembert_testkit::anchors::state_errors;
 use dalembert_testkit::{mechanisms, spatial};

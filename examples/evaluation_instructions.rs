@@ -13,8 +13,8 @@
 //! formulations `augmented`, `embedding`, `amalgamated`.
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
-use dalembert::constraints::Formulation;
 use dalembert::embedding::Embedding;
+use dalembert::system::Formulation;
 use std::hint::black_box;
 
 fn main() {

@@ -5,10 +5,10 @@
 //!
 //! Run: `cargo run --release --example four_bar`
 
-use dalembert::constraints::ConstraintSet as _;
 use dalembert::constraints::{Constraint, Model, Reaction, Revolute};
 use dalembert::integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};
+use dalembert::system::ConstraintSet as _;
 use dalembert::{FormulationKind, Simulation};
 use dalembert_testkit::anchors::{state_errors, FOURBAR_1S};
 use std::sync::Arc;

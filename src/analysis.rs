@@ -7,8 +7,9 @@ use crate::output::{Recorder, Rows, Table};
 use crate::simulation::SimulationError;
 use crate::{Mechanism, Scene};
 use dalembert_augmented::InverseDynamics;
-use dalembert_constraints::{ConstraintRole, DynamicsError, KinematicOptions, RedundancyTreatment};
+use dalembert_constraints::ConstraintRole;
 use dalembert_integrators::{Sample, Statistics};
+use dalembert_system::{DynamicsError, KinematicOptions, RedundancyTreatment};
 use std::sync::atomic::AtomicBool;
 
 /// What [`Scene::check`] finds: the structure of the constraints at the assembled configuration,

@@ -48,7 +48,7 @@ impl ForceElement for PlanarCodeForce {
         add_torque(self.body, w.torque[2], q_e);
     }
 
-    fn validate(&self, bodies: usize) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self, bodies: usize) -> Result<(), dalembert_system::ModelError> {
         check_body(&self.name, self.body, bodies)
     }
 

@@ -8,7 +8,7 @@
 //! |---|---|
 //! | [`system`] | the seam: how formulations and integrators see any multibody system; the linear-algebra layer |
 //! | [`kinematics`] | planar bodies, coordinates, point kinematics, mass matrix, applied forces, time functions |
-//! | [`constraints`] | planar joints, drivers, `C`, `C_q`, `C_t`, `Q_d`, reactions (structure and kinematic analysis re-exported from the seam) |
+//! | [`constraints`] | planar joints, drivers, `C`, `C_q`, `C_t`, `Q_d`, reactions (structure and kinematic analysis are the seam's: [`system`]) |
 //! | [`spatial`] | spatial bodies (Euler parameters, body-frame angular velocity), the spatial joint set, forces |
 //! | [`augmented`] | the augmented (Lagrange multiplier) formulation, reactions, inverse dynamics |
 //! | [`embedding`] | the embedding (velocity transformation) formulation, coordinate partitioning |

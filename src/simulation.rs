@@ -1,11 +1,11 @@
 //! A model, a formulation and an integrator, run together.
 
 use crate::mechanism::Mechanism;
-use dalembert_constraints::structure::dense_fits;
-use dalembert_constraints::{ConstraintError, DynamicsError, Formulation, KinematicOptions, RedundancyTreatment};
 use dalembert_integrators::{
     integrate_cancellable, IntegrationError, IntegrationFailure, IntegratorOptions, Sample, Statistics,
 };
+use dalembert_system::structure::dense_fits;
+use dalembert_system::{ConstraintError, DynamicsError, Formulation, KinematicOptions, RedundancyTreatment};
 use dalembert_system::{FormulationEntry, FormulationSettings, ModelError, MultibodySystem};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;

@@ -52,10 +52,10 @@
 use crate::output::Rows;
 use crate::scene::unknown_name;
 use crate::simulation::{Coordinates, Simulation, SimulationError};
-use dalembert_constraints::{ConstraintError, Formulation, KinematicOptions};
 use dalembert_integrators::{Integration, IntegrationFailure, Sample, Statistics};
 use dalembert_system::inputs::{with_code_forces, with_inputs, BodyMotion, Wrench};
 use dalembert_system::Shortest;
+use dalembert_system::{ConstraintError, Formulation, KinematicOptions};
 use std::cell::RefCell;
 use std::sync::atomic::AtomicBool;
 use thiserror::Error;

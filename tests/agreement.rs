@@ -19,18 +19,19 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
-use dalembert::constraints::{Formulation, Reaction};
+use dalembert::constraints::Reaction;
 use dalembert::embedding::{Embedding, EmbeddingOptions, Multipliers};
+use dalembert::system::Formulation;
+use dalembert::system::{ConstraintSet as _, MultibodySystem as _};
 use dalembert_testkit::generator::{build, BodySpec, LoopSpec, Spec, SpringSpec};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 use proptest::prelude::*;
 
 /// The augmented formulation on `backend`.
 fn augmented(
-    m: &std::sync::Arc<dyn dalembert::constraints::MultibodySystem>,
+    m: &std::sync::Arc<dyn dalembert::system::MultibodySystem>,
     backend: Backend,
-) -> Result<Augmented, dalembert::constraints::DynamicsError> {
+) -> Result<Augmented, dalembert::system::DynamicsError> {
     Augmented::new(
         m.clone(),
         AugmentedOptions {
@@ -42,13 +43,13 @@ fn augmented(
 
 /// The augmented formulation on `backend`, or on the dense LU where that back end cannot run (the
 /// Schur complements and the tree need positive mass and inertia everywhere).
-fn augmented_or_dense(m: &std::sync::Arc<dyn dalembert::constraints::MultibodySystem>, backend: Backend) -> Augmented {
+fn augmented_or_dense(m: &std::sync::Arc<dyn dalembert::system::MultibodySystem>, backend: Backend) -> Augmented {
     augmented(m, backend).or_else(|_| augmented(m, Backend::Dense)).unwrap()
 }
 
 fn formulations(mech: &Mechanism) -> Vec<Box<dyn Formulation>> {
     let m = mech.model.clone();
-    let sys: std::sync::Arc<dyn dalembert::constraints::MultibodySystem> = m.clone();
+    let sys: std::sync::Arc<dyn dalembert::system::MultibodySystem> = m.clone();
     vec![
         Box::new(augmented(&sys, Backend::Dense).unwrap()),
         Box::new(augmented(&sys, Backend::Sparse).unwrap()),
@@ -80,7 +81,7 @@ const NAMES: [&str; 8] = [
 
 /// The 2-norm condition number of `D K D`, `K = [M C_qᵀ; C_q 0]`, `D` = `M_ii^-1/2` on the velocities
 /// and the inverse norm of each row of `C_q M^-1/2` on the equations (see the module doc).
-fn equilibrated_condition(mech: &Mechanism, vals: &dalembert::constraints::ConstraintValues) -> f64 {
+fn equilibrated_condition(mech: &Mechanism, vals: &dalembert::system::ConstraintValues) -> f64 {
     let sys = mech.model.constraints();
     let (n, m) = (mech.q.len(), mech.model.num_equations());
     let mut mass = mech.model.mass_storage();
@@ -270,7 +271,7 @@ fn larger_models_agree_on_the_sparse_paths() {
 }
 
 /// A system shared by the formulations under test.
-type SharedSystem = std::sync::Arc<dyn dalembert::constraints::MultibodySystem>;
+type SharedSystem = std::sync::Arc<dyn dalembert::system::MultibodySystem>;
 
 /// Redundant constraints under the minimum-norm treatment: the planar parallelogram with a third
 /// crank (rank 11 of 12) and Bricard's spatial loop (rank 29 of 30, a state half a second into its
@@ -282,7 +283,7 @@ type SharedSystem = std::sync::Arc<dyn dalembert::constraints::MultibodySystem>;
 /// independent sets are well conditioned; measured ≤ 1e-12).
 #[test]
 fn redundant_mechanisms_agree_on_minimum_norm_multipliers() {
-    use dalembert::constraints::RedundancyTreatment;
+    use dalembert::system::RedundancyTreatment;
     use dalembert::Scene;
     let mut states: Vec<(String, SharedSystem, Vec<f64>, Vec<f64>)> = Vec::new();
     for (phi, w) in [(-1.2, 0.5), (0.4, -2.0), (2.5, 3.0)] {

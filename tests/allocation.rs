@@ -14,9 +14,9 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert::constraints::Formulation;
 use dalembert::embedding::{Embedding, EmbeddingOptions};
 use dalembert::integrators::{integrate, Applies, IntegratorOptions, Method, Stabilization, METHODS};
+use dalembert::system::Formulation;
 use dalembert::system::{MultibodySystem, RedundancyTreatment};
 use dalembert_testkit::mechanisms;
 use std::alloc::{GlobalAlloc, Layout, System};

@@ -3,9 +3,9 @@
 //! formulation, and automatic re-partitioning when the chosen dependent block becomes singular.
 
 use dalembert::augmented::Augmented;
-use dalembert::constraints::Formulation;
 use dalembert::embedding::{Embedding, EmbeddingOptions};
 use dalembert::integrators::{integrate, IntegratorOptions, Method, Stabilization, Statistics};
+use dalembert::system::Formulation;
 use dalembert_testkit::mechanisms::{self, Mechanism};
 
 fn run(f: &mut dyn Formulation, mech: &Mechanism, t_end: f64, opts: &IntegratorOptions) -> (Vec<f64>, Statistics) {

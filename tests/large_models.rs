@@ -2,9 +2,10 @@
 //! as the dense ones, computed here independently; rank-deficient models too large for the dense
 //! fallback get an error naming the size, not an allocation panic.
 
-use dalembert::constraints::ConstraintSet as _;
-use dalembert::constraints::{Constraint, ConstraintError, KinematicOptions, Model, Revolute};
+use dalembert::constraints::{Constraint, Model, Revolute};
 use dalembert::kinematics::{BodyId, BodyRef, Vec2};
+use dalembert::system::ConstraintSet as _;
+use dalembert::system::{ConstraintError, KinematicOptions};
 use dalembert_testkit::mechanisms;
 use faer::linalg::solvers::Solve;
 use faer::Mat;
@@ -30,7 +31,7 @@ fn dense_min_norm(a: &Mat<f64>, b: &[f64]) -> Vec<f64> {
 fn sparse_velocity_analysis_is_the_minimum_norm_solution() {
     let (model, q) = chain(300); // 900 coordinates: above the sparse threshold
     let sys = model.constraints();
-    assert!(sys.num_coordinates() >= dalembert::constraints::structure::SPARSE_FROM);
+    assert!(sys.num_coordinates() >= dalembert::system::structure::SPARSE_FROM);
     let mut qd: Vec<f64> = (0..q.len()).map(|i| ((i * 31) % 17) as f64 / 17.0 - 0.5).collect();
     let qd0 = qd.clone();
     sys.solve_velocities(0.0, &q, &mut qd, &KinematicOptions::default())
@@ -75,7 +76,7 @@ fn sparse_structure_analysis_matches_the_dense_rank() {
     let s = sys.analyse_structure(&vals, 1e-9).unwrap();
     // A chain of N pinned rods has N degrees of freedom.
     assert_eq!((s.rank, s.degrees_of_freedom), (600, 300));
-    let dense = dalembert::constraints::structure::column_rank(sys.jacobian_dense(&vals).transpose(), 1e-9).0;
+    let dense = dalembert::system::structure::column_rank(sys.jacobian_dense(&vals).transpose(), 1e-9).0;
     assert_eq!(dense, s.rank);
 }
 

@@ -3,9 +3,10 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
-use dalembert::constraints::{Constraint, DynamicsError, Formulation, Gear, Model, Prismatic, Revolute, Rigid};
+use dalembert::constraints::{Constraint, Gear, Model, Prismatic, Revolute, Rigid};
 use dalembert::embedding::Embedding;
 use dalembert::kinematics::{Body, BodyId, BodyRef, Vec2};
+use dalembert::system::{DynamicsError, Formulation};
 use std::sync::Arc;
 
 /// One rod pinned to the ground: `q = [0.5, 0, 0]`.

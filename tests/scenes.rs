@@ -1,7 +1,7 @@
 //! Scene files: every shipped scene loads and runs, the example loads as written, and each
 //! kind of bad input gives a one-line error naming the file, place or element at fault.
 
-use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
+use dalembert::system::{ConstraintSet as _, MultibodySystem as _};
 use dalembert::Scene;
 
 #[test]

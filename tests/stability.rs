@@ -3,11 +3,12 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert::constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment};
-use dalembert::constraints::{ConstraintSet as _, MultibodySystem as _};
+use dalembert::constraints::{Constraint, Model};
 use dalembert::embedding::{Embedding, EmbeddingOptions};
 use dalembert::integrators::{integrate, IntegrationError, IntegratorOptions, Method, Stabilization, Statistics};
 use dalembert::kinematics::{Body, BodyId, BodyRef, Vec2};
+use dalembert::system::{ConstraintSet as _, MultibodySystem as _};
+use dalembert::system::{DynamicsError, Formulation, RedundancyTreatment};
 use dalembert_testkit::closed_form::{pendulum_angle, DoublePendulum};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 use std::sync::Arc;

@@ -15,8 +15,8 @@
 
 use dalembert::amalgamated::Amalgamated;
 use dalembert::augmented::Augmented;
-use dalembert::constraints::{Formulation, MultibodySystem, PartitionTracker};
 use dalembert::embedding::Embedding;
+use dalembert::system::{Formulation, MultibodySystem, PartitionTracker};
 use dalembert_system::partition::DENSE_LIMIT;
 use dalembert_testkit::mechanisms;
 use faer::Mat;

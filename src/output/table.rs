@@ -4,11 +4,12 @@
 //! CSV writer and the in-memory [`Table`] both use it, so a column means the same thing in a file,
 //! a numpy array and a sweep.
 
-use crate::constraints::ConstraintSet as _;
 use crate::mechanism::Mechanism;
-use dalembert_constraints::{ConstraintRole, ConstraintValues, Model, Reaction};
+use crate::system::ConstraintSet as _;
+use dalembert_constraints::{ConstraintRole, Model, Reaction};
 use dalembert_integrators::Sample;
 use dalembert_spatial::frame::Frame;
+use dalembert_system::ConstraintValues;
 
 /// The output columns of one model and the scratch space to compute a row (allocation-free after
 /// construction).

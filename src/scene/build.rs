@@ -16,9 +16,10 @@ use dalembert_constraints::{
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
-    Body, BodyId, BodyRef, BodyState, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper,
-    TimeFunction, Torque, Vec2,
+    Body, BodyId, BodyRef, BodyState, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque,
+    Vec2,
 };
+use dalembert_system::TimeFunction;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::ops::Range;

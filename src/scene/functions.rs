@@ -8,7 +8,7 @@
 //! absolute.
 
 use super::format::FunctionDef;
-use dalembert_kinematics::TimeFunction;
+use dalembert_system::TimeFunction;
 use std::cell::RefCell;
 
 /// The index of input `name` in `inputs`, added when first met.

@@ -24,7 +24,7 @@ pub use values::SceneValue;
 
 use crate::mechanism::Mechanism;
 use crate::simulation::{Simulation, SimulationError};
-use dalembert_constraints::RedundancyTreatment;
+use dalembert_system::RedundancyTreatment;
 use std::path::Path;
 
 /// The names of the redundancy treatments in scenes and on the command line.
@@ -192,10 +192,7 @@ impl Scene {
             },
             _ => return None,
         };
-        let redundant = matches!(
-            dynamics,
-            dalembert_constraints::DynamicsError::RedundantConstraints { .. }
-        );
+        let redundant = matches!(dynamics, dalembert_system::DynamicsError::RedundantConstraints { .. });
         (redundant && self.settings.redundancy == RedundancyTreatment::Error).then_some(
             "if the mechanism moves with these equations dependent (a redundant joint, as in Bricard's loop or a parallelogram with a third crank), set redundant = \"minimum-norm\" in [simulation] (--redundant minimum-norm; redundant=\"minimum-norm\" in Python): the run then solves on an independent set and shares the reactions by least norm",
         )

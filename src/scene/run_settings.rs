@@ -2,8 +2,8 @@
 //! the integrators' registry), step, output interval, stabilization.
 
 use crate::simulation::{Coordinates, FormulationKind};
-use dalembert_constraints::RedundancyTreatment;
 use dalembert_integrators::{IntegratorOptions, Method, Parameter, Stabilization, METHODS};
+use dalembert_system::RedundancyTreatment;
 
 /// Settings of the `[simulation]` table, with defaults for everything but `end`.
 #[derive(Debug, Clone, PartialEq)]

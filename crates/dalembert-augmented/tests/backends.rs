@@ -2,9 +2,10 @@
 //! sense when asked.
 
 use dalembert_augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert_constraints::{Constraint, DynamicsError, Formulation, Model, RedundancyTreatment, Revolute};
-use dalembert_constraints::{ConstraintSet as _, MultibodySystem as _};
+use dalembert_constraints::{Constraint, Model, Revolute};
 use dalembert_kinematics::{Body, BodyId, BodyRef, Gravity, Vec2};
+use dalembert_system::{ConstraintSet as _, MultibodySystem as _};
+use dalembert_system::{DynamicsError, Formulation, RedundancyTreatment};
 use dalembert_testkit::mechanisms;
 use std::sync::Arc;
 

@@ -6,8 +6,8 @@
 //! wrong term (any modelling error is O(1)).
 
 use dalembert_augmented::{Augmented, AugmentedOptions, Backend};
-use dalembert_constraints::Formulation;
-use dalembert_constraints::MultibodySystem as _;
+use dalembert_system::Formulation;
+use dalembert_system::MultibodySystem as _;
 use dalembert_testkit::closed_form::{DoublePendulum, FourBar};
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 

@@ -2,9 +2,10 @@
 //! balance.
 
 use dalembert_augmented::{Augmented, InverseDynamics};
-use dalembert_constraints::{ConstraintSet as _, MultibodySystem as _};
-use dalembert_constraints::{Formulation, KinematicOptions, Reaction};
+use dalembert_constraints::Reaction;
 use dalembert_kinematics::Vec2;
+use dalembert_system::{ConstraintSet as _, MultibodySystem as _};
+use dalembert_system::{Formulation, KinematicOptions};
 use dalembert_testkit::closed_form::DoublePendulum;
 use dalembert_testkit::mechanisms::{self, Mechanism, G};
 
@@ -78,7 +79,7 @@ fn two_link_inverse_dynamics_matches_closed_form_torques() {
     let mech = mechanisms::driven_two_link(m, l, p1.clone(), p2.clone());
     let inv = InverseDynamics::new(mech.model.clone(), &mech.q, KinematicOptions::default()).unwrap();
     let dp = DoublePendulum { m, l };
-    let poly = |c: &[f64], t: f64| dalembert_kinematics::TimeFunction::Polynomial(c.to_vec()).eval(t);
+    let poly = |c: &[f64], t: f64| dalembert_system::TimeFunction::Polynomial(c.to_vec()).eval(t);
     let mut q = mech.q.clone();
     for k in 0..=20 {
         let t = 0.1 * k as f64;

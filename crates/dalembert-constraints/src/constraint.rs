@@ -84,7 +84,7 @@ pub trait Constraint: Send + Sync + std::fmt::Debug {
     }
 
     /// Checks the constraint's own parameters (finite geometry, non-zero axes, …).
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         Ok(())
     }
 }
@@ -121,7 +121,7 @@ impl<C: Constraint + ?Sized> Constraint for std::sync::Arc<C> {
     ) -> Option<dalembert_kinematics::second_derivatives::Pair6> {
         (**self).weighted_hessian(t, first, second, lambda)
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         (**self).validate()
     }
 }

@@ -25,17 +25,7 @@ pub mod primitives;
 pub mod reactions;
 pub mod system;
 
-// The analyses written once on the system seam, under their old paths.
-pub use dalembert_system::{error, formulation, gram, kinematics, partition, sparse_pattern, structure};
-
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
-pub use dalembert_system::StructureReport;
-pub use dalembert_system::{
-    Baumgarte, ConstraintError, ConstraintSet, ConstraintValues, DynamicsError, Energy, EquationRef, Formulation,
-    FormulationStats, MultibodySystem, RedundancyTreatment,
-};
-pub use dalembert_system::{KinematicOptions, KinematicReport};
-pub use dalembert_system::{Partition, PartitionTracker, Repartition, VelocityTransform};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use model::Model;

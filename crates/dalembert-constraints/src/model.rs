@@ -2,9 +2,10 @@
 //! implementation of the system seam ([`MultibodySystem`]).
 
 use crate::system::PLANAR_LABELS;
-use crate::{Constraint, ConstraintError, ConstraintSet, ConstraintSystem};
+use crate::{Constraint, ConstraintSystem};
 use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
+use dalembert_system::{ConstraintError, ConstraintSet};
 
 /// Bodies, applied force elements and the assembled constraint system of one mechanism.
 #[derive(Debug)]

@@ -9,9 +9,10 @@
 //! the same point, for every constraint that depends only on the bodies' relative configuration).
 //! A driver's effort is `−λ`.
 
-use crate::{ConstraintRole, ConstraintSystem, ConstraintValues};
+use crate::{ConstraintRole, ConstraintSystem};
 use dalembert_kinematics::rotation::cross;
 use dalembert_kinematics::{BodyRef, BodyState, Vec2};
+use dalembert_system::ConstraintValues;
 
 /// The reaction of one constraint.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

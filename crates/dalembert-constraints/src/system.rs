@@ -1,8 +1,9 @@
 //! Assembly of all planar constraints into `C`, `C_q` (sparse, fixed pattern), `C_t` and `Q_d`: the
 //! planar implementation of the seam's [`ConstraintSet`].
 
-use crate::{Constraint, ConstraintError, ConstraintEval, EquationRef};
+use crate::{Constraint, ConstraintEval};
 use dalembert_kinematics::{BodyRef, BodyState, Coordinates};
+use dalembert_system::{ConstraintError, EquationRef};
 use dalembert_system::{ConstraintPattern, ConstraintSet, ConstraintValues, Layout};
 
 /// The planar coordinate labels of one body (positions and velocities alike: `v = q̇`).

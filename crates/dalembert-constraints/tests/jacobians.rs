@@ -9,7 +9,8 @@
 //!   relative to the size of the terms.
 
 use dalembert_constraints::*;
-use dalembert_kinematics::{BodyId, BodyRef, TimeFunction, Vec2};
+use dalembert_kinematics::{BodyId, BodyRef, Vec2};
+use dalembert_system::{ConstraintSet, TimeFunction};
 use proptest::prelude::*;
 
 fn b(i: usize) -> BodyRef {

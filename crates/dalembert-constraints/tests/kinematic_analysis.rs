@@ -2,7 +2,8 @@
 //! singular and redundant configurations.
 
 use dalembert_constraints::*;
-use dalembert_kinematics::{BodyId, BodyRef, TimeFunction, Vec2};
+use dalembert_kinematics::{BodyId, BodyRef, Vec2};
+use dalembert_system::{ConstraintError, ConstraintSet, KinematicOptions, TimeFunction};
 
 fn b(i: usize) -> BodyRef {
     BodyRef::Body(BodyId(i))

@@ -8,9 +8,9 @@
 
 use dalembert_constraints::*;
 use dalembert_kinematics::{
-    Body, BodyId, BodyRef, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, TimeFunction,
-    Torque, Vec2,
+    Body, BodyId, BodyRef, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque, Vec2,
 };
+use dalembert_system::{ConstraintSet, TimeFunction};
 use dalembert_system::{MultibodySystem, TangentPattern, TangentValues};
 use proptest::prelude::*;
 

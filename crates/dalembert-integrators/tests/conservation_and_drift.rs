@@ -5,8 +5,8 @@ mod common;
 use common::run;
 
 use dalembert_augmented::Augmented;
-use dalembert_constraints::Baumgarte;
 use dalembert_integrators::{integrate, IntegrationError, IntegratorOptions, Method, Stabilization};
+use dalembert_system::Baumgarte;
 use dalembert_testkit::closed_form::pendulum_angle;
 use dalembert_testkit::mechanisms::{self, G};
 

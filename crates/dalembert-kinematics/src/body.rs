@@ -1,6 +1,7 @@
 //! Rigid bodies and references to them.
 
-use crate::{ModelError, Vec2};
+use crate::Vec2;
+use dalembert_system::ModelError;
 
 /// Index of a moving body in the system (the ground has none).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

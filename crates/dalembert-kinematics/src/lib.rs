@@ -21,17 +21,9 @@ pub mod mass;
 pub mod point;
 pub mod rotation;
 pub mod second_derivatives;
-pub use dalembert_system::time_function;
 
 pub use body::{Body, BodyId, BodyRef};
 pub use coordinates::{BodyState, Coordinates};
-pub use dalembert_system::ModelError;
-
-/// The errors of model building (moved to the system seam; kept here under the old path).
-pub mod error {
-    pub use dalembert_system::ModelError;
-}
-pub use dalembert_system::TimeFunction;
 pub use forces::{ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque};
 pub use mass::MassMatrix;
 pub use point::PointState;

@@ -191,7 +191,7 @@ impl PyScene {
         d.set_item(
             "redundant",
             match s.redundancy {
-                dalembert::constraints::RedundancyTreatment::MinimumNorm => "minimum-norm",
+                dalembert::system::RedundancyTreatment::MinimumNorm => "minimum-norm",
                 _ => "error",
             },
         )?;

@@ -7,11 +7,13 @@
 //! and well conditioned and at least one degree of freedom remains.
 
 use crate::mechanisms::{Mechanism, G};
-use dalembert_constraints::ConstraintSet as _;
 use dalembert_constraints::{
-    Constraint, ConstraintSystem, Distance, JointAngle, KinematicOptions, Model, PointOnLine, Prismatic, Revolute,
+    Constraint, ConstraintSystem, Distance, JointAngle, Model, PointOnLine, Prismatic, Revolute,
 };
-use dalembert_kinematics::{Body, BodyId, BodyRef, ForceElement, Gravity, SpringDamper, TimeFunction, Vec2};
+use dalembert_kinematics::{Body, BodyId, BodyRef, ForceElement, Gravity, SpringDamper, Vec2};
+use dalembert_system::ConstraintSet as _;
+use dalembert_system::KinematicOptions;
+use dalembert_system::TimeFunction;
 use std::sync::Arc;
 
 /// One body of a tree, attached to an earlier body or the ground.

@@ -1,7 +1,8 @@
 //! Builders of reference mechanisms. Angles are absolute, from the global +x axis; gravity −y.
 
 use dalembert_constraints::{Constraint, JointAngle, Model, Prismatic, Revolute};
-use dalembert_kinematics::{Body, BodyId, BodyRef, ForceElement, Gravity, TimeFunction, Torque, Vec2};
+use dalembert_kinematics::{Body, BodyId, BodyRef, ForceElement, Gravity, Torque, Vec2};
+use dalembert_system::TimeFunction;
 use std::sync::Arc;
 
 /// Standard gravity used by every reference mechanism (m/s²).

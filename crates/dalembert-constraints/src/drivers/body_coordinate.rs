@@ -1,5 +1,6 @@
 use crate::{Constraint, ConstraintEval, ConstraintRole};
-use dalembert_kinematics::{BodyId, BodyRef, BodyState, TimeFunction, Vec2};
+use dalembert_kinematics::{BodyId, BodyRef, BodyState, Vec2};
+use dalembert_system::TimeFunction;
 
 /// Which coordinate of a body a [`BodyCoordinate`] driver prescribes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -83,7 +84,7 @@ impl Constraint for BodyCoordinate {
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         second.position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         self.function.validate(&format!("driver '{}'", self.name))
     }
 }

@@ -1,7 +1,8 @@
 use crate::primitives::distance;
 use crate::primitives::hessian;
 use crate::{Constraint, ConstraintEval, ConstraintRole};
-use dalembert_kinematics::{BodyRef, BodyState, PointState, TimeFunction, Vec2};
+use dalembert_kinematics::{BodyRef, BodyState, PointState, Vec2};
+use dalembert_system::TimeFunction;
 
 /// Prescribes the distance between two points: `C = |p_j − p_i| − f(t)` (a linear actuator).
 /// The effort `−λ` is the actuator force, positive when it pushes the points apart.
@@ -49,7 +50,7 @@ impl Constraint for DistanceDriver {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         self.function.validate(&format!("driver '{}'", self.name))
     }
 }

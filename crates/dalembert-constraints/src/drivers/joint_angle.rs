@@ -1,6 +1,7 @@
 use crate::primitives::relative_angle;
 use crate::{Constraint, ConstraintEval, ConstraintRole, Revolute};
-use dalembert_kinematics::{BodyRef, BodyState, TimeFunction, Vec2};
+use dalembert_kinematics::{BodyRef, BodyState, Vec2};
+use dalembert_system::TimeFunction;
 
 /// Prescribes the relative angle of a revolute joint: `C = θ_j − θ_i − f(t)`. Its effort `−λ` is
 /// the motor torque on the joint's second body (and `+λ` on the first).
@@ -60,7 +61,7 @@ impl Constraint for JointAngle {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         dalembert_kinematics::PointState::new(first, self.pin).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         self.function.validate(&format!("driver '{}'", self.name))
     }
 }

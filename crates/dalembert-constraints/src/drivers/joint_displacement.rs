@@ -1,7 +1,8 @@
 use crate::primitives::hessian;
 use crate::primitives::{line_coordinate, unit};
 use crate::{Constraint, ConstraintEval, ConstraintRole, Prismatic};
-use dalembert_kinematics::{BodyRef, BodyState, PointState, TimeFunction, Vec2};
+use dalembert_kinematics::{BodyRef, BodyState, PointState, Vec2};
+use dalembert_system::TimeFunction;
 
 /// Prescribes the displacement of a prismatic joint: `C = a_iᵀ (p_j − p_i) − f(t)` with `a_i` the
 /// unit axis in the first body. The effort `−λ` is the actuator force on the second body along the axis.
@@ -73,7 +74,7 @@ impl Constraint for JointDisplacement {
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         crate::joints::check_direction(&self.name, self.axis)?;
         self.function.validate(&format!("driver '{}'", self.name))
     }

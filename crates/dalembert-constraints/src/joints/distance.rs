@@ -66,7 +66,7 @@ impl Constraint for Distance {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let p = &self.points;
         super::check_finite(
             &self.name,
@@ -74,7 +74,7 @@ impl Constraint for Distance {
             &[p[0].x, p[0].y, p[1].x, p[1].y, self.length],
         )?;
         if self.length <= 0.0 {
-            return Err(dalembert_kinematics::ModelError::InvalidParameter {
+            return Err(dalembert_system::ModelError::InvalidParameter {
                 element: format!("joint '{}'", self.name),
                 what: format!("distance must be positive, got {}", self.length),
             });

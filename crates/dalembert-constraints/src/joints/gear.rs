@@ -64,11 +64,11 @@ impl Constraint for Gear {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         first.position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let r = &self.reference_angles;
         super::check_finite(&self.name, "ratio and angles", &[self.ratio, r[0], r[1]])?;
         if self.ratio == 0.0 {
-            return Err(dalembert_kinematics::ModelError::InvalidParameter {
+            return Err(dalembert_system::ModelError::InvalidParameter {
                 element: format!("joint '{}'", self.name),
                 what: "gear ratio must be non-zero".into(),
             });

@@ -19,7 +19,8 @@ pub use rack_pinion::RackPinion;
 pub use revolute::Revolute;
 pub use rigid::Rigid;
 
-use dalembert_kinematics::{point::local_point, BodyRef, BodyState, ModelError, Vec2};
+use dalembert_kinematics::{point::local_point, BodyRef, BodyState, Vec2};
+use dalembert_system::ModelError;
 
 /// The pose of `body` in `q`, or `None` for a body whose coordinates `q` does not hold (the
 /// model's constructor then reports the unknown body by name).

@@ -74,7 +74,7 @@ impl Constraint for PointOnLine {
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let p = &self.points;
         super::check_finite(&self.name, "points", &[p[0].x, p[0].y, p[1].x, p[1].y])?;
         super::check_direction(&self.name, self.direction)

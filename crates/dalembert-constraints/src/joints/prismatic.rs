@@ -91,7 +91,7 @@ impl Constraint for Prismatic {
     fn reaction_point(&self, _first: &BodyState, second: &BodyState) -> Vec2 {
         PointState::new(second, self.points[1]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let p = &self.points;
         super::check_finite(
             &self.name,

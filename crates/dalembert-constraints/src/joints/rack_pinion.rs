@@ -99,7 +99,7 @@ impl Constraint for RackPinion {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let p = &self.points;
         super::check_finite(
             &self.name,
@@ -116,7 +116,7 @@ impl Constraint for RackPinion {
         )?;
         super::check_direction(&self.name, self.axis)?;
         if self.radius <= 0.0 {
-            return Err(dalembert_kinematics::ModelError::InvalidParameter {
+            return Err(dalembert_system::ModelError::InvalidParameter {
                 element: format!("joint '{}'", self.name),
                 what: "pinion radius must be positive".into(),
             });

@@ -75,7 +75,7 @@ impl Constraint for Revolute {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let p = &self.points;
         super::check_finite(&self.name, "pin points", &[p[0].x, p[0].y, p[1].x, p[1].y])
     }

@@ -85,7 +85,7 @@ impl Constraint for Rigid {
     fn reaction_point(&self, first: &BodyState, _second: &BodyState) -> Vec2 {
         PointState::new(first, self.points[0]).position
     }
-    fn validate(&self) -> Result<(), dalembert_kinematics::ModelError> {
+    fn validate(&self) -> Result<(), dalembert_system::ModelError> {
         let p = &self.points;
         super::check_finite(
             &self.name,

@@ -44,7 +44,7 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
     }
 
     /// Checks that every body the element refers to exists in a model of `bodies` moving bodies.
-    fn validate(&self, _bodies: usize) -> Result<(), crate::ModelError> {
+    fn validate(&self, _bodies: usize) -> Result<(), dalembert_system::ModelError> {
         Ok(())
     }
 
@@ -86,9 +86,9 @@ pub fn add_torque(body: BodyRef, tau: f64, q_e: &mut [f64]) {
 }
 
 /// Checks a body reference against the number of moving bodies.
-pub fn check_body(element: &str, body: BodyRef, count: usize) -> Result<(), crate::ModelError> {
+pub fn check_body(element: &str, body: BodyRef, count: usize) -> Result<(), dalembert_system::ModelError> {
     match body {
-        BodyRef::Body(id) if id.0 >= count => Err(crate::ModelError::UnknownBody {
+        BodyRef::Body(id) if id.0 >= count => Err(dalembert_system::ModelError::UnknownBody {
             element: element.to_string(),
             index: id.0,
             count,

@@ -1,5 +1,6 @@
 use super::{add_point_force, check_body, ForceElement};
-use crate::{Body, BodyRef, BodyState, PointState, TimeFunction, Vec2};
+use crate::{Body, BodyRef, BodyState, PointState, Vec2};
+use dalembert_system::TimeFunction;
 
 /// A force given in global components, applied at a body-fixed point; each component a function of
 /// time (use [`TimeFunction::Constant`] for a constant force).
@@ -62,7 +63,7 @@ impl ForceElement for PointForce {
         true
     }
 
-    fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
+    fn validate(&self, bodies: usize) -> Result<(), dalembert_system::ModelError> {
         check_body(&self.name, self.body, bodies)?;
         self.fx.validate(&format!("force '{}'", self.name))?;
         self.fy.validate(&format!("force '{}'", self.name))

@@ -72,14 +72,14 @@ impl ForceElement for RotationalSpringDamper {
         Some(0.5 * self.stiffness * phi * phi)
     }
 
-    fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
+    fn validate(&self, bodies: usize) -> Result<(), dalembert_system::ModelError> {
         check_body(&self.name, self.bodies.0, bodies)?;
         check_body(&self.name, self.bodies.1, bodies)?;
         let ok = [self.stiffness, self.damping, self.free_angle]
             .iter()
             .all(|x| x.is_finite());
         if !ok || self.stiffness < 0.0 || self.damping < 0.0 {
-            return Err(crate::ModelError::InvalidParameter {
+            return Err(dalembert_system::ModelError::InvalidParameter {
                 element: format!("force '{}'", self.name),
                 what: "stiffness and damping must be finite and non-negative".into(),
             });

@@ -1,5 +1,6 @@
 use super::{add_point_force, check_body, ForceElement};
-use crate::{Body, BodyRef, BodyState, PointState, TimeFunction, Vec2};
+use crate::{Body, BodyRef, BodyState, PointState, Vec2};
+use dalembert_system::TimeFunction;
 
 /// A translational spring–damper–actuator between point `P_i` on `bodies.0` and `P_j` on `bodies.1`.
 ///
@@ -112,14 +113,14 @@ impl ForceElement for SpringDamper {
         Some(0.5 * self.stiffness * (len - self.free_length).powi(2))
     }
 
-    fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
+    fn validate(&self, bodies: usize) -> Result<(), dalembert_system::ModelError> {
         check_body(&self.name, self.bodies.0, bodies)?;
         check_body(&self.name, self.bodies.1, bodies)?;
         let ok = [self.stiffness, self.damping, self.free_length]
             .iter()
             .all(|x| x.is_finite());
         if !ok || self.stiffness < 0.0 || self.damping < 0.0 || self.free_length < 0.0 {
-            return Err(crate::ModelError::InvalidParameter {
+            return Err(dalembert_system::ModelError::InvalidParameter {
                 element: format!("force '{}'", self.name),
                 what: "stiffness, damping and free length must be finite and non-negative".into(),
             });

@@ -1,5 +1,6 @@
 use super::{add_torque, check_body, ForceElement};
-use crate::{Body, BodyRef, TimeFunction};
+use crate::{Body, BodyRef};
+use dalembert_system::TimeFunction;
 
 /// A torque `T(t)` on `body`, with the reaction `−T(t)` on `reaction_body` (the ground by default:
 /// then it is simply an external torque). Between the two bodies of a joint this is a motor.
@@ -54,7 +55,7 @@ impl ForceElement for Torque {
         true
     }
 
-    fn validate(&self, bodies: usize) -> Result<(), crate::ModelError> {
+    fn validate(&self, bodies: usize) -> Result<(), dalembert_system::ModelError> {
         check_body(&self.name, self.body, bodies)?;
         check_body(&self.name, self.reaction_body, bodies)?;
         self.value.validate(&format!("force '{}'", self.name))
