@@ -4,34 +4,14 @@
 
 use dalembert::{FormulationKind, Scene, Simulator, SimulatorError};
 
-/// A slider of mass 2 kg on a guide along x (planar), pushed by input `push`, no gravity.
+/// A slider of mass 2 kg on a guide along x (planar), pushed by input `push`, no gravity
+/// (`tests/data/pushed-slider.toml`), with the given settings.
 fn planar_slider(formulation: &str, integrator: &str, step: f64) -> Scene {
-    let text = format!(
-        r#"
-[[bodies]]
-name = "slider"
-mass = 2.0
-inertia = 0.1
-position = [0.0, 0.0]
-[[joints]]
-name = "guide"
-type = "prismatic"
-bodies = ["ground", "slider"]
-at = [0.0, 0.0]
-axis = [1.0, 0.0]
-[[forces]]
-name = "push"
-type = "force"
-body = "slider"
-fx = {{ input = "push" }}
-[simulation]
-formulation = "{formulation}"
-integrator = "{integrator}"
-step = {step}
-end = 10.0
-"#
-    );
-    Scene::from_toml(&text, "planar slider").unwrap()
+    let mut scene = Scene::from_path("tests/data/pushed-slider.toml").unwrap();
+    scene.settings.formulation = FormulationKind::parse(formulation).unwrap();
+    scene.settings.method = dalembert::integrators::Method::named(integrator).unwrap();
+    scene.settings.step = step;
+    scene
 }
 
 /// The same slider in a spatial scene (guide along x, force component `fx` an input).
@@ -304,54 +284,15 @@ fn set_state_assembles_and_reset_restarts() {
     assert_eq!(snapshot(&sim), first, "after reset the run is the first one again");
 }
 
-/// A body on a revolute pin at its centre (planar, or spatial about z), no gravity: a torque
-/// from code `τ = −k θ − c ω` and a force from code that the pin carries.
+/// A body on a revolute pin at its centre (planar, or spatial about z), no gravity, with a force
+/// element computed by code (`tests/data/wheel.toml`, `wheel-3d.toml`).
 fn pinned(spatial: bool) -> Scene {
-    let text = if spatial {
-        r#"
-[scene]
-gravity = [0.0, 0.0, 0.0]
-[[bodies]]
-name = "wheel"
-mass = 3.0
-inertia = [0.5, 0.5, 0.5]
-position = [0.0, 0.0, 0.0]
-[[joints]]
-name = "pin"
-type = "revolute"
-bodies = ["ground", "wheel"]
-at = [0.0, 0.0, 0.0]
-axis = [0.0, 0.0, 1.0]
-[[forces]]
-name = "controller"
-type = "code"
-body = "wheel"
-[simulation]
-integrator = "rk4"
-step = 1e-3
-"#
+    let path = if spatial {
+        "tests/data/wheel-3d.toml"
     } else {
-        r#"
-[[bodies]]
-name = "wheel"
-mass = 3.0
-inertia = 0.5
-position = [0.0, 0.0]
-[[joints]]
-name = "pin"
-type = "revolute"
-bodies = ["ground", "wheel"]
-at = [0.0, 0.0]
-[[forces]]
-name = "controller"
-type = "code"
-body = "wheel"
-[simulation]
-integrator = "rk4"
-step = 1e-3
-"#
+        "tests/data/wheel.toml"
     };
-    Scene::from_toml(text, "pinned wheel").unwrap()
+    Scene::from_path(path).unwrap()
 }
 
 /// A torque from code closes a continuous-time loop: `J θ̈ = −k θ − c θ̇` from `θ = 0`,

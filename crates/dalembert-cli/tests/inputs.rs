@@ -3,33 +3,21 @@
 mod common;
 use common::{dalembert, tmp};
 
-/// A slider on a guide pushed by input `push`, and a torque input on nothing else.
-const PUSHED: &str = r#"
-[[bodies]]
-name = "slider"
-mass = 2.0
-inertia = 0.1
-position = [0.0, 0.0]
-[[joints]]
-name = "guide"
-type = "prismatic"
-bodies = ["ground", "slider"]
-at = [0.0, 0.0]
-axis = [1.0, 0.0]
-[[forces]]
-name = "push"
-type = "force"
-body = "slider"
-fx = { input = "push" }
-fy = { input = "lift" }
-[simulation]
-end = 0.5
-"#;
-
 #[test]
 fn check_lists_the_inputs_and_a_run_holds_them_at_zero() {
+    // tests/data/pushed-slider.toml with a second input.
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../tests/data/pushed-slider.toml"
+    ))
+    .unwrap()
+    .replace(
+        "fx = { input = \"push\" }",
+        "fx = { input = \"push\" }\nfy = { input = \"lift\" }",
+    );
+    assert!(text.contains("lift"));
     let path = tmp("pushed.toml");
-    std::fs::write(&path, PUSHED).unwrap();
+    std::fs::write(&path, text).unwrap();
     let p = path.to_str().unwrap();
     let (ok, out, err) = dalembert(&["check", p]);
     assert!(ok, "{err}");
@@ -39,7 +27,7 @@ fn check_lists_the_inputs_and_a_run_holds_them_at_zero() {
     );
     // No force acts in a run from start to end: the slider stays where it is, exactly.
     let csv = tmp("pushed.csv");
-    let (ok, _, err) = dalembert(&["simulate", p, "--output", csv.to_str().unwrap()]);
+    let (ok, _, err) = dalembert(&["simulate", p, "--end", "0.5", "--output", csv.to_str().unwrap()]);
     assert!(ok, "{err}");
     let text = std::fs::read_to_string(&csv).unwrap();
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();

@@ -11,28 +11,9 @@ import pytest
 
 import dalembert
 
-SLIDER = """
-[[bodies]]
-name = "slider"
-mass = 2.0
-inertia = 0.1
-position = [0.0, 0.0]
-[[joints]]
-name = "guide"
-type = "prismatic"
-bodies = ["ground", "slider"]
-at = [0.0, 0.0]
-axis = [1.0, 0.0]
-[[forces]]
-name = "push"
-type = "force"
-body = "slider"
-fx = { input = "push" }
-[simulation]
-integrator = "rk4"
-step = 1e-3
-end = 10.0
-"""
+from conftest import ROOT
+
+SLIDER = (ROOT / "tests" / "data" / "pushed-slider.toml").read_text()
 
 
 @pytest.mark.parametrize("formulation", ["augmented", "embedding", "amalgamated"])
@@ -112,25 +93,7 @@ def test_ctrl_c_stops_advance_to_and_it_can_go_on(scenes):
     assert sim.t == pytest.approx(reached + 0.01, abs=1e-12)
 
 
-WHEEL = """
-[[bodies]]
-name = "wheel"
-mass = 3.0
-inertia = 0.5
-position = [0.0, 0.0]
-[[joints]]
-name = "pin"
-type = "revolute"
-bodies = ["ground", "wheel"]
-at = [0.0, 0.0]
-[[forces]]
-name = "controller"
-type = "code"
-body = "wheel"
-[simulation]
-integrator = "rk4"
-step = 1e-3
-"""
+WHEEL = (ROOT / "tests" / "data" / "wheel.toml").read_text()
 
 
 def test_a_torque_from_python_follows_the_damped_oscillator():
