@@ -9,8 +9,8 @@
 //!   (`Q_d = −(C_q q̇)_q q̇ − 2 C_qt q̇ − C_tt`, quadratic in the velocities).
 //!
 //! [`ConstraintSystem`] stacks them into the system vectors and a sparse `C_q` whose pattern is fixed
-//! at construction; [`structure`] finds the number of degrees of freedom and redundant equations from
-//! the rank of `C_q`; [`kinematics`] does position, velocity and acceleration analysis.
+//! at construction; [`structure`](dalembert_system::structure) finds the number of degrees of freedom and redundant equations from
+//! the rank of `C_q`; [`kinematics`](dalembert_system::kinematics) does position, velocity and acceleration analysis.
 //!
 //! Sign convention for reactions (stated once, in `docs/sign-conventions.md`): the generalized
 //! constraint force is `Q_c = −C_qᵀ λ`; a joint's reported reaction is the force (and torque, about

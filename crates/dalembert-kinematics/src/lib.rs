@@ -10,7 +10,7 @@
 //! * the block-diagonal mass matrix ([`MassMatrix`]) including the translation–rotation coupling and
 //!   quadratic-velocity force of a reference point away from the centre of mass;
 //! * applied forces mapped to generalized forces by virtual work ([`forces`]), with potential energy;
-//! * time functions with exact first and second derivatives ([`TimeFunction`]).
+//! * time functions with exact first and second derivatives ([`TimeFunction`](dalembert_system::TimeFunction), from the seam).
 //!
 //! Equations follow `docs/equations.md` §1 and `docs/coordinates.md`.
 
