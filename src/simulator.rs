@@ -52,7 +52,7 @@
 use crate::output::Rows;
 use crate::scene::unknown_name;
 use crate::simulation::{Coordinates, Simulation, SimulationError};
-use dalembert_integrators::{Integration, IntegrationFailure, Sample, Statistics};
+use dalembert_integrators::{Integration, IntegrationError, IntegrationFailure, Sample, Statistics};
 use dalembert_system::inputs::{with_code_forces, with_inputs, BodyMotion, Wrench};
 use dalembert_system::Shortest;
 use dalembert_system::{ConstraintError, Formulation, KinematicOptions};
@@ -176,7 +176,6 @@ pub struct Simulator {
     rows: Rows,
     row: Vec<f64>,
     row_valid: bool,
-    never: AtomicBool,
 }
 
 impl std::fmt::Debug for Simulator {
@@ -237,7 +236,6 @@ impl Simulator {
             rows,
             row,
             row_valid: false,
-            never: AtomicBool::new(false),
         })
     }
 
@@ -321,25 +319,12 @@ impl Simulator {
     /// One step of the method (an adaptive method: one accepted step); after
     /// [`Simulator::advance_to`] stopped between two steps, to the end of the step in progress.
     pub fn step(&mut self) -> Result<(), SimulatorError> {
-        let Simulator {
-            formulation,
-            run,
-            values,
-            forces,
-            never,
-            ..
-        } = self;
-        self.row_valid = false;
-        let result = lent(values, forces, || run.step(formulation.as_mut(), never));
-        result.map_err(|error| failure(error, run.statistics(formulation.as_ref())))
+        self.drive(|run, f| run.step(f, &AtomicBool::new(false)))
     }
 
     /// Advances to exactly `t` (see the module documentation).
     pub fn advance_to(&mut self, t: f64) -> Result<(), SimulatorError> {
-        let never = std::mem::replace(&mut self.never, AtomicBool::new(false));
-        let result = self.advance_to_cancellable(t, &never);
-        self.never = never;
-        result
+        self.advance_to_cancellable(t, &AtomicBool::new(false))
     }
 
     /// [`Simulator::advance_to`] that stops after the step during which `cancel` was set (e.g.
@@ -350,6 +335,16 @@ impl Simulator {
         if !t.is_finite() || t < at {
             return Err(SimulatorError::Past { to: t, at });
         }
+        self.drive(|run, f| run.advance_to(f, t, cancel))
+    }
+
+    /// Runs `work` on the run and its formulation with the inputs and code forces lent to the
+    /// model; a failure is the run's, with its statistics so far.
+    fn drive(
+        &mut self,
+        work: impl FnOnce(&mut Integration, &mut dyn Formulation) -> Result<(), IntegrationError>,
+    ) -> Result<(), SimulatorError> {
+        self.row_valid = false;
         let Simulator {
             formulation,
             run,
@@ -357,9 +352,8 @@ impl Simulator {
             forces,
             ..
         } = self;
-        self.row_valid = false;
-        let result = lent(values, forces, || run.advance_to(formulation.as_mut(), t, cancel));
-        result.map_err(|error| failure(error, run.statistics(formulation.as_ref())))
+        lent(values, forces, || work(run, formulation.as_mut()))
+            .map_err(|error| failure(error, run.statistics(formulation.as_ref())))
     }
 
     /// The output columns [`Simulator::value`] reads (those of the CSV, `t` first).
@@ -440,16 +434,7 @@ impl Simulator {
             positions: largest(&q_new, q),
             velocities: largest(&qd_new, qd),
         };
-        let Simulator {
-            formulation,
-            run,
-            values,
-            forces,
-            ..
-        } = self;
-        lent(values, forces, || run.set_state(formulation.as_mut(), &q_new, &qd_new))
-            .map_err(|error| failure(error, run.statistics(formulation.as_ref())))?;
-        self.row_valid = false;
+        self.drive(|run, f| run.set_state(f, &q_new, &qd_new))?;
         Ok(moved)
     }
 
@@ -474,7 +459,7 @@ impl Simulator {
 }
 
 /// A run's failure as a simulation error, with the statistics so far.
-fn failure(error: dalembert_integrators::IntegrationError, statistics: Statistics) -> SimulatorError {
+fn failure(error: IntegrationError, statistics: Statistics) -> SimulatorError {
     SimulatorError::Simulation(SimulationError::Integration(IntegrationFailure {
         error,
         statistics: Box::new(statistics),
