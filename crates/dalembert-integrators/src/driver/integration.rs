@@ -19,7 +19,7 @@ use crate::branch::BranchMonitor;
 use crate::methods::first_order::derivative;
 use crate::stepper::{Setup, StepControl, Stepper};
 use crate::{IntegrationError, IntegratorOptions, Stabilization, Statistics};
-use dalembert_system::{Formulation, FormulationStats};
+use dalembert_system::Formulation;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
@@ -92,8 +92,6 @@ pub struct Integration {
     rate: Vec<f64>,
     /// Time spent in the run's own work.
     busy: Duration,
-    /// The work of methods replaced by a restart ([`Integration::set_state`]).
-    retired: FormulationStats,
 }
 
 fn tolerance(t: f64) -> f64 {
@@ -130,7 +128,7 @@ impl Integration {
         let mut y = [q0, qd0].concat();
         let energy0 = f.energy(t0, q0, qd0).total();
         let conservative_fixed = f.system().is_conservative() && entry.control == StepControl::Fixed;
-        let mut mon = Monitors {
+        let mon = Monitors {
             n,
             stats: Statistics {
                 min_step_taken: f64::INFINITY,
@@ -144,7 +142,6 @@ impl Integration {
             energy0,
             scale0: 1.0 + inf_norm(&y),
             divergence_factor: opts.divergence_factor,
-            extra: FormulationStats::default(),
             baumgarte: stabilization.gains(opts.step),
             branch: BranchMonitor::new(f, q0, qd0, energy0, conservative_fixed),
         };
@@ -189,7 +186,6 @@ impl Integration {
                 }))
             }
         };
-        mon.stats.min_step_taken = f64::INFINITY;
         let len = y.len();
         Ok(Integration {
             mon,
@@ -209,7 +205,6 @@ impl Integration {
             rate_prev: vec![0.0; len],
             rate: vec![0.0; len],
             busy: wall.elapsed(),
-            retired: FormulationStats::default(),
         })
     }
 
@@ -455,14 +450,7 @@ impl Integration {
 
     /// The statistics of the run so far (wall time: the run's own work, without the caller's).
     pub fn statistics(&self, f: &dyn Formulation) -> Statistics {
-        let work = self.stepper.work();
-        let method = FormulationStats {
-            evaluations: work.evaluations + self.retired.evaluations,
-            factorizations: work.factorizations + self.retired.factorizations,
-            newton_iterations: work.newton_iterations + self.retired.newton_iterations,
-            ..FormulationStats::default()
-        };
-        let mut s = self.mon.statistics(f, method);
+        let mut s = self.mon.statistics(f, self.stepper.work());
         s.wall_time = self.busy;
         s
     }

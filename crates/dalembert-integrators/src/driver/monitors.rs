@@ -22,8 +22,6 @@ pub(super) struct Monitors {
     pub energy0: f64,
     pub scale0: f64,
     pub divergence_factor: f64,
-    /// Work done outside the formulation (the implicit method's own Newton solves).
-    pub extra: FormulationStats,
     /// The Baumgarte gains the method integrates with (the samples' `q̈` and `λ` use them too).
     pub baumgarte: Option<Baumgarte>,
     /// Stops the run where it leaves its branch at a singular position.
@@ -107,20 +105,15 @@ impl Monitors {
         Ok(true)
     }
 
-    /// The statistics so far: the formulation's work since the start plus the method's own
-    /// (`method`); wall time is the caller's.
+    /// The statistics so far: the formulation's work since the start plus the work the method
+    /// did outside it (`method`: an implicit method's own Newton solves); wall time is the
+    /// caller's.
     pub fn statistics(&self, f: &dyn Formulation, method: FormulationStats) -> Statistics {
         let now = f.stats();
         let mut s = self.stats;
-        let extra = FormulationStats {
-            evaluations: self.extra.evaluations + method.evaluations,
-            factorizations: self.extra.factorizations + method.factorizations,
-            newton_iterations: self.extra.newton_iterations + method.newton_iterations,
-            ..self.extra
-        };
-        s.evaluations = now.evaluations - self.start.evaluations + extra.evaluations;
-        s.factorizations = now.factorizations - self.start.factorizations + extra.factorizations;
-        s.newton_iterations = now.newton_iterations - self.start.newton_iterations + extra.newton_iterations;
+        s.evaluations = now.evaluations - self.start.evaluations + method.evaluations;
+        s.factorizations = now.factorizations - self.start.factorizations + method.factorizations;
+        s.newton_iterations = now.newton_iterations - self.start.newton_iterations + method.newton_iterations;
         s.repartitions = now.repartitions - self.start.repartitions;
         s.handovers = now.handovers - self.start.handovers;
         if s.steps == 0 {
