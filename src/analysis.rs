@@ -5,10 +5,12 @@
 
 use crate::output::{Recorder, Rows, Table};
 use crate::simulation::SimulationError;
-use crate::{Mechanism, Scene};
+use crate::Mechanism;
+use crate::Scene;
 use dalembert_augmented::InverseDynamics;
-use dalembert_constraints::ConstraintRole;
 use dalembert_integrators::{Sample, Statistics};
+use dalembert_system::StructureReport;
+use dalembert_system::{ConstraintError, ConstraintSet, ConstraintValues};
 use dalembert_system::{DynamicsError, KinematicOptions, RedundancyTreatment};
 use std::sync::atomic::AtomicBool;
 
@@ -75,7 +77,32 @@ pub struct Recording {
     pub warning: Option<String>,
 }
 
+/// The rank tolerance of the structure analysis: singular values of `C_q` below this share of
+/// the largest count as zero.
+const RANK_TOLERANCE: f64 = 1e-9;
+
+/// The structure of the constraints whose values at a state are `values` (the one call of the
+/// analysis for scenes, their checks and the command line).
+fn structure_of(sys: &dyn ConstraintSet, values: &ConstraintValues) -> Result<StructureReport, ConstraintError> {
+    sys.analyse_structure(values, RANK_TOLERANCE)
+}
+
+/// The structure of `model`'s constraints at positions `q`, time 0: rank, degrees of freedom and
+/// redundant equations.
+pub(crate) fn structure_at(model: &Mechanism, q: &[f64]) -> Result<StructureReport, ConstraintError> {
+    let sys = model.as_system().constraints();
+    let mut values = sys.values();
+    sys.evaluate(0.0, q, &[], &mut values);
+    structure_of(sys, &values)
+}
+
 impl Scene {
+    /// The structure of the scene's constraints at its initial positions: rank, degrees of
+    /// freedom, redundant equations by name.
+    pub fn structure(&self) -> Result<StructureReport, ConstraintError> {
+        structure_at(&self.model, &self.q)
+    }
+
     /// The structure check of `dalembert check`: degrees of freedom, redundant equations named,
     /// the assembled violation, and the accelerations and reactions at t = 0 with the scene's
     /// formulation. Errors only when the structure analysis itself cannot run (a model too large
@@ -85,7 +112,7 @@ impl Scene {
         let sys = model.as_system().constraints();
         let mut vals = sys.values();
         sys.evaluate(0.0, &self.q, &self.qd, &mut vals);
-        let s = sys.analyse_structure(&vals, 1e-9)?;
+        let s = structure_of(sys, &vals)?;
         let mut rows = Rows::new(model);
         let coordinate_names = model.velocity_names();
         let (n, m) = (model.num_velocities(), model.num_equations());
@@ -112,7 +139,7 @@ impl Scene {
                     energy: 0.0,
                 };
                 let mut row = Vec::new();
-                rows.push(model, &sample, &mut row);
+                rows.push(&sample, &mut row);
                 let columns = rows.reaction_columns();
                 rows.names()[columns.clone()]
                     .iter()
@@ -143,20 +170,10 @@ impl Scene {
     pub fn record(&self, cancel: &AtomicBool) -> Recording {
         let sim = self.simulation();
         let mut rec = Recorder::new(&self.model);
-        let mechanism = self.model.clone();
-        let model = mechanism.as_system();
-        let mut largest_kinetic = 0.0f64;
-        let outcome = sim.run_cancellable(
-            &mut |s| {
-                largest_kinetic = largest_kinetic.max(model.kinetic_energy(s.q, s.qd));
-                rec.record(&mechanism, s)
-            },
-            cancel,
-        );
+        let outcome = sim.run_cancellable(&mut |s| rec.record(s), cancel);
         let warning = match &outcome {
-            Ok(st) if model.is_conservative() => {
-                let e0 = model.kinetic_energy(&self.q, &self.qd) + model.potential_energy(0.0, &self.q);
-                crate::energy_warning(st.max_energy_change, largest_kinetic.max(e0.abs()), false)
+            Ok(st) if self.model.as_system().is_conservative() => {
+                crate::energy_warning(st.max_energy_change, st.energy_scale, false)
             }
             _ => None,
         };
@@ -214,8 +231,7 @@ impl Scene {
     /// the failure, if any, after the rows computed before it.
     pub fn inverse_table(&self, end: f64, every: f64) -> (Table, Result<(), DynamicsError>) {
         let mut rec = Recorder::new(&self.model);
-        let model = self.model.clone();
-        let res = self.inverse(end, every, &mut |s| rec.record(&model, s));
+        let res = self.inverse(end, every, &mut |s| rec.record(s));
         (rec.into_table(), res)
     }
 
@@ -223,33 +239,14 @@ impl Scene {
     /// element that is not conservative and `driver 'crank'` for each driver, in order. Empty for
     /// a conservative model.
     pub fn nonconservative_elements(&self) -> Vec<String> {
-        let forces: Vec<String> = match &self.model {
-            Mechanism::Planar(m) => m
-                .forces()
-                .iter()
-                .filter(|f| !f.is_conservative())
-                .map(|f| format!("force '{}'", f.name()))
-                .collect(),
-            Mechanism::Spatial(m) => m
-                .nonconservative_force_names()
-                .map(|n| format!("force '{n}'"))
-                .collect(),
-        };
+        let forces = self.model.kind().nonconservative_force_names();
+        let forces = forces.into_iter().map(|n| format!("force '{n}'"));
         let drivers = self.drivers().into_iter().map(|d| format!("driver '{d}'"));
-        forces.into_iter().chain(drivers).collect()
+        forces.chain(drivers).collect()
     }
 
     /// The names of the scene's drivers, in the order of their `<driver>.effort` columns.
     pub fn drivers(&self) -> Vec<String> {
-        match &self.model {
-            Mechanism::Planar(m) => m
-                .constraints()
-                .constraints()
-                .iter()
-                .filter(|c| c.role() == ConstraintRole::Driver)
-                .map(|c| c.name().to_string())
-                .collect(),
-            Mechanism::Spatial(m) => m.driver_names().map(String::from).collect(),
-        }
+        self.model.kind().driver_names()
     }
 }

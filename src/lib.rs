@@ -22,6 +22,7 @@ pub mod animation;
 pub mod builder;
 pub mod code_force;
 pub mod energy;
+mod joint_map;
 pub mod mechanism;
 pub mod output;
 pub mod scene;

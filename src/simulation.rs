@@ -1,5 +1,6 @@
 //! A model, a formulation and an integrator, run together.
 
+use crate::joint_map::{JointMap, JointStart};
 use crate::mechanism::Mechanism;
 use dalembert_integrators::{
     integrate_cancellable, IntegrationError, IntegrationFailure, IntegratorOptions, Sample, Statistics,
@@ -288,15 +289,12 @@ impl Simulation {
     /// Assembles the initial state: position analysis from the given `q` (least change), then the
     /// least (weighted) change to `q̇` that satisfies the velocity constraints.
     pub fn assemble(&mut self) -> Result<(), SimulationError> {
-        let opts = KinematicOptions::default();
-        let sys = self.model.as_system().constraints();
-        sys.solve_positions(self.start, &mut self.q, &opts)?;
-        sys.solve_velocities_weighted(
+        assemble(
+            self.model.as_system(),
             self.start,
-            &self.q,
+            &mut self.q,
             &mut self.qd,
             self.velocity_weights.as_deref(),
-            &opts,
         )?;
         Ok(())
     }
@@ -308,7 +306,7 @@ impl Simulation {
 
     /// Builds the chosen formulation on `system` (the model, or its joint coordinates), with the
     /// embedding formulation's `independent` velocity indices of that system.
-    fn formulation_on(
+    pub(crate) fn formulation_on(
         &self,
         system: Arc<dyn MultibodySystem>,
         independent: Option<Vec<usize>>,
@@ -386,27 +384,12 @@ impl Simulation {
         observer: &mut dyn FnMut(&Sample<'_>),
         cancel: &AtomicBool,
     ) -> Result<Statistics, SimulationError> {
-        let not_spatial = || ModelError::InvalidParameter {
-            element: "model".into(),
-            what: "joint coordinates are for spatial models".into(),
-        };
-        let model = self
-            .model
-            .spatial()
-            .ok_or_else(not_spatial)
-            .map_err(SimulationError::JointCoordinates)?;
-        let jc = model
-            .joint_coordinates_at(&self.q, &self.qd)
-            .map_err(SimulationError::JointCoordinates)?;
-        let (q0, qd0) = jc.initial_state();
-        // The model's independent coordinates do not index the joint coordinates (which are all
-        // independent).
-        let mut f = self.formulation_on(jc.system(), None)?;
-        let mut absolute = self.formulation()?;
-        let (n, m) = (self.qd.len(), self.model.num_equations());
-        let (mut q, mut qd) = (self.q.clone(), self.qd.clone());
-        let (mut qdd, mut lambda, mut c, mut cdot) = (vec![0.0; n], vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-        let mut frames = jc.frames();
+        let JointStart {
+            mut map,
+            formulation: mut f,
+            q0,
+            qd0,
+        } = JointMap::start(self, &self.q, &self.qd)?;
         let (stop, mut failed) = (AtomicBool::new(false), None);
         let (mut violation, mut velocity_violation) = (0.0f64, 0.0f64);
         let result = integrate_cancellable(
@@ -420,27 +403,18 @@ impl Simulation {
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                jc.absolute(s.q, s.qd, &mut frames, &mut q, &mut qd);
-                if let Err(e) = absolute.accelerations(s.t, &q, &qd, None, &mut qdd, &mut lambda) {
-                    failed = Some(e);
-                    stop.store(true, Ordering::Relaxed);
-                    return;
+                match map.sample(s) {
+                    Ok(sample) => {
+                        violation = violation.max(sample.constraint_violation);
+                        velocity_violation = velocity_violation.max(sample.velocity_violation);
+                        observer(&sample);
+                    }
+                    Err(e) => {
+                        failed = Some(e);
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
                 }
-                absolute.residuals(s.t, &q, &qd, &mut c, &mut cdot);
-                let max = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-                let (c_max, cdot_max) = (max(&c), max(&cdot));
-                violation = violation.max(c_max);
-                velocity_violation = velocity_violation.max(cdot_max);
-                observer(&Sample {
-                    t: s.t,
-                    q: &q,
-                    qd: &qd,
-                    qdd: &qdd,
-                    lambda: &lambda,
-                    constraint_violation: c_max,
-                    velocity_violation: cdot_max,
-                    energy: s.energy,
-                });
                 if cancel.load(Ordering::Relaxed) {
                     stop.store(true, Ordering::Relaxed);
                 }
@@ -467,6 +441,23 @@ impl Simulation {
             (Err(e), None) => failure(e.error, *e.statistics),
         }
     }
+}
+
+/// Assembles `(q, q̇)` to the constraints of `system` at `t`: the least change of the positions
+/// (Newton with minimum-norm steps), then of the velocities weighted by `weights` (per velocity
+/// coordinate; `None`: the mass matrix's diagonal). The one assembly of scenes, simulations and
+/// simulators.
+pub(crate) fn assemble(
+    system: &dyn MultibodySystem,
+    t: f64,
+    q: &mut [f64],
+    qd: &mut [f64],
+    weights: Option<&[f64]>,
+) -> Result<(), ConstraintError> {
+    let opts = KinematicOptions::default();
+    let sys = system.constraints();
+    sys.solve_positions(t, q, &opts)?;
+    sys.solve_velocities_weighted(t, q, qd, weights, &opts)
 }
 
 #[cfg(test)]

@@ -49,10 +49,11 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use crate::joint_map::{JointMap, JointStart};
 use crate::output::Rows;
 use crate::scene::unknown_name;
 use crate::simulation::{Coordinates, Simulation, SimulationError};
-use dalembert_integrators::{Integration, IntegrationError, IntegrationFailure, Sample, Statistics};
+use dalembert_integrators::{Integration, IntegrationError, IntegrationFailure, Statistics};
 use dalembert_system::inputs::{with_code_forces, with_inputs, BodyMotion, Wrench};
 use dalembert_system::Shortest;
 use dalembert_system::{ConstraintError, Formulation, KinematicOptions};
@@ -114,9 +115,6 @@ pub enum SimulatorError {
     /// A state that cannot be assembled to the constraints.
     #[error("set_state: the state cannot be assembled to the constraints: {0}")]
     Assembly(#[source] ConstraintError),
-    /// Settings the simulator does not take.
-    #[error("{0}")]
-    Settings(String),
 }
 
 fn unknown_input(name: &str, inputs: &[String]) -> String {
@@ -176,6 +174,10 @@ pub struct Simulator {
     rows: Rows,
     row: Vec<f64>,
     row_valid: bool,
+    /// In joint coordinates: the map to the model's coordinates (the run integrates the tree).
+    joint: Option<JointMap>,
+    /// The statistics of the runs a state set in joint coordinates replaced.
+    before: Option<Statistics>,
 }
 
 impl std::fmt::Debug for Simulator {
@@ -206,25 +208,16 @@ impl crate::Scene {
 
 impl Simulator {
     fn new(simulation: Simulation) -> Result<Self, SimulatorError> {
-        if simulation.coordinates == Coordinates::Joint {
-            return Err(SimulatorError::Settings(
-                "the simulator steps the model's absolute coordinates; joint coordinates are for runs from start to end so far: set coordinates = \"absolute\"".into(),
-            ));
-        }
-        let mut formulation = simulation.formulation()?;
         let values = vec![0.0; simulation.inputs.len()];
         let forces = Forces(RefCell::new(simulation.code_forces.iter().map(|_| None).collect()));
-        let run = lent(&values, &forces, || {
-            Integration::new(
-                formulation.as_mut(),
-                simulation.start,
-                simulation.end,
-                &simulation.q,
-                &simulation.qd,
-                &simulation.integrator,
-            )
-        })
-        .map_err(|error| failure(error, Statistics::default()))?;
+        let (formulation, run, joint) = start(
+            &simulation,
+            simulation.start,
+            &simulation.q,
+            &simulation.qd,
+            &values,
+            &forces,
+        )?;
         let rows = Rows::new(&simulation.model);
         let row = Vec::with_capacity(rows.names().len());
         Ok(Simulator {
@@ -236,6 +229,8 @@ impl Simulator {
             rows,
             row,
             row_valid: false,
+            joint,
+            before: None,
         })
     }
 
@@ -311,9 +306,13 @@ impl Simulator {
         self.run.time()
     }
 
-    /// The current state `(q, q̇)` in the model's coordinates.
+    /// The current state `(q, q̇)` in the model's coordinates (in joint coordinates too: the
+    /// tree's state mapped to the bodies).
     pub fn state(&self) -> (&[f64], &[f64]) {
-        self.run.state()
+        match &self.joint {
+            Some(map) => map.state(),
+            None => self.run.state(),
+        }
     }
 
     /// One step of the method (an adaptive method: one accepted step); after
@@ -350,10 +349,16 @@ impl Simulator {
             run,
             values,
             forces,
+            joint,
+            before,
             ..
         } = self;
-        lent(values, forces, || work(run, formulation.as_mut()))
-            .map_err(|error| failure(error, run.statistics(formulation.as_ref())))
+        let result = lent(values, forces, || work(run, formulation.as_mut()));
+        if let Some(map) = joint {
+            let (q, qd) = run.state();
+            map.map(q, qd);
+        }
+        result.map_err(|error| failure(error, then(before, run.statistics(formulation.as_ref()))))
     }
 
     /// The output columns [`Simulator::value`] reads (those of the CSV, `t` first).
@@ -366,23 +371,27 @@ impl Simulator {
     pub fn row(&mut self) -> Result<&[f64], SimulatorError> {
         if !self.row_valid {
             let Simulator {
-                simulation,
                 formulation,
                 run,
                 values,
                 forces,
                 rows,
                 row,
+                joint,
+                before,
                 ..
             } = self;
             let sample = lent(values, forces, || {
-                run.sample(formulation.as_mut()).map(|s: Sample<'_>| {
-                    row.clear();
-                    rows.push(&simulation.model, &s, row);
-                })
+                let s = run.sample(formulation.as_mut())?;
+                row.clear();
+                match joint {
+                    Some(map) => rows.push(&map.sample(&s)?, row),
+                    None => rows.push(&s, row),
+                }
+                Ok(())
             });
             if let Err(error) = sample {
-                return Err(failure(error, run.statistics(formulation.as_ref())));
+                return Err(failure(error, then(before, run.statistics(formulation.as_ref()))));
             }
             self.row_valid = true;
         }
@@ -434,7 +443,16 @@ impl Simulator {
             positions: largest(&q_new, q),
             velocities: largest(&qd_new, qd),
         };
-        self.drive(|run, f| run.set_state(f, &q_new, &qd_new))?;
+        if self.joint.is_some() {
+            // The tree is built again with its zero configuration at the new state.
+            let stats = self.statistics();
+            let (formulation, run, joint) = start(&self.simulation, t, &q_new, &qd_new, &self.values, &self.forces)?;
+            (self.formulation, self.run, self.joint) = (formulation, run, joint);
+            self.before = Some(stats);
+            self.row_valid = false;
+        } else {
+            self.drive(|run, f| run.set_state(f, &q_new, &qd_new))?;
+        }
         Ok(moved)
     }
 
@@ -449,12 +467,57 @@ impl Simulator {
 
     /// The run's statistics so far.
     pub fn statistics(&self) -> Statistics {
-        self.run.statistics(self.formulation.as_ref())
+        then(&self.before, self.run.statistics(self.formulation.as_ref()))
     }
 
     /// The simulation the simulator was built from (its model, initial state and settings).
     pub fn simulation(&self) -> &Simulation {
         &self.simulation
+    }
+}
+
+/// A run started: its formulation, the run, and the map from joint coordinates.
+type Started = (Box<dyn Formulation>, Integration, Option<JointMap>);
+
+/// The formulation and the run of `simulation` from `(t, q, q̇)` (assembled), with the map from
+/// joint coordinates when it runs in them (the tree's zero configuration at that state).
+fn start(
+    simulation: &Simulation,
+    t: f64,
+    q: &[f64],
+    qd: &[f64],
+    values: &[f64],
+    forces: &Forces,
+) -> Result<Started, SimulatorError> {
+    let (mut formulation, q0, qd0, mut joint) = if simulation.coordinates == Coordinates::Joint {
+        let s: JointStart = JointMap::start(simulation, q, qd)?;
+        (s.formulation, s.q0, s.qd0, Some(s.map))
+    } else {
+        (simulation.formulation()?, q.to_vec(), qd.to_vec(), None)
+    };
+    // The output grid of a fixed-step method spans the simulation's; a run started again at or
+    // past its end has one output interval.
+    let end = if t < simulation.end {
+        simulation.end
+    } else {
+        t + simulation.integrator.output_every
+    };
+    let run = lent(values, forces, || {
+        Integration::new(formulation.as_mut(), t, end, &q0, &qd0, &simulation.integrator)
+    })
+    .map_err(|error| failure(error, Statistics::default()))?;
+    if let Some(map) = &mut joint {
+        let (q, qd) = run.state();
+        map.map(q, qd);
+    }
+    Ok((formulation, run, joint))
+}
+
+/// The statistics of a run after `before` (the runs a state set in joint coordinates replaced).
+fn then(before: &Option<Statistics>, now: Statistics) -> Statistics {
+    match before {
+        Some(b) => b.then(&now),
+        None => now,
     }
 }
 

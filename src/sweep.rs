@@ -153,12 +153,11 @@ pub fn run_one(
         let mut rows = Rows::new(&s.model);
         let mut row = Vec::with_capacity(rows.names().len());
         let mut acc: Vec<(f64, usize)> = vec![(f64::NAN, 0); outputs.len()];
-        let model = s.model.clone();
         let stats = sim
             .run_cancellable(
                 &mut |smp| {
                     row.clear();
-                    rows.push(&model, smp, &mut row);
+                    rows.push(smp, &mut row);
                     for (o, a) in outputs.iter().zip(acc.iter_mut()) {
                         if let Output::Column { index, summary } = o {
                             let v = row[*index];

@@ -408,3 +408,47 @@ fn the_simulator_loop_allocates_nothing() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The same loop (without inputs: joint coordinates take no force elements) on a spatial chain in
+/// joint coordinates, every formulation × method: the map to the model's coordinates and the
+/// evaluation of its reactions there allocate nothing either.
+#[test]
+fn the_simulator_loop_in_joint_coordinates_allocates_nothing() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let text = dalembert_testkit::spatial::chain3d_toml(4, 1.0)
+        .replace("[simulation]\n", "[simulation]\ncoordinates = \"joint\"\n");
+    let base = dalembert::Scene::from_toml(&text, "chain3d-4 joint").unwrap();
+    let reaction = base.check().unwrap().reactions[0].0.clone();
+    let mut failures = Vec::new();
+    for formulation in dalembert::FormulationKind::ALL {
+        for entry in METHODS {
+            if entry.applies == Applies::AugmentedIndex3 && formulation != dalembert::FormulationKind::Augmented {
+                continue;
+            }
+            let mut scene = base.clone();
+            scene.settings.formulation = formulation;
+            scene.settings.method = Method::of(entry);
+            scene.settings.step = 1e-3;
+            let count = |iterations: usize| {
+                let mut sim = scene.simulator().unwrap();
+                let before = ALLOCATIONS.load(Ordering::Relaxed);
+                for k in 1..=iterations {
+                    sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
+                    sim.value(&reaction).unwrap();
+                    sim.step().unwrap();
+                }
+                ALLOCATIONS.load(Ordering::Relaxed) - before
+            };
+            let (short, long) = (count(50), count(100));
+            if long > short {
+                failures.push(format!(
+                    "{}, {}: {short} allocations for 50 iterations, {long} for 100",
+                    formulation.name(),
+                    entry.name
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -119,7 +119,7 @@ fn result_csv_reader_never_panics() {
     let mut sim = scene.simulation();
     sim.end = 0.05;
     let mut csv = CsvOutput::new(&scene.model, Vec::new()).unwrap();
-    sim.run(&mut |s| csv.write(&scene.model, s)).unwrap();
+    sim.run(&mut |s| csv.write(s)).unwrap();
     let text = String::from_utf8(csv.finish().unwrap()).unwrap();
     let quoted = text.replacen("crank.x", "\"crank,\"\"x\"\"\"", 1);
     let seeds = vec![text, quoted];

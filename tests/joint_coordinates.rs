@@ -543,3 +543,109 @@ fn a_stop_request_ends_a_joint_coordinate_run_at_a_sample() {
     // The samples up to the request, none after: t = 0, 0.01, 0.02.
     assert_eq!(times.len(), 3, "{times:?}");
 }
+
+/// chain3d-6 with its [simulation] table set to joint or absolute coordinates.
+fn chain_scene(joint: bool) -> dalembert::Scene {
+    let text = dalembert_testkit::spatial::chain3d_toml(6, 1.0);
+    let coordinates = if joint { "joint" } else { "absolute" };
+    let text = text.replace(
+        "[simulation]\n",
+        &format!("[simulation]\ncoordinates = \"{coordinates}\"\n"),
+    );
+    dalembert::Scene::from_toml(&text, "chain3d-6").expect("scene")
+}
+
+#[test]
+fn a_simulator_in_joint_coordinates_is_the_run_in_them() {
+    // Advanced in uneven chunks (stopping between steps and going on), the simulator in joint
+    // coordinates passes through every output time of the run from start to end with the same
+    // sample, bitwise: the same steps of the same method on the same tree, mapped by the same
+    // map and evaluated by the same formulation.
+    let scene = chain_scene(true);
+    let run = samples(&scene);
+    let mut sim = scene.simulator().expect("simulator in joint coordinates");
+    let (q_col, qd_col): (Vec<usize>, Vec<usize>) = {
+        let cols = sim.columns().to_vec();
+        let bodies = scene.model.body_names();
+        let at = |b: &str, c: &str| cols.iter().position(|x| *x == format!("{b}.{c}")).unwrap();
+        (
+            bodies
+                .iter()
+                .flat_map(|b| ["x", "y", "z", "e0", "e1", "e2", "e3"].map(|c| at(b, c)))
+                .collect(),
+            bodies
+                .iter()
+                .flat_map(|b| ["vx", "vy", "vz"].map(|c| at(b, c)))
+                .collect(),
+        )
+    };
+    let mut chunk = 0.0013;
+    for (k, (t, q, qd, _)) in run.iter().enumerate().skip(1) {
+        // An uneven stop inside the interval first (every third one), then the output time.
+        if k % 3 == 0 {
+            sim.advance_to(t - chunk).unwrap();
+            chunk = (chunk * 1.7) % 0.004;
+        }
+        sim.advance_to(*t).unwrap();
+        assert_eq!(sim.time(), *t);
+        let (sq, sqd) = sim.state();
+        assert_eq!(sq, &q[..], "positions at t = {t}");
+        assert_eq!(sqd, &qd[..], "velocities at t = {t}");
+        let row = sim.row().unwrap().to_vec();
+        for (i, &c) in q_col.iter().enumerate() {
+            assert_eq!(row[c], q[i], "column {} at t = {t}", sim.columns()[c]);
+        }
+        for (i, &c) in qd_col.iter().enumerate() {
+            // The body's centre-of-mass velocity: the first three of its six velocities.
+            assert_eq!(
+                row[c],
+                qd[6 * (i / 3) + i % 3],
+                "column {} at t = {t}",
+                sim.columns()[c]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_state_set_in_joint_coordinates_moves_the_tree() {
+    // The same perturbed state set in a simulator in joint coordinates and in one in absolute
+    // coordinates at t = 0.3: both assemble it with the same kinematic solve (the same `Moved`,
+    // to round-off), then integrate different equations for the same motion, so at t = 0.8 they
+    // differ by the two RK4 truncation errors (1e-8, as in
+    // `a_scene_in_joint_coordinates_gives_the_same_outputs`). The joint simulator's statistics go
+    // on across the rebuilt tree (the steps before and after are counted).
+    let mut joint = chain_scene(true).simulator().unwrap();
+    let mut absolute = chain_scene(false).simulator().unwrap();
+    for sim in [&mut joint, &mut absolute] {
+        sim.advance_to(0.3).unwrap();
+    }
+    let steps_before = joint.statistics().steps;
+    let (mut q, mut qd) = (joint.state().0.to_vec(), joint.state().1.to_vec());
+    q[0] += 1e-3; // the first link's centre of mass off its joint
+    q[7 * 2 + 3] += 2e-3; // the third link's Euler parameters off their unit norm and joint
+    qd[6 * 3 + 4] += 0.5; // the fourth link turning about a direction its joint forbids
+    let moved_j = joint.set_state(&q, &qd).unwrap();
+    let moved_a = absolute.set_state(&q, &qd).unwrap();
+    assert!(
+        (moved_j.positions - moved_a.positions).abs() < 1e-12,
+        "{moved_j:?} {moved_a:?}"
+    );
+    assert!(
+        (moved_j.velocities - moved_a.velocities).abs() < 1e-12,
+        "{moved_j:?} {moved_a:?}"
+    );
+    assert!(moved_j.positions > 1e-4 && moved_j.velocities > 1e-2, "{moved_j:?}");
+    // The joint simulator's state is the assembled one mapped to the rebuilt tree and back: equal
+    // to round-off of the map along the chain (6 links, positions up to 5.4 m: 1e-13).
+    let dq0 = position_error(joint.state().0, absolute.state().0);
+    assert!(dq0 < 1e-13, "the same assembled positions: |Δq| {dq0:e}");
+    for sim in [&mut joint, &mut absolute] {
+        sim.advance_to(0.8).unwrap();
+    }
+    let dq = position_error(joint.state().0, absolute.state().0);
+    let dv = max_diff(joint.state().1, absolute.state().1);
+    assert!(dq < 1e-8 && dv < 1e-7, "|Δq| {dq:e}, |Δv| {dv:e}");
+    let stats = joint.statistics();
+    assert_eq!(stats.steps, steps_before + 500, "300 steps of 1 ms, then 500");
+}

@@ -819,7 +819,7 @@ function = { kind = "linear", rate = 2.0 }
 "#;
     let scene = dalembert::Scene::from_toml(text, "spin.toml").unwrap();
     let mech = Mechanism {
-        model: scene.model.planar().unwrap().clone(),
+        model: scene.model.downcast().unwrap(),
         q: scene.q.clone(),
         qd: scene.qd.clone(),
     };

@@ -9,8 +9,9 @@
 mod read;
 mod table;
 
+pub use crate::mechanism::{PLANAR_BODY_COLUMNS, SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS};
 pub use read::{no_column, read_columns, read_header, ResultCsvError, ResultTable};
-pub use table::{Recorder, Rows, Table, SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS};
+pub use table::{Recorder, Rows, Table};
 
 use crate::mechanism::Mechanism;
 use dalembert_integrators::Sample;
@@ -99,12 +100,12 @@ impl<W: Write> CsvOutput<W> {
     }
 
     /// Writes one sample. I/O errors are kept and reported by [`CsvOutput::finish`].
-    pub fn write(&mut self, model: &Mechanism, s: &Sample<'_>) {
+    pub fn write(&mut self, s: &Sample<'_>) {
         if self.error.is_some() {
             return;
         }
         self.numbers.clear();
-        self.rows_of.push(model, s, &mut self.numbers);
+        self.rows_of.push(s, &mut self.numbers);
         let written = self.write_row().and_then(|()| {
             self.rows += 1;
             self.last_time = Some(s.t);

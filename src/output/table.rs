@@ -4,118 +4,42 @@
 //! CSV writer and the in-memory [`Table`] both use it, so a column means the same thing in a file,
 //! a numpy array and a sweep.
 
-use crate::mechanism::Mechanism;
-use crate::system::ConstraintSet as _;
-use dalembert_constraints::{ConstraintRole, Model, Reaction};
+use crate::mechanism::{ColumnWriter, Mechanism};
 use dalembert_integrators::Sample;
-use dalembert_spatial::frame::Frame;
-use dalembert_system::ConstraintValues;
 
 /// The output columns of one model and the scratch space to compute a row (allocation-free after
 /// construction).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Rows {
     names: Vec<String>,
     /// Index of the first reaction or effort column.
     first_reaction: usize,
-    scratch: Scratch,
+    columns: Box<dyn ColumnWriter>,
 }
 
-/// What a row is computed with, per kind of model.
-#[derive(Debug, Clone)]
-enum Scratch {
-    Planar {
-        roles: Vec<ConstraintRole>,
-        values: ConstraintValues,
-        reactions: Vec<Reaction>,
-    },
-    Spatial {
-        reactions: Vec<dalembert_spatial::Reaction>,
-        drivers: usize,
-    },
+impl Clone for Rows {
+    fn clone(&self) -> Self {
+        Rows {
+            names: self.names.clone(),
+            first_reaction: self.first_reaction,
+            columns: self.columns.boxed_clone(),
+        }
+    }
 }
-
-/// The columns of a spatial body: centre of mass, Euler parameters, centre-of-mass velocity and
-/// angular velocity (global components).
-pub const SPATIAL_BODY_COLUMNS: [&str; 13] = [
-    "x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
-];
-
-/// The columns of a spatial joint: force and moment (about the joint's point) that its second body
-/// exerts on its first, global components.
-pub const SPATIAL_JOINT_COLUMNS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
 
 impl Rows {
     /// The columns of `model` (see the module documentation of [`crate::output`]).
     pub fn new(model: &Mechanism) -> Self {
-        match model {
-            Mechanism::Planar(m) => Rows::planar(m),
-            Mechanism::Spatial(m) => Rows::spatial(m),
-        }
-    }
-
-    fn planar(model: &Model) -> Self {
+        let columns = model.columns();
         let mut names = vec!["t".to_string()];
-        for b in model.bodies() {
-            for c in ["x", "y", "angle", "vx", "vy", "omega"] {
-                names.push(format!("{}.{c}", b.name));
-            }
-        }
+        names.extend(columns.body_columns());
         let first_reaction = names.len();
-        let sys = model.constraints();
-        let roles: Vec<ConstraintRole> = sys.constraints().iter().map(|c| c.role()).collect();
-        for (c, role) in sys.constraints().iter().zip(&roles) {
-            match role {
-                ConstraintRole::Joint { carries_torque } => {
-                    names.push(format!("{}.fx", c.name()));
-                    names.push(format!("{}.fy", c.name()));
-                    if *carries_torque {
-                        names.push(format!("{}.torque", c.name()));
-                    }
-                }
-                ConstraintRole::Driver => names.push(format!("{}.effort", c.name())),
-            }
-        }
+        names.extend(columns.reaction_columns());
         names.extend(TRAILING_COLUMNS.map(String::from));
         Rows {
             names,
             first_reaction,
-            scratch: Scratch::Planar {
-                values: sys.values(),
-                reactions: vec![Reaction::default(); roles.len()],
-                roles,
-            },
-        }
-    }
-
-    fn spatial(model: &dalembert_spatial::Model) -> Self {
-        let mut names = vec!["t".to_string()];
-        for b in model.bodies() {
-            names.extend(SPATIAL_BODY_COLUMNS.iter().map(|c| format!("{}.{c}", b.name)));
-        }
-        let first_reaction = names.len();
-        for j in model.joint_names() {
-            names.extend(SPATIAL_JOINT_COLUMNS.iter().map(|c| format!("{j}.{c}")));
-        }
-        let drivers: Vec<String> = model.driver_names().map(|d| format!("{d}.effort")).collect();
-        let n_drivers = drivers.len();
-        names.extend(drivers);
-        names.extend(TRAILING_COLUMNS.map(String::from));
-        Rows {
-            names,
-            first_reaction,
-            scratch: Scratch::Spatial {
-                reactions: vec![
-                    dalembert_spatial::Reaction {
-                        force: Default::default(),
-                        moment: Default::default(),
-                        point: Default::default(),
-                        axes: Default::default(),
-                    };
-                    model.joint_names().count()
-                ],
-                drivers: n_drivers,
-            },
+            columns,
         }
     }
 
@@ -131,54 +55,9 @@ impl Rows {
 
     /// Appends the row of sample `s` (one number per column) to `row`: positions and velocities,
     /// the reactions from the sample's multipliers, energy and constraint violations.
-    ///
-    /// # Panics
-    /// When `model` is not the model these rows were made for (another kind of model).
-    pub fn push(&mut self, model: &Mechanism, s: &Sample<'_>, row: &mut Vec<f64>) {
+    pub fn push(&mut self, s: &Sample<'_>, row: &mut Vec<f64>) {
         row.push(s.t);
-        match (&mut self.scratch, model) {
-            (
-                Scratch::Planar {
-                    roles,
-                    values,
-                    reactions,
-                },
-                Mechanism::Planar(model),
-            ) => {
-                let sys = model.constraints();
-                sys.evaluate(s.t, s.q, s.qd, values);
-                sys.reactions(s.q, values, s.lambda, reactions);
-                for i in 0..s.q.len() / 3 {
-                    row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
-                    row.extend_from_slice(&s.qd[3 * i..3 * i + 3]);
-                }
-                for (r, role) in reactions.iter().zip(roles.iter()) {
-                    match role {
-                        ConstraintRole::Joint { carries_torque } => {
-                            row.extend_from_slice(&[r.force.x, r.force.y]);
-                            if *carries_torque {
-                                row.push(r.torque);
-                            }
-                        }
-                        ConstraintRole::Driver => row.push(r.effort.unwrap_or(f64::NAN)),
-                    }
-                }
-            }
-            (Scratch::Spatial { reactions, drivers }, Mechanism::Spatial(model)) => {
-                for i in 0..model.bodies().len() {
-                    let f = Frame::of(i, s.q, s.qd);
-                    row.extend_from_slice(&s.q[7 * i..7 * i + 7]);
-                    row.extend(f.v.iter().chain(f.w.iter()));
-                }
-                model.reactions_into(s.t, s.q, s.lambda, reactions);
-                for r in reactions.iter() {
-                    row.extend(r.force.iter().chain(r.moment.iter()));
-                }
-                let first = s.lambda.len() - *drivers;
-                row.extend(s.lambda[first..].iter().map(|l| -l));
-            }
-            _ => panic!("output rows made for another kind of model"),
-        }
+        self.columns.push(s, row);
         row.extend_from_slice(&[s.energy, s.constraint_violation, s.velocity_violation]);
     }
 }
@@ -247,8 +126,8 @@ impl Recorder {
     }
 
     /// Appends sample `s`.
-    pub fn record(&mut self, model: &Mechanism, s: &Sample<'_>) {
-        self.rows.push(model, s, &mut self.table.data);
+    pub fn record(&mut self, s: &Sample<'_>) {
+        self.rows.push(s, &mut self.table.data);
     }
 
     /// The table so far.

@@ -8,7 +8,7 @@ use super::names::{Ctx, Names};
 use super::{method_parameter, parameter_keys, unknown_name, RunSettings, Scene};
 use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
 use crate::mechanism::Mechanism;
-use crate::simulation::{Coordinates, FormulationKind, Simulation};
+use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
     BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Gear, JointAngle, JointDisplacement, Model,
@@ -369,31 +369,12 @@ pub(crate) fn assembled(
     settings: RunSettings,
     drawing: Drawing,
 ) -> Result<Scene, SceneError> {
-    let mut sim = Simulation {
-        model,
-        q,
-        qd,
-        start: 0.0,
-        end: settings.end,
-        formulation: settings.formulation,
-        redundancy: settings.redundancy,
-        integrator: settings.integrator_options(),
-        velocity_weights: Some(weights),
-        independent: settings.independent.clone(),
-        coordinates: settings.coordinates,
-        inputs: ctx.input_names(),
-        code_forces: ctx.code_force_names(),
-    };
-    sim.assemble()
+    let (mut q, mut qd) = (q, qd);
+    assemble(model.as_system(), 0.0, &mut q, &mut qd, Some(&weights))
         .map_err(|e| ctx.err(None, format!("cannot assemble the mechanism: {e}")))?;
     if let Some(independent) = &settings.independent {
         // As many independent coordinates as degrees of freedom at the assembled position.
-        let sys = sim.model.as_system();
-        let sys = sys.constraints();
-        let mut v = sys.values();
-        sys.evaluate(0.0, &sim.q, &[], &mut v);
-        let dof = sys
-            .analyse_structure(&v, 1e-9)
+        let dof = crate::analysis::structure_at(&model, &q)
             .map_err(|e| ctx.err(None, e.to_string()))?
             .degrees_of_freedom;
         if independent.len() != dof {
@@ -411,12 +392,12 @@ pub(crate) fn assembled(
     }
     Ok(Scene {
         name,
-        model: sim.model,
-        q: sim.q,
-        qd: sim.qd,
+        model,
+        q,
+        qd,
         settings,
-        inputs: sim.inputs,
-        code_forces: sim.code_forces,
+        inputs: ctx.input_names(),
+        code_forces: ctx.code_force_names(),
         drawing,
         source: ctx.text.to_string(),
         origin: ctx.file.to_string(),

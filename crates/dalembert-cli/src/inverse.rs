@@ -57,11 +57,11 @@ pub fn run(a: Args) -> Result<(), String> {
             outln!();
         }
         if let Some(w) = csv.as_mut() {
-            w.write(&model, s);
+            w.write(s);
         }
         if i % every_row == 0 || i == steps {
             row.clear();
-            rows.push(&model, s, &mut row);
+            rows.push(s, &mut row);
             out!("{}", fixed(s.t, 9, 4));
             for &k in &effort_cols {
                 out!(" {}", fixed(row[k], 16, 6));

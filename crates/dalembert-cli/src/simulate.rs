@@ -134,14 +134,7 @@ pub fn run(a: Args) -> Result<(), String> {
     let mechanism = scene.model.clone();
     let model = mechanism.as_system();
     let s = &scene.settings;
-    let dof = {
-        let sys = model.constraints();
-        let mut v = sys.values();
-        sys.evaluate(0.0, &scene.q, &[], &mut v);
-        sys.analyse_structure(&v, 1e-9)
-            .map_err(|e| e.to_string())?
-            .degrees_of_freedom
-    };
+    let dof = scene.structure().map_err(|e| e.to_string())?.degrees_of_freedom;
     let m = &s.method;
     let method = match m.entry().control {
         StepControl::Adaptive => format!("{m}, initial step {} s", short(s.step)),
@@ -190,17 +183,14 @@ pub fn run(a: Args) -> Result<(), String> {
     let tty = std::io::stderr().is_terminal();
     let mut last_bar = Instant::now();
     let end = s.end;
-    let energy0 = model.kinetic_energy(&scene.q, &scene.qd) + model.potential_energy(0.0, &scene.q);
     let summary = mechanism.summary_coordinates(0.0, &scene.q);
-    let mut largest_kinetic = 0.0f64;
     // A model that is not conservative: E − W, the energy less the work of its non-conservative
     // forces and drivers, is what the exact motion keeps (docs/energy.md).
     let mut balance = (!model.is_conservative()).then(|| EnergyBalance::new(model));
     let mut observer = |smp: &Sample<'_>| {
-        largest_kinetic = largest_kinetic.max(model.kinetic_energy(smp.q, smp.qd));
         let e_minus_w = balance.as_mut().map(|b| b.push(model, smp));
         if let Some(c) = csv.as_mut() {
-            c.write(&mechanism, smp);
+            c.write(smp);
         }
         if k.is_multiple_of(every_row) || (smp.t - end).abs() < 1e-12 {
             let angles = summary.iter().take(6).map(|&(_, k)| smp.q[k]).collect();
@@ -276,7 +266,7 @@ pub fn run(a: Args) -> Result<(), String> {
         stats.wall_time.as_secs_f64() * 1e3,
         stats.wall_time.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
     );
-    let scale = largest_kinetic.max(energy0.abs());
+    let scale = stats.energy_scale;
     match &balance {
         None => outln!(
             "accuracy     largest |C| = {:.2e}, largest |Ċ| = {:.2e}, largest energy change = {:.2e} J (a conservative model: it should be 0)",

@@ -56,11 +56,7 @@ pub fn run(a: Args) -> Result<(), String> {
     }
     let names: Vec<String> = if a.outputs.is_empty() {
         // Each body's position: x, y, angle (planar) or x, y, z (spatial).
-        let labels: &[&str] = if scene.model.is_spatial() {
-            &["x", "y", "z"]
-        } else {
-            &["x", "y", "angle"]
-        };
+        let labels = scene.model.kind().position_columns();
         scene
             .model
             .body_names()

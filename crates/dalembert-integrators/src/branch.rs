@@ -97,7 +97,8 @@ impl Jump {
 pub(crate) struct BranchMonitor {
     /// The velocities before a step's projection (length `n_v`).
     v_stepped: Vec<f64>,
-    /// The largest kinetic energy seen (initial state and after every step).
+    /// The largest kinetic energy seen (initial state, after every projection and every accepted
+    /// step).
     largest_kinetic: f64,
     /// `|T + V|` at the start: with `T_max` the scale below which a change is round-off.
     energy0: f64,
@@ -124,6 +125,12 @@ impl BranchMonitor {
         }
     }
 
+    /// The run's energy scale: the largest of `|E₀|` and the largest kinetic energy seen
+    /// ([`Statistics::energy_scale`]).
+    pub(crate) fn energy_scale(&self) -> f64 {
+        self.largest_kinetic.max(self.energy0.abs())
+    }
+
     /// Whether the energy check applies (conservative model, fixed step).
     pub(crate) fn watches_energy(&self) -> bool {
         self.energy_check
@@ -137,7 +144,7 @@ impl BranchMonitor {
     /// Changes above round-off of the run's energy scale only: at rest there is no motion to
     /// switch.
     fn share(&self, change: f64) -> Option<f64> {
-        let scale = self.largest_kinetic.max(self.energy0.abs());
+        let scale = self.energy_scale();
         (self.largest_kinetic > 0.0 && change > 1e-12 * scale).then(|| change / self.largest_kinetic)
     }
 
@@ -189,10 +196,10 @@ impl BranchMonitor {
         energy: dalembert_system::Energy,
         first: bool,
     ) -> Result<(), IntegrationError> {
+        self.largest_kinetic = self.largest_kinetic.max(energy.kinetic);
         if !self.energy_check {
             return Ok(());
         }
-        self.largest_kinetic = self.largest_kinetic.max(energy.kinetic);
         let energy = energy.total();
         let share = self.share((energy - self.last_energy).abs());
         self.last_energy = energy;

@@ -39,8 +39,43 @@ pub struct Statistics {
     /// to another branch at a singular position (the run stops above
     /// [`BRANCH_SWITCH_SHARE`](crate::BRANCH_SWITCH_SHARE)).
     pub max_projection_share: f64,
+    /// The run's energy scale: the largest of `|T + V|` at the start and the kinetic energy `T`
+    /// after every accepted step. Changes of the energy are judged against it (the energy
+    /// warning, the balance of a non-conservative model); at rest it is `|V|`.
+    pub energy_scale: f64,
     /// Smallest accepted step.
     pub min_step_taken: f64,
     /// Largest accepted step.
     pub max_step_taken: f64,
+}
+
+impl Statistics {
+    /// The statistics of a run made of this one and then `later` (a run started again from
+    /// where this one stopped): counts and wall times added, the largest of the largest values,
+    /// the smallest of the smallest steps (of the parts that took a step).
+    pub fn then(&self, later: &Statistics) -> Statistics {
+        let min_step_taken = match (self.steps, later.steps) {
+            (0, _) => later.min_step_taken,
+            (_, 0) => self.min_step_taken,
+            _ => self.min_step_taken.min(later.min_step_taken),
+        };
+        Statistics {
+            steps: self.steps + later.steps,
+            rejected: self.rejected + later.rejected,
+            evaluations: self.evaluations + later.evaluations,
+            factorizations: self.factorizations + later.factorizations,
+            newton_iterations: self.newton_iterations + later.newton_iterations,
+            repartitions: self.repartitions + later.repartitions,
+            handovers: self.handovers + later.handovers,
+            bridges: self.bridges + later.bridges,
+            wall_time: self.wall_time + later.wall_time,
+            max_constraint_violation: self.max_constraint_violation.max(later.max_constraint_violation),
+            max_velocity_violation: self.max_velocity_violation.max(later.max_velocity_violation),
+            max_energy_change: self.max_energy_change.max(later.max_energy_change),
+            max_projection_share: self.max_projection_share.max(later.max_projection_share),
+            energy_scale: self.energy_scale.max(later.energy_scale),
+            min_step_taken,
+            max_step_taken: self.max_step_taken.max(later.max_step_taken),
+        }
+    }
 }

@@ -119,6 +119,7 @@ impl Monitors {
         if s.steps == 0 {
             s.min_step_taken = 0.0;
         }
+        s.energy_scale = self.branch.energy_scale();
         s
     }
 }

@@ -1,59 +1,128 @@
-//! The model of a scene or a simulation: planar or spatial.
+//! The model of a scene or a simulation, of any kind: planar or spatial bodies.
 //!
-//! Formulations and integrators see either through the system seam
-//! ([`MultibodySystem`]); what differs between the two is only
-//! what a user reads: the output columns ([`crate::output`]), the reactions (a planar joint
-//! carries `fx, fy` and perhaps a torque, a spatial one a force and a moment) and the drawing.
+//! Formulations and integrators see every kind through the system seam ([`MultibodySystem`]);
+//! what differs between kinds is only what a user reads: the names of the elements, the output
+//! columns ([`crate::output`]) and the reactions (a planar joint carries `fx, fy` and perhaps a
+//! torque, a spatial one a force and a moment). [`ModelKind`] is that contract; `planar.rs` and
+//! `spatial.rs` implement it for the two kinds there are.
 
+use dalembert_integrators::Sample;
 use dalembert_system::MultibodySystem;
+use std::any::Any;
 use std::sync::Arc;
 
-/// A planar or a spatial multibody model.
-#[derive(Debug, Clone)]
-#[non_exhaustive]
-pub enum Mechanism {
-    /// Planar bodies (`x, y, angle`), [`dalembert_constraints::Model`].
-    Planar(Arc<dalembert_constraints::Model>),
-    /// Spatial bodies (centre of mass and Euler parameters), [`dalembert_spatial::Model`].
-    Spatial(Arc<dalembert_spatial::Model>),
+mod planar;
+mod spatial;
+
+pub use planar::PLANAR_BODY_COLUMNS;
+pub use spatial::{SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS};
+
+/// What a kind of model (planar bodies, spatial bodies, later flexible ones) provides beyond the
+/// system seam, so that scenes' analyses, output, the command line and Python serve it without
+/// knowing which kind it is: the names of its elements and the columns of its output.
+///
+/// A new body kind implements this trait (one file, as `planar.rs` and `spatial.rs` in this module
+/// do) and [`MultibodySystem`]; nothing that reads a [`Mechanism`] matches on its kind.
+pub trait ModelKind: std::fmt::Debug + Send + Sync + Any {
+    /// The model as formulations and integrators see it.
+    fn system(&self) -> &dyn MultibodySystem;
+
+    /// The model through the seam, shared.
+    fn shared_system(self: Arc<Self>) -> Arc<dyn MultibodySystem>;
+
+    /// 2 for a planar model, 3 for a spatial one: the components of a force, a velocity or a
+    /// body's position a user gives or reads.
+    fn dimension(&self) -> usize;
+
+    /// The names of the joints and drivers, in the order of their reaction and effort columns.
+    fn constraint_names(&self) -> Vec<String>;
+
+    /// The names of the drivers, in the order of their `<driver>.effort` columns.
+    fn driver_names(&self) -> Vec<String>;
+
+    /// The names of the force elements that are not conservative (they do work beyond the
+    /// potential energy), in order.
+    fn nonconservative_force_names(&self) -> Vec<String>;
+
+    /// The position columns of a body that say where it is (`x, y, angle` or `x, y, z`): the
+    /// default outputs of a sweep.
+    fn position_columns(&self) -> &'static [&'static str];
+
+    /// The writer of the body and reaction columns of this model's output.
+    fn columns(self: Arc<Self>) -> Box<dyn ColumnWriter>;
+
+    /// The model as [`Any`], to reach the concrete kind ([`Mechanism::planar`]).
+    fn as_any(&self) -> &dyn Any;
+
+    /// The shared model as [`Any`] ([`Mechanism::downcast`]).
+    fn into_any(self: Arc<Self>) -> Arc<dyn Any + Send + Sync>;
 }
 
+/// The body and reaction columns of one kind of model's output, and the scratch space to fill a
+/// row of them (allocation-free after construction). [`crate::output::Rows`] adds `t` before and
+/// the energy and violations after.
+pub trait ColumnWriter: std::fmt::Debug + Send + Sync {
+    /// The body columns (`<body>.x`, …), in order.
+    fn body_columns(&self) -> Vec<String>;
+
+    /// The reaction and effort columns (`<joint>.fx`, …, `<driver>.effort`), in order.
+    fn reaction_columns(&self) -> Vec<String>;
+
+    /// Appends the values of the body columns, then of the reaction columns, of sample `s`.
+    fn push(&mut self, s: &Sample<'_>, row: &mut Vec<f64>);
+
+    /// A copy with its own scratch space.
+    fn boxed_clone(&self) -> Box<dyn ColumnWriter>;
+}
+
+/// A multibody model of any kind ([`ModelKind`]): planar or spatial.
+#[derive(Debug, Clone)]
+pub struct Mechanism(Arc<dyn ModelKind>);
+
 impl Mechanism {
+    /// A mechanism of the given kind.
+    pub fn new(kind: Arc<dyn ModelKind>) -> Self {
+        Mechanism(kind)
+    }
+
+    /// The model's kind, through its contract.
+    pub fn kind(&self) -> &dyn ModelKind {
+        self.0.as_ref()
+    }
+
     /// The model as the formulations and integrators see it.
     pub fn system(&self) -> Arc<dyn MultibodySystem> {
-        match self {
-            Mechanism::Planar(m) => m.clone(),
-            Mechanism::Spatial(m) => m.clone(),
-        }
+        self.0.clone().shared_system()
     }
 
     /// The model through the seam, borrowed.
     pub fn as_system(&self) -> &dyn MultibodySystem {
-        match self {
-            Mechanism::Planar(m) => m.as_ref(),
-            Mechanism::Spatial(m) => m.as_ref(),
-        }
+        self.0.system()
+    }
+
+    /// The model if it is of kind `T`, shared.
+    pub fn downcast<T: ModelKind>(&self) -> Option<Arc<T>> {
+        self.0.clone().into_any().downcast::<T>().ok()
     }
 
     /// The planar model, if this is one.
-    pub fn planar(&self) -> Option<&Arc<dalembert_constraints::Model>> {
-        match self {
-            Mechanism::Planar(m) => Some(m),
-            Mechanism::Spatial(_) => None,
-        }
+    pub fn planar(&self) -> Option<&dalembert_constraints::Model> {
+        self.0.as_any().downcast_ref()
     }
 
     /// The spatial model, if this is one.
-    pub fn spatial(&self) -> Option<&Arc<dalembert_spatial::Model>> {
-        match self {
-            Mechanism::Spatial(m) => Some(m),
-            Mechanism::Planar(_) => None,
-        }
+    pub fn spatial(&self) -> Option<&dalembert_spatial::Model> {
+        self.0.as_any().downcast_ref()
     }
 
-    /// True for a spatial model.
+    /// True for a model in space ([`ModelKind::dimension`] 3).
     pub fn is_spatial(&self) -> bool {
-        matches!(self, Mechanism::Spatial(_))
+        self.0.dimension() == 3
+    }
+
+    /// The writer of this model's body and reaction columns.
+    pub fn columns(&self) -> Box<dyn ColumnWriter> {
+        self.0.clone().columns()
     }
 
     /// The bodies' names, in coordinate order.
@@ -73,15 +142,7 @@ impl Mechanism {
 
     /// The names of the joints and drivers, in the order of their reaction and effort columns.
     pub fn constraint_names(&self) -> Vec<String> {
-        match self {
-            Mechanism::Planar(m) => m
-                .constraints()
-                .constraints()
-                .iter()
-                .map(|c| c.name().to_string())
-                .collect(),
-            Mechanism::Spatial(m) => m.joint_names().chain(m.driver_names()).map(String::from).collect(),
-        }
+        self.0.constraint_names()
     }
 
     /// Number of position coordinates `n_q`.
@@ -169,26 +230,20 @@ impl Mechanism {
 /// joints fix (a dense SVD of `C_q`: about 0.1 s at this size).
 pub const SUMMARY_CHECK_LIMIT: usize = 600;
 
-impl From<Arc<dalembert_constraints::Model>> for Mechanism {
-    fn from(m: Arc<dalembert_constraints::Model>) -> Self {
-        Mechanism::Planar(m)
-    }
-}
-
-impl From<Arc<dalembert_spatial::Model>> for Mechanism {
-    fn from(m: Arc<dalembert_spatial::Model>) -> Self {
-        Mechanism::Spatial(m)
+impl<T: ModelKind> From<Arc<T>> for Mechanism {
+    fn from(m: Arc<T>) -> Self {
+        Mechanism(m)
     }
 }
 
 impl From<dalembert_constraints::Model> for Mechanism {
     fn from(m: dalembert_constraints::Model) -> Self {
-        Mechanism::Planar(Arc::new(m))
+        Mechanism(Arc::new(m))
     }
 }
 
 impl From<dalembert_spatial::Model> for Mechanism {
     fn from(m: dalembert_spatial::Model) -> Self {
-        Mechanism::Spatial(Arc::new(m))
+        Mechanism(Arc::new(m))
     }
 }

@@ -1,0 +1,110 @@
+//! A run in joint coordinates seen in the model's absolute coordinates: [`JointMap`].
+//!
+//! A spatial tree integrated in joint coordinates ([`Coordinates::Joint`]) reports every sample in
+//! the model's own coordinates: the joint state mapped to each body's centre of mass, Euler
+//! parameters and velocities, then `q̈`, `λ` (hence the reactions) and the constraint residuals of
+//! the model's own formulation there, one evaluation per sample. [`crate::Simulation::run`] and the
+//! [`crate::Simulator`] share this map.
+//!
+//! [`Coordinates::Joint`]: crate::Coordinates::Joint
+
+use crate::simulation::{Simulation, SimulationError};
+use dalembert_integrators::Sample;
+use dalembert_spatial::JointCoordinates;
+use dalembert_system::tree::WorldFrame;
+use dalembert_system::{DynamicsError, Formulation, ModelError};
+
+/// The map from a joint-coordinate run to the model's coordinates, with its storage
+/// (allocation-free after construction).
+pub(crate) struct JointMap {
+    jc: JointCoordinates,
+    /// The chosen formulation on the model's absolute coordinates (for `q̈`, `λ`, residuals).
+    absolute: Box<dyn Formulation>,
+    frames: Vec<WorldFrame>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+    lambda: Vec<f64>,
+    c: Vec<f64>,
+    cdot: Vec<f64>,
+}
+
+/// A joint-coordinate run's start: the map, the formulation on the joint coordinates and the
+/// initial joint state.
+pub(crate) struct JointStart {
+    pub map: JointMap,
+    pub formulation: Box<dyn Formulation>,
+    pub q0: Vec<f64>,
+    pub qd0: Vec<f64>,
+}
+
+impl JointMap {
+    /// The tree of `simulation`'s spatial model with its zero configuration at the absolute
+    /// (assembled) state `(q, q̇)`, the chosen formulation on it and on the model.
+    pub fn start(simulation: &Simulation, q: &[f64], qd: &[f64]) -> Result<JointStart, SimulationError> {
+        let model = simulation.model.spatial().ok_or_else(|| {
+            SimulationError::JointCoordinates(ModelError::InvalidParameter {
+                element: "model".into(),
+                what: "joint coordinates are for spatial models".into(),
+            })
+        })?;
+        let jc = model
+            .joint_coordinates_at(q, qd)
+            .map_err(SimulationError::JointCoordinates)?;
+        let (q0, qd0) = jc.initial_state();
+        // The model's independent coordinates do not index the joint coordinates (which are all
+        // independent).
+        let formulation = simulation.formulation_on(jc.system(), None)?;
+        let absolute = simulation.formulation()?;
+        let (n, m) = (qd.len(), simulation.model.num_equations());
+        let map = JointMap {
+            frames: jc.frames(),
+            jc,
+            absolute,
+            q: q.to_vec(),
+            qd: qd.to_vec(),
+            qdd: vec![0.0; n],
+            lambda: vec![0.0; m],
+            c: vec![0.0; m],
+            cdot: vec![0.0; m],
+        };
+        Ok(JointStart {
+            map,
+            formulation,
+            q0,
+            qd0,
+        })
+    }
+
+    /// Maps the joint state `(q, q̇)` to the model's coordinates ([`JointMap::state`]).
+    pub fn map(&mut self, q: &[f64], qd: &[f64]) {
+        self.jc.absolute(q, qd, &mut self.frames, &mut self.q, &mut self.qd);
+    }
+
+    /// The model's state last mapped.
+    pub fn state(&self) -> (&[f64], &[f64]) {
+        (&self.q, &self.qd)
+    }
+
+    /// Sample `s` of the joint-coordinate run in the model's coordinates: the state mapped, `q̈`,
+    /// `λ` and the residuals evaluated there by the model's formulation; the energy is the run's
+    /// (the same mechanism's).
+    pub fn sample(&mut self, s: &Sample<'_>) -> Result<Sample<'_>, DynamicsError> {
+        self.map(s.q, s.qd);
+        self.absolute
+            .accelerations(s.t, &self.q, &self.qd, None, &mut self.qdd, &mut self.lambda)?;
+        self.absolute
+            .residuals(s.t, &self.q, &self.qd, &mut self.c, &mut self.cdot);
+        let max = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        Ok(Sample {
+            t: s.t,
+            q: &self.q,
+            qd: &self.qd,
+            qdd: &self.qdd,
+            lambda: &self.lambda,
+            constraint_violation: max(&self.c),
+            velocity_violation: max(&self.cdot),
+            energy: s.energy,
+        })
+    }
+}

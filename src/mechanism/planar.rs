@@ -1,0 +1,137 @@
+//! Planar bodies as a [`ModelKind`]: `x, y, angle` per body, reactions `fx, fy` (and a torque
+//! where the joint carries one), an effort per driver.
+
+use super::{ColumnWriter, ModelKind};
+use dalembert_constraints::{ConstraintRole, Model, Reaction};
+use dalembert_integrators::Sample;
+use dalembert_system::{ConstraintSet as _, ConstraintValues, MultibodySystem};
+use std::any::Any;
+use std::sync::Arc;
+
+/// The columns of a planar body: reference point, angle (continuous, never wrapped) and their
+/// rates.
+pub const PLANAR_BODY_COLUMNS: [&str; 6] = ["x", "y", "angle", "vx", "vy", "omega"];
+
+impl ModelKind for Model {
+    fn system(&self) -> &dyn MultibodySystem {
+        self
+    }
+
+    fn shared_system(self: Arc<Self>) -> Arc<dyn MultibodySystem> {
+        self
+    }
+
+    fn dimension(&self) -> usize {
+        2
+    }
+
+    fn constraint_names(&self) -> Vec<String> {
+        self.constraints()
+            .constraints()
+            .iter()
+            .map(|c| c.name().to_string())
+            .collect()
+    }
+
+    fn driver_names(&self) -> Vec<String> {
+        self.constraints()
+            .constraints()
+            .iter()
+            .filter(|c| c.role() == ConstraintRole::Driver)
+            .map(|c| c.name().to_string())
+            .collect()
+    }
+
+    fn nonconservative_force_names(&self) -> Vec<String> {
+        self.forces()
+            .iter()
+            .filter(|f| !f.is_conservative())
+            .map(|f| f.name().to_string())
+            .collect()
+    }
+
+    fn position_columns(&self) -> &'static [&'static str] {
+        &PLANAR_BODY_COLUMNS[..3]
+    }
+
+    fn columns(self: Arc<Self>) -> Box<dyn ColumnWriter> {
+        let sys = self.constraints();
+        let roles: Vec<ConstraintRole> = sys.constraints().iter().map(|c| c.role()).collect();
+        Box::new(PlanarColumns {
+            values: sys.values(),
+            reactions: vec![Reaction::default(); roles.len()],
+            roles,
+            model: self,
+        })
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn into_any(self: Arc<Self>) -> Arc<dyn Any + Send + Sync> {
+        self
+    }
+}
+
+/// The columns of a planar model and the scratch space of its reactions.
+#[derive(Debug, Clone)]
+struct PlanarColumns {
+    model: Arc<Model>,
+    roles: Vec<ConstraintRole>,
+    values: ConstraintValues,
+    reactions: Vec<Reaction>,
+}
+
+impl ColumnWriter for PlanarColumns {
+    fn body_columns(&self) -> Vec<String> {
+        self.model
+            .bodies()
+            .iter()
+            .flat_map(|b| PLANAR_BODY_COLUMNS.iter().map(move |c| format!("{}.{c}", b.name)))
+            .collect()
+    }
+
+    fn reaction_columns(&self) -> Vec<String> {
+        let mut names = Vec::new();
+        let sys = self.model.constraints();
+        for (c, role) in sys.constraints().iter().zip(&self.roles) {
+            match role {
+                ConstraintRole::Joint { carries_torque } => {
+                    names.push(format!("{}.fx", c.name()));
+                    names.push(format!("{}.fy", c.name()));
+                    if *carries_torque {
+                        names.push(format!("{}.torque", c.name()));
+                    }
+                }
+                ConstraintRole::Driver => names.push(format!("{}.effort", c.name())),
+            }
+        }
+        names
+    }
+
+    fn push(&mut self, s: &Sample<'_>, row: &mut Vec<f64>) {
+        let sys = self.model.constraints();
+        sys.evaluate(s.t, s.q, s.qd, &mut self.values);
+        sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
+        for i in 0..s.q.len() / 3 {
+            row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
+            row.extend_from_slice(&s.qd[3 * i..3 * i + 3]);
+        }
+        for (r, role) in self.reactions.iter().zip(&self.roles) {
+            match role {
+                ConstraintRole::Joint { carries_torque } => {
+                    row.extend_from_slice(&[r.force.x, r.force.y]);
+                    if *carries_torque {
+                        row.push(r.torque);
+                    }
+                }
+                ConstraintRole::Driver => row.push(r.effort.unwrap_or(f64::NAN)),
+            }
+        }
+    }
+
+    fn boxed_clone(&self) -> Box<dyn ColumnWriter> {
+        Box::new(self.clone())
+    }
+}

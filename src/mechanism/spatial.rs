@@ -1,0 +1,123 @@
+//! Spatial bodies as a [`ModelKind`]: centre of mass, Euler parameters and velocities per body,
+//! a force and a moment per joint, an effort per driver.
+
+use super::{ColumnWriter, ModelKind};
+use dalembert_integrators::Sample;
+use dalembert_spatial::frame::Frame;
+use dalembert_spatial::{Model, Reaction};
+use dalembert_system::MultibodySystem;
+use std::any::Any;
+use std::sync::Arc;
+
+/// The columns of a spatial body: centre of mass, Euler parameters, centre-of-mass velocity and
+/// angular velocity (global components).
+pub const SPATIAL_BODY_COLUMNS: [&str; 13] = [
+    "x", "y", "z", "e0", "e1", "e2", "e3", "vx", "vy", "vz", "wx", "wy", "wz",
+];
+
+/// The columns of a spatial joint: force and moment (about the joint's point) that its second body
+/// exerts on its first, global components.
+pub const SPATIAL_JOINT_COLUMNS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
+
+impl ModelKind for Model {
+    fn system(&self) -> &dyn MultibodySystem {
+        self
+    }
+
+    fn shared_system(self: Arc<Self>) -> Arc<dyn MultibodySystem> {
+        self
+    }
+
+    fn dimension(&self) -> usize {
+        3
+    }
+
+    fn constraint_names(&self) -> Vec<String> {
+        self.joint_names()
+            .chain(self.driver_names())
+            .map(String::from)
+            .collect()
+    }
+
+    fn driver_names(&self) -> Vec<String> {
+        Model::driver_names(self).map(String::from).collect()
+    }
+
+    fn nonconservative_force_names(&self) -> Vec<String> {
+        Model::nonconservative_force_names(self).map(String::from).collect()
+    }
+
+    fn position_columns(&self) -> &'static [&'static str] {
+        &SPATIAL_BODY_COLUMNS[..3]
+    }
+
+    fn columns(self: Arc<Self>) -> Box<dyn ColumnWriter> {
+        let joints = self.joint_names().count();
+        Box::new(SpatialColumns {
+            reactions: vec![
+                Reaction {
+                    force: Default::default(),
+                    moment: Default::default(),
+                    point: Default::default(),
+                    axes: Default::default(),
+                };
+                joints
+            ],
+            drivers: Model::driver_names(&self).count(),
+            model: self,
+        })
+    }
+
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
+    fn into_any(self: Arc<Self>) -> Arc<dyn Any + Send + Sync> {
+        self
+    }
+}
+
+/// The columns of a spatial model and the scratch space of its reactions.
+#[derive(Debug, Clone)]
+struct SpatialColumns {
+    model: Arc<Model>,
+    reactions: Vec<Reaction>,
+    drivers: usize,
+}
+
+impl ColumnWriter for SpatialColumns {
+    fn body_columns(&self) -> Vec<String> {
+        self.model
+            .bodies()
+            .iter()
+            .flat_map(|b| SPATIAL_BODY_COLUMNS.iter().map(move |c| format!("{}.{c}", b.name)))
+            .collect()
+    }
+
+    fn reaction_columns(&self) -> Vec<String> {
+        let joints = self.model.joint_names();
+        let mut names: Vec<String> = joints
+            .flat_map(|j| SPATIAL_JOINT_COLUMNS.iter().map(move |c| format!("{j}.{c}")))
+            .collect();
+        names.extend(self.model.driver_names().map(|d| format!("{d}.effort")));
+        names
+    }
+
+    fn push(&mut self, s: &Sample<'_>, row: &mut Vec<f64>) {
+        for i in 0..self.model.bodies().len() {
+            let f = Frame::of(i, s.q, s.qd);
+            row.extend_from_slice(&s.q[7 * i..7 * i + 7]);
+            row.extend(f.v.iter().chain(f.w.iter()));
+        }
+        self.model.reactions_into(s.t, s.q, s.lambda, &mut self.reactions);
+        for r in &self.reactions {
+            row.extend(r.force.iter().chain(r.moment.iter()));
+        }
+        let first = s.lambda.len() - self.drivers;
+        row.extend(s.lambda[first..].iter().map(|l| -l));
+    }
+
+    fn boxed_clone(&self) -> Box<dyn ColumnWriter> {
+        Box::new(self.clone())
+    }
+}
