@@ -22,8 +22,10 @@ pub mod animation;
 pub mod builder;
 pub mod code_force;
 pub mod energy;
+pub mod equilibrium;
 mod joint_map;
 pub mod mechanism;
+pub mod modes;
 pub mod output;
 pub mod scene;
 pub mod simulation;
@@ -42,7 +44,9 @@ pub use dalembert_system as system;
 
 pub use analysis::{CheckReport, Recording};
 pub use builder::ModelBuilder;
+pub use equilibrium::{Equilibrium, EquilibriumError};
 pub use mechanism::Mechanism;
+pub use modes::Modes;
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError, SceneValue};
 pub use simulation::{

@@ -55,6 +55,7 @@ mod method_args;
 mod paths;
 mod plot;
 mod simulate;
+mod statics;
 mod sweep;
 mod trade;
 
@@ -85,6 +86,10 @@ enum Command {
     Sweep(sweep::Args),
     /// Write a self-contained HTML animation of a scene's motion (or of a saved run, --from).
     Animate(animate::Args),
+    /// The static equilibrium nearest the scene's position: positions, reactions, stability.
+    Equilibrium(statics::Args),
+    /// Natural frequencies, damping ratios and mode shapes about the static equilibrium.
+    Modes(statics::Args),
 }
 
 /// A usage error on one line that names what is wrong: the missing arguments, the suggestion for
@@ -156,6 +161,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Simulate(a) => simulate::run(a),
         Command::Check(a) => check::run(a),
+        Command::Equilibrium(a) => statics::equilibrium(a),
+        Command::Modes(a) => statics::modes(a),
         Command::Inverse(a) => inverse::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Trade(a) => trade::run(a),

@@ -246,6 +246,45 @@ impl PyScene {
         Ok(d)
     }
 
+    /// The static equilibrium nearest the scene's position (drivers held at t = 0, inputs at 0):
+    /// a dict from the position columns (`rod.x`, …, as in the CSV) to their values, with
+    /// `reactions` (a dict of the reaction and effort columns), `stable`, `free_directions`,
+    /// `unstable_directions`, `stiffness` (the eigenvalues of the reduced stiffness relative to
+    /// the reduced mass, 1/s²) and `iterations`. Raises ValueError naming the cause when there is
+    /// none (a net force along a direction nothing resists) or Newton's method does not converge.
+    fn equilibrium<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let scene = self.inner.clone();
+        let eq = py
+            .detach(move || scene.equilibrium())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        equilibrium_dict(py, &eq)
+    }
+
+    /// Natural frequencies (Hz, ascending), damping ratios and mode shapes about the static
+    /// equilibrium: a dict with `frequencies` and `damping_ratios` (numpy arrays), `shapes` (a
+    /// numpy array, one row per mode over `columns`, the position columns), and `equilibrium`
+    /// (as `equilibrium()` returns it). Raises ValueError at an unstable equilibrium.
+    fn modes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let scene = self.inner.clone();
+        let modes = py
+            .detach(move || scene.modes())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let d = PyDict::new(py);
+        d.set_item("frequencies", numpy::PyArray1::from_vec(py, modes.frequencies.clone()))?;
+        d.set_item(
+            "damping_ratios",
+            numpy::PyArray1::from_vec(py, modes.damping_ratios.clone()),
+        )?;
+        let (rows, cols) = (modes.shapes.len(), modes.columns.len());
+        let flat: Vec<f64> = modes.shapes.iter().flatten().copied().collect();
+        let array = numpy::ndarray::Array2::from_shape_vec((rows, cols), flat)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        d.set_item("shapes", numpy::PyArray2::from_owned_array(py, array))?;
+        d.set_item("columns", &modes.columns)?;
+        d.set_item("equilibrium", equilibrium_dict(py, &modes.equilibrium)?)?;
+        Ok(d)
+    }
+
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
     /// line's flags do); the methods' parameters (`rtol`, `atol`, `rho_inf`) are keywords too. Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
     /// so far) when the run stops early; with `strict=True` also when a conservative model's
@@ -546,4 +585,23 @@ pub fn sweep_runs<'py>(
         out.append(item)?;
     }
     Ok(out)
+}
+
+/// An equilibrium as the dict `Scene.equilibrium` returns.
+fn equilibrium_dict<'py>(py: Python<'py>, eq: &dalembert::Equilibrium) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (n, v) in &eq.positions {
+        d.set_item(n, v)?;
+    }
+    let reactions = PyDict::new(py);
+    for (n, v) in &eq.reactions {
+        reactions.set_item(n, v)?;
+    }
+    d.set_item("reactions", reactions)?;
+    d.set_item("stable", eq.stable)?;
+    d.set_item("free_directions", &eq.free_directions)?;
+    d.set_item("unstable_directions", &eq.unstable_directions)?;
+    d.set_item("stiffness", &eq.stiffness)?;
+    d.set_item("iterations", eq.iterations)?;
+    Ok(d)
 }

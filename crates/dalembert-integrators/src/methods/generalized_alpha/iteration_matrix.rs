@@ -25,9 +25,8 @@
 //! that of the independent equations, whose solution is the same motion. The saddle-point
 //! factorization without the tangent terms is set up on `R` alone.
 
-use super::residual;
 use dalembert_system::linalg::{Backend, LinalgError, PatternLu, SaddlePoint};
-use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem, TangentPattern, TangentValues};
+use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem, ResidualTangent, TangentAt, TangentPattern};
 
 /// Largest `(β' ‖∂r/∂q‖ + γ' ‖∂r/∂v‖) / ‖M‖` (row-sum norms) for which the tangent terms are
 /// dropped from the matrix: Newton then contracts by about that ratio per iteration.
@@ -39,10 +38,8 @@ pub(super) const KKT_PIVOT_TOLERANCE: f64 = 1e-13;
 
 /// The tangent, the matrix's storage and its factors.
 pub(crate) struct IterationMatrix {
-    tangent: TangentPattern,
     /// `∂r/∂q` and `∂r/∂v` over the tangent's entries, from the last differentiation.
-    dr_dq: Vec<f64>,
-    dr_dv: Vec<f64>,
+    tangent: ResidualTangent,
     /// Whether `dr_dq`, `dr_dv` hold a differentiation, and whether it was the analytic one.
     differentiated: bool,
     analytic: bool,
@@ -59,12 +56,8 @@ pub(crate) struct IterationMatrix {
     /// the index of each of its entries in the system's values, and its values), the entries of
     /// the dropped rows, and `(n + |R|)` scratch for `kkt`'s solves. `None` without redundancy.
     reduced: Option<Reduced>,
-    /// Work vectors for the differences.
-    step: Vec<f64>,
-    q: Vec<f64>,
+    /// Scratch of `n_v` (row sums).
     v: Vec<f64>,
-    plus: Vec<f64>,
-    minus: Vec<f64>,
 }
 
 /// The independent equations of a redundant system (see the module documentation).
@@ -96,11 +89,11 @@ impl IterationMatrix {
         mass: &BlockDiagonal,
         independent: Option<Vec<usize>>,
     ) -> Result<Self, LinalgError> {
-        let tangent = TangentPattern::new(system);
-        let n = tangent.dim();
+        let tangent = ResidualTangent::new(system);
+        let n = tangent.pattern().dim();
         let pattern = system.constraints().pattern();
         let m = pattern.rows();
-        let mut entries: Vec<(usize, usize)> = tangent.entries().collect();
+        let mut entries: Vec<(usize, usize)> = tangent.pattern().entries().collect();
         entries.extend(mass.entries().map(|(r, c, _)| (r, c)));
         entries.extend(pattern.entries().iter().map(|&(r, c)| (n + r, c)));
         entries.extend(pattern.entries().iter().map(|&(r, c)| (c, n + r)));
@@ -138,10 +131,7 @@ impl IterationMatrix {
             KKT_PIVOT_TOLERANCE,
         )
         .ok();
-        let n_q = system.layout().n_q();
         Ok(IterationMatrix {
-            dr_dq: vec![0.0; tangent.len()],
-            dr_dv: vec![0.0; tangent.len()],
             differentiated: false,
             analytic: false,
             norms: (0.0, 0.0),
@@ -150,11 +140,7 @@ impl IterationMatrix {
             kkt,
             uses_kkt: false,
             reduced,
-            step: vec![0.0; n],
-            q: vec![0.0; n_q],
             v: vec![0.0; n],
-            plus: vec![0.0; k],
-            minus: vec![0.0; k],
         })
     }
 
@@ -189,78 +175,28 @@ impl IterationMatrix {
         values: &mut ConstraintValues,
         at: &Trial<'_>,
     ) -> u64 {
-        let mut out = TangentValues::new(&self.tangent, &mut self.dr_dq, &mut self.dr_dv);
-        self.analytic = system.residual_tangent(at.t, (at.q, at.v), (at.qdd, at.lambda), &mut out);
+        let trial = TangentAt {
+            t: at.t,
+            q: at.q,
+            v: at.v,
+            qdd: at.qdd,
+            lambda: at.lambda,
+        };
+        self.analytic = self.tangent.differentiate(system, mass, values, &trial);
         let cost = if self.analytic {
             0
         } else {
-            self.difference(system, mass, values, at);
-            4 * self.tangent.passes().len() as u64
+            4 * self.tangent.pattern().passes().len() as u64
         };
         self.norms = (
-            Self::row_sum_norm(&self.tangent, &self.dr_dq, &mut self.v),
-            Self::row_sum_norm(&self.tangent, &self.dr_dv, &mut self.v),
+            Self::row_sum_norm(self.tangent.pattern(), self.tangent.dr_dq(), &mut self.v),
+            Self::row_sum_norm(self.tangent.pattern(), self.tangent.dr_dv(), &mut self.v),
         );
         self.differentiated = true;
         // Leave `mass` and `values` at the trial state, as the residual there left them.
         system.mass(at.q, mass);
         system.constraints().evaluate(at.t, at.q, at.v, values);
         cost
-    }
-
-    /// `∂r/∂q` and `∂r/∂v` by central differences of the residual, column passes at a time.
-    fn difference(
-        &mut self,
-        system: &dyn MultibodySystem,
-        mass: &mut BlockDiagonal,
-        values: &mut ConstraintValues,
-        at: &Trial<'_>,
-    ) {
-        let largest_position = at.q.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let rates = at.q.len() == at.v.len();
-        for pass in self.tangent.passes() {
-            for velocity in [false, true] {
-                // Relative steps: to the velocity, or to the position coordinate when `v = q̇`
-                // (otherwise to the largest position: the direction mixes coordinates).
-                for &j in pass {
-                    let size = match (velocity, rates) {
-                        (true, _) => at.v[j].abs(),
-                        (false, true) => at.q[j].abs(),
-                        (false, false) => largest_position,
-                    };
-                    self.step[j] = 1e-7 * (1.0 + size);
-                }
-                for (sign, out) in [(1.0, &mut self.plus), (-1.0, &mut self.minus)] {
-                    self.q.copy_from_slice(at.q);
-                    self.v.copy_from_slice(at.v);
-                    if velocity {
-                        for &j in pass {
-                            self.v[j] += sign * self.step[j];
-                        }
-                    } else {
-                        system.integrate_positions(&mut self.q, &self.step, sign);
-                    }
-                    residual(
-                        mass,
-                        values,
-                        system,
-                        at.t,
-                        (&self.q, &self.v),
-                        (at.qdd, at.lambda),
-                        1.0,
-                        out,
-                    );
-                }
-                let target = if velocity { &mut self.dr_dv } else { &mut self.dr_dq };
-                for &j in pass {
-                    let h = self.step[j];
-                    for (e, &i) in self.tangent.column(j).zip(self.tangent.rows(j)) {
-                        target[e] = (self.plus[i] - self.minus[i]) / (2.0 * h);
-                    }
-                    self.step[j] = 0.0;
-                }
-            }
-        }
     }
 
     /// `max_i Σ_j |values_ij|` over the tangent pattern (`sums`: scratch of `n_v`).
@@ -312,10 +248,10 @@ impl IterationMatrix {
             }
         }
         self.uses_kkt = false;
-        let nt = self.dr_dq.len();
+        let nt = self.tangent.dr_dq().len();
         let out = self.lu.values_mut();
         let (tangent, rest) = out.split_at_mut(nt);
-        for ((o, dq), dv) in tangent.iter_mut().zip(&self.dr_dq).zip(&self.dr_dv) {
+        for ((o, dq), dv) in tangent.iter_mut().zip(self.tangent.dr_dq()).zip(self.tangent.dr_dv()) {
             *o = beta * dq + gamma * dv;
         }
         let masked = self.reduced.as_ref().map_or(0, |r| r.dropped.len());
@@ -339,7 +275,7 @@ impl IterationMatrix {
 
     /// `x ← A⁻¹ x` with the last factors (the masked rows of a redundant system give zero).
     pub fn solve(&mut self, system: &dyn MultibodySystem, x: &mut [f64]) {
-        let n = self.step.len();
+        let n = self.v.len();
         match (&mut self.kkt, &mut self.reduced) {
             (Some(kkt), Some(r)) if self.uses_kkt => {
                 r.x[..n].copy_from_slice(&x[..n]);
@@ -369,6 +305,7 @@ impl IterationMatrix {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::generalized_alpha::residual;
     use dalembert_testkit::generator::{build, BodySpec, LoopSpec, Spec, SpringSpec};
     use std::sync::Arc;
 
@@ -489,20 +426,27 @@ mod tests {
             let mut mass = system.mass_storage();
             system.mass(&q, &mut mass);
             let mut values = system.constraints().values();
-            let mut matrix = IterationMatrix::new(&*system, &mass, None).unwrap();
+            let mut tangent = ResidualTangent::new(&*system);
             // More than one body: some columns share a pass.
-            let passes = matrix.tangent.passes().len();
+            let passes = tangent.pattern().passes().len();
             assert!(
                 passes <= n && (n <= 6 || passes < n),
                 "{name}: {passes} passes for {n} columns"
             );
-            matrix.difference(&*system, &mut mass, &mut values, &at);
-            for (velocity, got) in [(false, &matrix.dr_dq), (true, &matrix.dr_dv)] {
+            let trial = TangentAt {
+                t: at.t,
+                q: at.q,
+                v: at.v,
+                qdd: at.qdd,
+                lambda: at.lambda,
+            };
+            tangent.differences(&*system, &mut mass, &mut values, &trial);
+            for (velocity, got) in [(false, tangent.dr_dq()), (true, tangent.dr_dv())] {
                 let plain = plain_tangent(&*system, &at, velocity);
                 let scale = plain.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
                 assert!(scale > 0.0, "{name}");
                 let mut dense = vec![vec![0.0; n]; n];
-                for (e, (i, j)) in matrix.tangent.entries().enumerate() {
+                for (e, (i, j)) in tangent.pattern().entries().enumerate() {
                     dense[j][i] = got[e];
                 }
                 for j in 0..n {
@@ -541,11 +485,11 @@ mod tests {
         assert_eq!(matrix.differentiate(system, &mut mass, &mut values, &at), 0);
         assert!(matrix.is_analytic());
         let mut worst = 0.0f64;
-        for (velocity, got) in [(false, &matrix.dr_dq), (true, &matrix.dr_dv)] {
+        for (velocity, got) in [(false, matrix.tangent.dr_dq()), (true, matrix.tangent.dr_dv())] {
             let plain = plain_tangent(system, &at, velocity);
             let scale = plain.iter().flatten().fold(1.0f64, |a, v| a.max(v.abs()));
             let mut dense = vec![vec![0.0; n]; n];
-            for (e, (i, j)) in matrix.tangent.entries().enumerate() {
+            for (e, (i, j)) in matrix.tangent.pattern().entries().enumerate() {
                 dense[j][i] = got[e];
             }
             for j in 0..n {

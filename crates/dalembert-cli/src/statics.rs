@@ -1,0 +1,77 @@
+//! `dalembert equilibrium` and `dalembert modes`: [`dalembert::Scene::equilibrium`] and
+//! [`dalembert::Scene::modes`] printed.
+
+use dalembert::output::shortest;
+use dalembert::{Equilibrium, Scene};
+use std::path::PathBuf;
+
+/// Arguments of `equilibrium` and `modes`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scene file (TOML).
+    scene: PathBuf,
+}
+
+fn load(a: &Args) -> Result<Scene, String> {
+    Scene::from_path(&a.scene).map_err(|e| e.to_string())
+}
+
+/// `name = value` pairs on one line.
+fn pairs(list: &[(String, f64)]) -> String {
+    list.iter()
+        .map(|(n, v)| format!("{n} = {}", shortest(*v)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn print_equilibrium(scene: &Scene, eq: &Equilibrium) {
+    outln!("scene        {}", scene.name);
+    let verdict = if eq.stable {
+        "stable".to_string()
+    } else if !eq.unstable_directions.is_empty() {
+        format!("unstable along {}", eq.unstable_directions.join("; "))
+    } else {
+        format!("neutral along {}", eq.free_directions.join("; "))
+    };
+    outln!(
+        "equilibrium  found in {} Newton iteration(s); {verdict} (reduced stiffness over mass: {} 1/s²)",
+        eq.iterations,
+        eq.stiffness.iter().map(|x| shortest(*x)).collect::<Vec<_>>().join(", ")
+    );
+    outln!("positions    {}", pairs(&eq.positions));
+    if !eq.reactions.is_empty() {
+        outln!("reactions    {}", pairs(&eq.reactions));
+    }
+}
+
+/// `dalembert equilibrium SCENE`.
+pub fn equilibrium(a: Args) -> Result<(), String> {
+    let scene = load(&a)?;
+    let eq = scene.equilibrium().map_err(|e| e.to_string())?;
+    print_equilibrium(&scene, &eq);
+    Ok(())
+}
+
+/// `dalembert modes SCENE`.
+pub fn modes(a: Args) -> Result<(), String> {
+    let scene = load(&a)?;
+    let modes = scene.modes().map_err(|e| e.to_string())?;
+    print_equilibrium(&scene, &modes.equilibrium);
+    outln!("\nmode  frequency (Hz)  damping ratio  shape (largest position changes)");
+    for (k, ((f, z), shape)) in modes
+        .frequencies
+        .iter()
+        .zip(&modes.damping_ratios)
+        .zip(&modes.shapes)
+        .enumerate()
+    {
+        outln!(
+            "{:>4}  {:>14}  {:>13}  {}",
+            k + 1,
+            format!("{f:.6}"),
+            format!("{z:.6}"),
+            dalembert::equilibrium::describe(&modes.columns, shape)
+        );
+    }
+    Ok(())
+}

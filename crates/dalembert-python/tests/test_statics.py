@@ -1,0 +1,72 @@
+"""Static equilibrium and vibration modes from Python against closed forms: a mass on a spring
+(static deflection m g / k, ω_n = √(k/m), ζ = c / (2√(k m))) and the shipped pendulum (the pivot
+carries the weight; ω² = m g d / (m L²/12 + m d²)); a free body is refused naming the cause."""
+
+import math
+
+import numpy as np
+import pytest
+
+import dalembert
+
+from conftest import ROOT
+
+G = 9.81
+
+SPRING = """
+[scene]
+gravity = [0.0, -9.81]
+[[bodies]]
+name = "slider"
+mass = 2.0
+inertia = 0.1
+position = [0.0, -1.0]
+[[joints]]
+name = "guide"
+type = "prismatic"
+bodies = ["ground", "slider"]
+at = [0.0, -1.0]
+axis = [0.0, 1.0]
+[[forces]]
+name = "spring"
+type = "spring-damper"
+bodies = ["ground", "slider"]
+at = [[0.0, 0.0], [0.0, -1.0]]
+stiffness = 400.0
+damping = 4.0
+free_length = 1.0
+"""
+
+
+def test_a_mass_on_a_spring_rests_and_rings_at_its_closed_forms():
+    scene = dalembert.Scene.from_toml(SPRING)
+    eq = scene.equilibrium()
+    # Newton to the assembly's 1e-12; the damped pair of eigenvalues to 1e-10 relative.
+    assert abs(eq["slider.y"] - (-1.0 - 2.0 * G / 400.0)) < 1e-12
+    assert eq["stable"] and eq["free_directions"] == []
+    modes = scene.modes()
+    assert isinstance(modes["frequencies"], np.ndarray)
+    wn = math.sqrt(400.0 / 2.0)
+    assert abs(modes["frequencies"][0] - wn / (2 * math.pi)) < 1e-10 * wn
+    assert abs(modes["damping_ratios"][0] - 4.0 / (2 * math.sqrt(800.0))) < 1e-10
+    assert modes["shapes"].shape == (1, len(modes["columns"]))
+    assert modes["shapes"][0][modes["columns"].index("slider.y")] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_the_pendulum_hangs_with_its_weight_on_the_pivot():
+    scene = dalembert.Scene.load(str(ROOT / "scenes" / "pendulum.toml"))
+    eq = scene.equilibrium()
+    d = math.hypot(0.25, 0.433)  # the file's centre of mass from the pivot
+    assert abs(eq["rod.y"] + d) < 1e-12
+    assert abs(eq["reactions"]["pivot.fy"] + G) < 1e-10
+    f = scene.modes()["frequencies"][0]
+    expected = math.sqrt(G * d / (1.0 / 12.0 + d * d)) / (2 * math.pi)
+    assert abs(f - expected) < 1e-10 * expected
+
+
+def test_a_free_body_has_no_equilibrium():
+    scene = dalembert.Scene.from_toml(
+        '[scene]\ngravity = [0.0, -9.81]\n[[bodies]]\nname = "stone"\nmass = 2.0\ninertia = 0.1\nposition = [0.0, 1.0]\n'
+    )
+    with pytest.raises(ValueError, match="there is none: a net force of 19.62 acts along stone.y"):
+        scene.equilibrium()

@@ -1,0 +1,534 @@
+//! Static equilibrium of a scene: [`Scene::equilibrium`].
+//!
+//! From the scene's position, Newton's method on the constrained static equations
+//! (`docs/statics.md`, equations S1–S3)
+//!
+//! ```text
+//! C_qᵀ(q) λ − Q(t, q, 0) = 0,     C(q, t) = 0,
+//! ```
+//!
+//! with the drivers held at the scene's time 0 and the inputs at 0. Each iteration solves
+//! `[K C_qᵀ; C_q 0] [Δv; Δλ] = −[r; C]`, with `K = ∂r/∂q` the tangent of the dynamic residual at
+//! rest (the system's analytic tangent, or its central differences: [`ResidualTangent`]) on its
+//! sparsity ([`PatternLu`]: the symbolic analysis once), and moves the positions along the
+//! velocity coordinates, `q ← q ⊕ α Δv` (Euler parameters stay on the rotation group), with a
+//! backtracking line search on the scaled residual.
+//!
+//! A singular matrix (a direction without stiffness: at the start `λ = 0` gives a pendulum none)
+//! or a step that does not decrease the residual adds `μ M` to `K` (Levenberg–Marquardt with the
+//! mass matrix as the metric), removed again as full steps succeed.
+//!
+//! At the equilibrium, the reduced stiffness `K_r = Bᵀ K B` relative to the reduced mass (`B` the
+//! velocity transformation of coordinate partitioning: the admissible motions) says whether it is
+//! stable; a direction in which the stiffness vanishes is a neutral mechanism, reported with the
+//! equilibrium. Where Newton's method cannot converge, a free direction along which a net force
+//! acts is named with that force: there is no equilibrium.
+
+use crate::output::Rows;
+use crate::Scene;
+use dalembert_integrators::Sample;
+use dalembert_system::linalg::PatternLu;
+use dalembert_system::{ConstraintSet, MultibodySystem, Partition, ResidualTangent, TangentAt, VelocityTransform};
+use nalgebra::DMatrix;
+use thiserror::Error;
+
+/// Why no equilibrium was found (one line naming the cause).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum EquilibriumError {
+    /// The constraints are redundant at the scene's position (the equations named).
+    #[error("equilibrium: redundant constraint equations at the scene's position ({0}); the static solve needs independent ones")]
+    Redundant(String),
+    /// A direction of the admissible motions in which nothing resists, and a net force along it:
+    /// no position balances it.
+    #[error("equilibrium: there is none: a net force of {} acts along {direction}, in which nothing resists (zero stiffness)", dalembert_system::Shortest(*.force))]
+    Mechanism {
+        /// The free direction, as its largest velocity components.
+        direction: String,
+        /// The net generalized force along it (per unit of the direction).
+        force: f64,
+    },
+    /// Newton's method did not converge from the scene's position.
+    #[error("equilibrium: not found from the scene's position after {iterations} iterations (residual force {force:.3e}, constraint violation {violation:.3e}); start it nearer, or look for a force that no position balances")]
+    NotConverged {
+        /// Iterations taken.
+        iterations: usize,
+        /// Largest residual generalized force at the last iterate.
+        force: f64,
+        /// Largest constraint violation at the last iterate.
+        violation: f64,
+    },
+    /// The model or its constraints could not be evaluated.
+    #[error("equilibrium: {0}")]
+    Model(String),
+}
+
+/// Column names with their values.
+type Named = Vec<(String, f64)>;
+
+/// A static equilibrium of a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Equilibrium {
+    /// Positions at the equilibrium (the model's coordinates).
+    pub q: Vec<f64>,
+    /// Multipliers there.
+    pub lambda: Vec<f64>,
+    /// The position columns of the output (`crank.x`, …, `top.e3`) with their values.
+    pub positions: Vec<(String, f64)>,
+    /// The reaction and effort columns (`pin.fx`, …, `motor.effort`) with their values.
+    pub reactions: Vec<(String, f64)>,
+    /// Eigenvalues `μ` of the reduced stiffness relative to the reduced mass,
+    /// `K_r φ = μ M_r φ` (symmetric parts), ascending, in 1/s²: the squares of the natural
+    /// angular frequencies where positive, a growth rate squared where negative; they do not
+    /// depend on which coordinates are independent.
+    pub stiffness: Vec<f64>,
+    /// The directions in which the stiffness vanishes (a neutral mechanism: a spin about a
+    /// spherical joint's vertical, a slider nothing pushes), each as its largest velocity
+    /// components.
+    pub free_directions: Vec<String>,
+    /// The directions in which the stiffness is negative: the equilibrium is unstable there.
+    pub unstable_directions: Vec<String>,
+    /// Whether the equilibrium is stable: every eigenvalue of the reduced stiffness positive
+    /// (none free).
+    pub stable: bool,
+    /// Newton iterations taken.
+    pub iterations: usize,
+}
+
+/// The reduced matrices of a scene at a state of rest: `B` (`n_v × dof`, admissible velocities
+/// `v = B v_i`), `K_r = Bᵀ K B`, `D_r = Bᵀ D B`, `M_r = Bᵀ M B`, with `K = ∂r/∂q`, `D = ∂r/∂v`.
+pub(crate) struct Reduced {
+    pub b: DMatrix<f64>,
+    pub k: DMatrix<f64>,
+    pub d: DMatrix<f64>,
+    pub m: DMatrix<f64>,
+}
+
+/// Largest Newton iterations.
+const MAX_ITERATIONS: usize = 100;
+/// Converged when the constraint violation is below this (m, rad: the assembly's tolerance) …
+const POSITION_TOLERANCE: f64 = 1e-12;
+/// … and the residual force below this share of the force scale.
+const FORCE_TOLERANCE: f64 = 1e-10;
+/// Relative eigenvalue of the reduced stiffness below which a direction counts as free.
+const FREE_TOLERANCE: f64 = 1e-9;
+/// The largest change of a coordinate in one step, as a share of the length scale.
+const STEP_LIMIT: f64 = 0.5;
+/// The largest regularization, in units of the force scale per length and mass: past it the
+/// residual does not decrease along any direction the matrix gives.
+const MU_LARGEST: f64 = 1e8;
+
+impl Scene {
+    /// The static equilibrium nearest the scene's position (see the module documentation).
+    pub fn equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
+        let system = self.model.as_system();
+        let sys = system.constraints();
+        let (n, m) = (system.layout().n_v(), system.num_equations());
+        let t = 0.0;
+        let structure = self.structure().map_err(|e| EquilibriumError::Model(e.to_string()))?;
+        if !structure.redundant.is_empty() {
+            let names: Vec<String> = structure.redundant.iter().map(|e| e.to_string()).collect();
+            return Err(EquilibriumError::Redundant(names.join(", ")));
+        }
+        let mut tangent = ResidualTangent::new(system);
+        let mut mass = system.mass_storage();
+        system.mass(&self.q, &mut mass);
+        // The matrix's entries: the tangent's, the mass blocks' (the regularization), `C_q`, `C_qᵀ`.
+        let mut entries: Vec<(usize, usize)> = tangent.pattern().entries().collect();
+        entries.extend(mass.entries().map(|(r, c, _)| (r, c)));
+        let pattern = sys.pattern();
+        entries.extend(pattern.entries().iter().map(|&(r, c)| (n + r, c)));
+        entries.extend(pattern.entries().iter().map(|&(r, c)| (c, n + r)));
+        let mut lu = PatternLu::new(n + m, entries, PatternLu::DENSE_LIMIT)
+            .map_err(|e| EquilibriumError::Model(e.to_string()))?;
+        let (mut values, mut scratch) = (sys.values(), sys.values());
+        let (zero_v, zero_a) = (vec![0.0; n], vec![0.0; n]);
+        let mut q = self.q.clone();
+        let mut lambda = vec![0.0; m];
+        let mut f = vec![0.0; n + m];
+        // Scales: the generalized forces at the start, the positions' size.
+        let mut q_force = vec![0.0; n];
+        system.applied_forces(t, &q, &zero_v, &mut q_force);
+        let force_scale = 1.0 + q_force.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let length_scale = 1.0 + q.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let residual = |q: &[f64], lambda: &[f64], mass: &mut _, values: &mut _, f: &mut [f64]| {
+            let (r, c) = f.split_at_mut(n);
+            system.dynamics_residual(t, (q, &zero_v), (&zero_a, lambda), (mass, values), r);
+            c.copy_from_slice(&values.c);
+            let force = r.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let violation = c.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let merit = r.iter().map(|x| (x / force_scale).powi(2)).sum::<f64>()
+                + c.iter().map(|x| (x / length_scale).powi(2)).sum::<f64>();
+            (force, violation, merit)
+        };
+        let mut step = vec![0.0; n + m];
+        // The first multipliers: those of the motion at rest here, `[M C_qᵀ; C_q 0] [q̈; λ] =
+        // [Q; 0]`, so that the first tangent has the constraints' geometric stiffness (with λ = 0
+        // a pendulum has none).
+        sys.evaluate(t, &q, &zero_v, &mut values);
+        {
+            let nt = tangent.dr_dq().len();
+            let nm = mass.entries().count();
+            let nj = values.jacobian.len();
+            let a = lu.values_mut();
+            a[..nt].fill(0.0);
+            for (o, (_, _, v)) in a[nt..nt + nm].iter_mut().zip(mass.entries()) {
+                *o = v;
+            }
+            a[nt + nm..nt + nm + nj].copy_from_slice(&values.jacobian);
+            a[nt + nm + nj..].copy_from_slice(&values.jacobian);
+            if lu.factor().is_ok() {
+                step[..n].copy_from_slice(&q_force);
+                step[n..].fill(0.0);
+                lu.solve_in_place(&mut step);
+                if step.iter().all(|x| x.is_finite()) {
+                    lambda.copy_from_slice(&step[n..]);
+                }
+            }
+        }
+        let (mut force, mut violation, mut merit) = residual(&q, &lambda, &mut mass, &mut values, &mut f);
+        let (mut q_try, mut lambda_try) = (q.clone(), lambda.clone());
+        let mut iterations = 0;
+        // The regularization `μ M` added to `K` (1/s²): 0 while Newton's steps decrease the
+        // residual, raised where the matrix is singular (a direction without stiffness: at the
+        // start, λ = 0 gives a pendulum none) or a step does not decrease it, lowered again after
+        // full steps (Levenberg–Marquardt with the mass matrix as the metric).
+        let mu_unit = force_scale / length_scale / mass_scale(&mass);
+        let mut mu = 0.0f64;
+        let converged = |force: f64, violation: f64| {
+            violation <= POSITION_TOLERANCE * length_scale && force <= FORCE_TOLERANCE * force_scale
+        };
+        // Once converged, one more full Newton step (kept where it does not increase the
+        // residual) takes the last iterate from the tolerance to round-off.
+        let mut polished = false;
+        while !(converged(force, violation) && polished) {
+            polished = converged(force, violation);
+            if iterations == MAX_ITERATIONS || mu > MU_LARGEST * mu_unit {
+                return Err(self.no_equilibrium(&q, &lambda, iterations, force, violation));
+            }
+            iterations += 1;
+            let at = TangentAt {
+                t,
+                q: &q,
+                v: &zero_v,
+                qdd: &zero_a,
+                lambda: &lambda,
+            };
+            tangent.differentiate(system, &mut mass, &mut scratch, &at);
+            system.mass(&q, &mut mass);
+            // `values` holds the constraint values at `q` (from its residual).
+            let nt = tangent.dr_dq().len();
+            let nm = mass.entries().count();
+            let nj = values.jacobian.len();
+            let a = lu.values_mut();
+            a[..nt].copy_from_slice(tangent.dr_dq());
+            for (o, (_, _, v)) in a[nt..nt + nm].iter_mut().zip(mass.entries()) {
+                *o = mu * v;
+            }
+            a[nt + nm..nt + nm + nj].copy_from_slice(&values.jacobian);
+            a[nt + nm + nj..].copy_from_slice(&values.jacobian);
+            let solved = lu.factor().is_ok() && {
+                step.iter_mut().zip(&f).for_each(|(s, x)| *s = -x);
+                lu.solve_in_place(&mut step);
+                step.iter().all(|x| x.is_finite())
+            };
+            // Backtracking on the scaled residual.
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            let floor = if polished { 1.0 } else { 1.0 / 1024.0 };
+            // A step moves no coordinate by more than `STEP_LIMIT` of the length scale (m or
+            // rad): far from the equilibrium the tangent holds only nearby.
+            let largest_step = step[..n].iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let limit = STEP_LIMIT * length_scale;
+            if solved && largest_step > limit {
+                step.iter_mut().for_each(|x| *x *= limit / largest_step);
+            }
+            while solved && alpha >= floor {
+                q_try.copy_from_slice(&q);
+                system.integrate_positions(&mut q_try, &step[..n], alpha);
+                system.normalize(&mut q_try);
+                for (l, (l0, d)) in lambda_try.iter_mut().zip(lambda.iter().zip(&step[n..])) {
+                    *l = l0 + alpha * d;
+                }
+                let trial = residual(&q_try, &lambda_try, &mut mass, &mut values, &mut f);
+                let decreased = if polished {
+                    trial.2 <= merit
+                } else {
+                    trial.2 <= (1.0 - 1e-4 * alpha) * merit
+                };
+                if decreased {
+                    (force, violation, merit) = trial;
+                    q.copy_from_slice(&q_try);
+                    lambda.copy_from_slice(&lambda_try);
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if accepted {
+                if alpha == 1.0 {
+                    mu = if mu <= mu_unit * 1e-9 { 0.0 } else { mu * 0.1 };
+                }
+            } else if polished {
+                // At round-off already: the polishing step is not kept.
+                break;
+            } else {
+                // Back at (q, λ): its residual and constraint values again, and a larger μ.
+                (force, violation, merit) = residual(&q, &lambda, &mut mass, &mut values, &mut f);
+                mu = if mu == 0.0 { mu_unit * 1e-6 } else { mu * 10.0 };
+            }
+        }
+        let reduced = reduced_matrices(system, t, &q, &lambda, &mut tangent)?;
+        let (stiffness, shapes) = relative_stiffness(&reduced);
+        // Eigenvalues (1/s²) below FREE_TOLERANCE of the largest, or of the model's own scale
+        // (force per length and mass), are zero.
+        let largest = stiffness.iter().fold(mu_unit, |a, x| a.max(x.abs()));
+        let free = |x: f64| x.abs() <= FREE_TOLERANCE * largest;
+        let names = self.model.velocity_names();
+        let directions = |keep: &dyn Fn(f64) -> bool| -> Vec<String> {
+            (stiffness.iter().zip(&shapes))
+                .filter(|(&x, _)| keep(x))
+                .map(|(_, v)| describe(&names, v))
+                .collect()
+        };
+        let free_directions = directions(&|x| free(x));
+        let unstable_directions = directions(&|x| x < 0.0 && !free(x));
+        let stable = free_directions.is_empty() && unstable_directions.is_empty();
+        let (positions, reactions) = self.columns_at(&q, &lambda);
+        Ok(Equilibrium {
+            q,
+            lambda,
+            positions,
+            reactions,
+            stiffness,
+            free_directions,
+            unstable_directions,
+            stable,
+            iterations,
+        })
+    }
+
+    /// The position and reaction columns of an output row at rest at `(q, λ)`.
+    fn columns_at(&self, q: &[f64], lambda: &[f64]) -> (Named, Named) {
+        let n = self.model.num_velocities();
+        let zero = vec![0.0; n];
+        let mut rows = Rows::new(&self.model);
+        let mut row = Vec::with_capacity(rows.names().len());
+        rows.push(
+            &Sample {
+                t: 0.0,
+                q,
+                qd: &zero,
+                qdd: &zero,
+                lambda,
+                constraint_violation: 0.0,
+                velocity_violation: 0.0,
+                energy: 0.0,
+            },
+            &mut row,
+        );
+        let names = rows.names();
+        let position_names = position_column_names(&self.model, names);
+        let positions = position_names.into_iter().map(|(k, name)| (name, row[k])).collect();
+        let reactions = rows.reaction_columns().map(|k| (names[k].clone(), row[k])).collect();
+        (positions, reactions)
+    }
+
+    /// Why Newton's method stopped at `(q, λ)`: a direction without stiffness along which a net
+    /// force acts (the free direction and the force), or no convergence.
+    fn no_equilibrium(
+        &self,
+        q: &[f64],
+        lambda: &[f64],
+        iterations: usize,
+        force: f64,
+        violation: f64,
+    ) -> EquilibriumError {
+        let system = self.model.as_system();
+        let n = system.layout().n_v();
+        let mut tangent = ResidualTangent::new(system);
+        let reduced = match reduced_matrices(system, 0.0, q, lambda, &mut tangent) {
+            Ok(r) => r,
+            Err(e) => return e,
+        };
+        let (stiffness, shapes) = relative_stiffness(&reduced);
+        let largest = stiffness.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        // The residual at rest, r = C_qᵀλ − Q: along an admissible direction the constraint
+        // forces do no work, so −dᵀr is the applied force along d.
+        let mut r = vec![0.0; n];
+        let mut mass = system.mass_storage();
+        let mut values = system.constraints().values();
+        system.dynamics_residual(
+            0.0,
+            (q, &vec![0.0; n]),
+            (&vec![0.0; n], lambda),
+            (&mut mass, &mut values),
+            &mut r,
+        );
+        let mut q_force = vec![0.0; n];
+        system.applied_forces(0.0, q, &vec![0.0; n], &mut q_force);
+        let scale = 1.0 + q_force.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        // The free direction with the largest force along it (unit length).
+        let along = stiffness
+            .iter()
+            .zip(&shapes)
+            .filter(|(&x, _)| x.abs() <= FREE_TOLERANCE * largest || largest == 0.0 || x < 0.0)
+            .map(|(_, d)| {
+                let norm = d.iter().map(|x| x * x).sum::<f64>().sqrt().max(f64::MIN_POSITIVE);
+                let f = -d.iter().zip(&r).map(|(a, b)| a * b).sum::<f64>() / norm;
+                (d, f)
+            })
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()));
+        match along {
+            Some((d, f)) if f.abs() > 1e-8 * scale => EquilibriumError::Mechanism {
+                direction: describe(
+                    &self.model.velocity_names(),
+                    &d.iter().map(|x| x * f.signum()).collect::<Vec<_>>(),
+                ),
+                force: f.abs(),
+            },
+            _ => EquilibriumError::NotConverged {
+                iterations,
+                force,
+                violation,
+            },
+        }
+    }
+}
+
+/// The largest diagonal entry of the mass matrix (the unit of the regularization).
+fn mass_scale(mass: &dalembert_system::BlockDiagonal) -> f64 {
+    mass.entries()
+        .filter(|(r, c, _)| r == c)
+        .fold(0.0f64, |a, (_, _, v)| a.max(v.abs()))
+        .max(f64::MIN_POSITIVE)
+}
+
+/// The eigenvalues `μ` of `K_r φ = μ M_r φ` (symmetric parts; 1/s², the squares of the natural
+/// angular frequencies where positive: independent of which coordinates are independent),
+/// ascending, with each direction in the velocity coordinates (`B φ`). Where `M_r` is not
+/// definite, those of `K_r` alone.
+pub(crate) fn relative_stiffness(r: &Reduced) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let dof = r.k.nrows();
+    if dof == 0 {
+        return (Vec::new(), Vec::new());
+    }
+    let k = (&r.k + r.k.transpose()) * 0.5;
+    let m = (&r.m + r.m.transpose()) * 0.5;
+    let l_inv = m.cholesky().and_then(|c| c.l().try_inverse());
+    let (a, back) = match &l_inv {
+        Some(li) => (li * &k * li.transpose(), li.transpose()),
+        None => (k.clone(), DMatrix::identity(dof, dof)),
+    };
+    let a = (&a + a.transpose()) * 0.5;
+    let eig = a.symmetric_eigen();
+    let mut order: Vec<usize> = (0..dof).collect();
+    order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+    let values = order.iter().map(|&i| eig.eigenvalues[i]).collect();
+    let shapes = order
+        .iter()
+        .map(|&i| {
+            let phi = &back * eig.eigenvectors.column(i);
+            (&r.b * phi).iter().copied().collect()
+        })
+        .collect();
+    (values, shapes)
+}
+
+/// `(index in the row, name)` of each body's position columns (`x, y, angle` or `x, y, z, e0,
+/// …, e3`: the first `n_q / bodies` body columns).
+fn position_column_names(model: &crate::Mechanism, names: &[String]) -> Vec<(usize, String)> {
+    let bodies = model.num_bodies().max(1);
+    let (per_q, per_v) = (model.num_positions() / bodies, model.num_velocities() / bodies);
+    (0..model.num_bodies())
+        .flat_map(|b| {
+            let first = 1 + b * (per_q + per_v);
+            (first..first + per_q).map(|k| (k, names[k].clone()))
+        })
+        .collect()
+}
+
+/// A direction over named coordinates as its largest components: `crank.angle 0.89, slider.x
+/// -0.45` (normalized to a largest component of 1, at most four, those above 1 %).
+pub fn describe(names: &[String], direction: &[f64]) -> String {
+    let largest = direction.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if largest == 0.0 {
+        return "no coordinate".into();
+    }
+    let mut order: Vec<usize> = (0..direction.len()).collect();
+    order.sort_by(|&a, &b| direction[b].abs().total_cmp(&direction[a].abs()));
+    let sign = direction[order[0]].signum();
+    order
+        .iter()
+        .take(4)
+        .filter(|&&k| direction[k].abs() > 1e-2 * largest)
+        .map(|&k| format!("{} {:.3}", names[k], sign * direction[k] / largest))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `B`, `K_r`, `D_r`, `M_r` at rest at `(t, q, λ)` (see [`Reduced`]): `B` from coordinate
+/// partitioning, the tangent from `tangent`.
+pub(crate) fn reduced_matrices(
+    system: &dyn MultibodySystem,
+    t: f64,
+    q: &[f64],
+    lambda: &[f64],
+    tangent: &mut ResidualTangent,
+) -> Result<Reduced, EquilibriumError> {
+    let sys = system.constraints();
+    let n = system.layout().n_v();
+    let zero = vec![0.0; n];
+    let mut values = sys.values();
+    sys.evaluate(t, q, &zero, &mut values);
+    let b = admissible_basis(sys, &values)?;
+    let mut mass = system.mass_storage();
+    let mut scratch = sys.values();
+    tangent.differentiate(
+        system,
+        &mut mass,
+        &mut scratch,
+        &TangentAt {
+            t,
+            q,
+            v: &zero,
+            qdd: &zero,
+            lambda,
+        },
+    );
+    system.mass(q, &mut mass);
+    let dof = b.ncols();
+    // (X B) row i = Σ_j X_ij B_j for a matrix given by its entries.
+    let times_b = |entries: &mut dyn Iterator<Item = (usize, usize, f64)>| {
+        let mut xb = DMatrix::<f64>::zeros(n, dof);
+        for (i, j, v) in entries {
+            for c in 0..dof {
+                xb[(i, c)] += v * b[(j, c)];
+            }
+        }
+        b.transpose() * xb
+    };
+    let pattern = tangent.pattern();
+    let k = times_b(&mut pattern.entries().zip(tangent.dr_dq()).map(|((i, j), &v)| (i, j, v)));
+    let d = times_b(&mut pattern.entries().zip(tangent.dr_dv()).map(|((i, j), &v)| (i, j, v)));
+    let m = times_b(&mut mass.entries());
+    Ok(Reduced { b, k, d, m })
+}
+
+/// A basis `B` (`n × dof`) of the admissible velocities at the constraint values `values`: the
+/// velocity transformation of coordinate partitioning (`docs/formulations.md`), `v = B v_i`.
+fn admissible_basis(
+    sys: &dyn ConstraintSet,
+    values: &dalembert_system::ConstraintValues,
+) -> Result<DMatrix<f64>, EquilibriumError> {
+    let n = sys.num_coordinates();
+    let partition = Partition::choose(sys, values, 1e-9);
+    let mut transform = VelocityTransform::new(&partition, sys);
+    if !transform.refactor(values) {
+        return Err(EquilibriumError::Model(
+            "the constraint Jacobian is singular at the equilibrium (a singular position)".into(),
+        ));
+    }
+    transform.compute(&vec![0.0; sys.num_equations()]);
+    let dof = partition.dof();
+    Ok(DMatrix::from_fn(n, dof, |r, c| transform.b_row(r)[c]))
+}

@@ -1,0 +1,154 @@
+//! Vibration modes about a static equilibrium: [`Scene::modes`].
+//!
+//! At the equilibrium ([`Scene::equilibrium`]) the motion linearized in the independent
+//! coordinates `v_i` of coordinate partitioning is `M_r δq̈_i + D_r δq̇_i + K_r δq_i = 0`, with
+//! `M_r = Bᵀ M B`, `D_r = Bᵀ (∂r/∂v) B`, `K_r = Bᵀ (∂r/∂q) B` (`docs/statics.md`, equations
+//! S4–S6). The natural frequencies and the mode shapes are those of the undamped problem
+//! `K_r φ = ω² M_r φ` (a symmetric definite eigenproblem through the Cholesky factor of `M_r`);
+//! with damping, the frequencies and damping ratios are those of the eigenvalues `s` of the first
+//! order system, `ω_n = |s|`, `ζ = −Re s / |s|` (an overdamped pair of real eigenvalues
+//! `s₁ s₂`: `ω_n = √(s₁ s₂)`, `ζ = −(s₁ + s₂) / (2 ω_n)`), and the shapes stay the undamped ones.
+
+use crate::equilibrium::{reduced_matrices, Equilibrium, EquilibriumError};
+use crate::Scene;
+use dalembert_system::ResidualTangent;
+use nalgebra::DMatrix;
+use std::f64::consts::PI;
+
+/// The vibration modes of a scene about its equilibrium.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Modes {
+    /// Natural frequencies in Hz, ascending (`ω_n / 2π`).
+    pub frequencies: Vec<f64>,
+    /// Damping ratio of each mode (0 without damping; above 1 overdamped).
+    pub damping_ratios: Vec<f64>,
+    /// The position columns the shapes are given over (`crank.x`, …, `top.e3`).
+    pub columns: Vec<String>,
+    /// One shape per mode over [`Modes::columns`]: the change of the positions along the mode,
+    /// scaled to a largest component of 1 (positive).
+    pub shapes: Vec<Vec<f64>>,
+    /// The equilibrium the modes are about.
+    pub equilibrium: Equilibrium,
+}
+
+impl Scene {
+    /// The vibration modes about the equilibrium nearest the scene's position (see the module
+    /// documentation). A neutral direction ([`Equilibrium::free_directions`]) is a mode of 0 Hz;
+    /// an unstable equilibrium is refused (its "frequencies" would be growth rates).
+    pub fn modes(&self) -> Result<Modes, EquilibriumError> {
+        let equilibrium = self.equilibrium()?;
+        if !equilibrium.unstable_directions.is_empty() {
+            return Err(EquilibriumError::Model(format!(
+                "the equilibrium found from the scene's position is unstable along {}: it has no vibration modes (start the scene nearer a stable one)",
+                equilibrium.unstable_directions.join("; ")
+            )));
+        }
+        let system = self.model.as_system();
+        let mut tangent = ResidualTangent::new(system);
+        let r = reduced_matrices(system, 0.0, &equilibrium.q, &equilibrium.lambda, &mut tangent)?;
+        let dof = r.m.nrows();
+        if dof == 0 {
+            // Nothing moves: a fully driven or fully constrained model has no modes.
+            return Ok(Modes {
+                frequencies: Vec::new(),
+                damping_ratios: Vec::new(),
+                columns: equilibrium.positions.iter().map(|(c, _)| c.clone()).collect(),
+                shapes: Vec::new(),
+                equilibrium,
+            });
+        }
+        let m = (&r.m + r.m.transpose()) * 0.5;
+        let k = (&r.k + r.k.transpose()) * 0.5;
+        let chol = m.clone().cholesky().ok_or_else(|| {
+            EquilibriumError::Model(
+                "the mass matrix is singular on the admissible motions (a body without mass or inertia moves)".into(),
+            )
+        })?;
+        let l = chol.l();
+        let l_inv = l.clone().try_inverse().ok_or_else(|| {
+            EquilibriumError::Model("the mass matrix on the admissible motions cannot be inverted".into())
+        })?;
+        let a = &l_inv * &k * l_inv.transpose();
+        let a = (&a + a.transpose()) * 0.5;
+        let eig = a.symmetric_eigen();
+        let mut order: Vec<usize> = (0..dof).collect();
+        order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
+        let omega: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i].max(0.0).sqrt()).collect();
+        let (frequencies, damping_ratios) = if r.d.iter().all(|&x| x == 0.0) {
+            (omega.iter().map(|w| w / (2.0 * PI)).collect(), vec![0.0; dof])
+        } else {
+            damped(&m, &r.d, &k)?
+        };
+        // Shapes: φ_i = L⁻ᵀ y, the velocities B φ_i, the positions' change T(q) B φ_i.
+        let n_q = system.layout().n_q();
+        let columns: Vec<String> = equilibrium.positions.iter().map(|(c, _)| c.clone()).collect();
+        let shapes = order
+            .iter()
+            .map(|&i| {
+                let phi = l_inv.transpose() * eig.eigenvectors.column(i);
+                let v = &r.b * phi;
+                let mut dq = vec![0.0; n_q];
+                system.position_rates(&equilibrium.q, v.as_slice(), &mut dq);
+                let (largest, at) =
+                    dq.iter().enumerate().fold(
+                        (0.0f64, 0),
+                        |(a, k), (j, x)| if x.abs() > a { (x.abs(), j) } else { (a, k) },
+                    );
+                let scale = if largest > 0.0 { dq[at].signum() / largest } else { 1.0 };
+                dq.iter().map(|x| x * scale).collect()
+            })
+            .collect();
+        Ok(Modes {
+            frequencies,
+            damping_ratios,
+            columns,
+            shapes,
+            equilibrium,
+        })
+    }
+}
+
+/// Natural frequencies (Hz) and damping ratios from the eigenvalues of the first-order system
+/// `[0 I; −M⁻¹K −M⁻¹D]`, ascending in frequency.
+fn damped(m: &DMatrix<f64>, d: &DMatrix<f64>, k: &DMatrix<f64>) -> Result<(Vec<f64>, Vec<f64>), EquilibriumError> {
+    let dof = m.nrows();
+    let m_inv = m.clone().try_inverse().ok_or_else(|| {
+        EquilibriumError::Model("the mass matrix on the admissible motions cannot be inverted".into())
+    })?;
+    let mut a = DMatrix::<f64>::zeros(2 * dof, 2 * dof);
+    for i in 0..dof {
+        a[(i, dof + i)] = 1.0;
+    }
+    let mk = -(&m_inv * k);
+    let md = -(&m_inv * d);
+    for i in 0..dof {
+        for j in 0..dof {
+            a[(dof + i, j)] = mk[(i, j)];
+            a[(dof + i, dof + j)] = md[(i, j)];
+        }
+    }
+    let s = a.complex_eigenvalues();
+    let scale = s.iter().fold(0.0f64, |x, z| x.max(z.norm()));
+    let tol = 1e-10 * scale.max(f64::MIN_POSITIVE);
+    let mut modes: Vec<(f64, f64)> = s
+        .iter()
+        .filter(|z| z.im > tol)
+        .map(|z| {
+            let w = z.norm();
+            (w, -z.re / w)
+        })
+        .collect();
+    let mut reals: Vec<f64> = s.iter().filter(|z| z.im.abs() <= tol).map(|z| z.re).collect();
+    reals.sort_by(|a, b| b.total_cmp(a)); // nearest zero first
+    for pair in reals.chunks(2) {
+        if let [s1, s2] = *pair {
+            let w = (s1 * s2).max(0.0).sqrt();
+            modes.push((w, if w > 0.0 { -(s1 + s2) / (2.0 * w) } else { f64::INFINITY }));
+        }
+    }
+    modes.sort_by(|a, b| a.0.total_cmp(&b.0));
+    Ok((
+        modes.iter().map(|(w, _)| w / (2.0 * PI)).collect(),
+        modes.iter().map(|&(_, z)| z).collect(),
+    ))
+}

@@ -1,0 +1,316 @@
+//! Static equilibrium and vibration modes against closed forms: a compound pendulum
+//! (`ω² = m g d / J_O`), a double pendulum of point masses (`ω² = (g/L)(2 ∓ √2)`, shapes
+//! `x₂/x₁ = 1 ± √2`), a mass–spring–damper (`x = −m g / k`, `ω_n = √(k/m)`,
+//! `ζ = c / (2√(k m))`), a slider-crank held by a driver against a piston force
+//! (`T = −F ∂x/∂θ`, virtual work), a spherical pendulum (both swings, a free spin); variants
+//! written another way (bodies listed in reverse, a perturbed start) give the same answers; and
+//! what has no equilibrium is refused naming the free direction.
+
+use dalembert::{EquilibriumError, Scene};
+
+/// Value of column `name` in a list of named values.
+fn named(list: &[(String, f64)], name: &str) -> f64 {
+    list.iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no column {name} in {list:?}"))
+        .1
+}
+
+const G: f64 = 9.81;
+
+#[test]
+fn a_compound_pendulum_hangs_and_swings_at_its_closed_form() {
+    // The shipped pendulum (uniform rod, 1 kg, 1 m, pinned at one end) released 60° from the
+    // vertical: it comes to rest hanging, its centre of mass below the pivot at the distance the
+    // file gives (d = |(0.25, −0.433)| = 0.49999, the file's rounding), Newton to the assembly's
+    // 1e-12; the pivot carries its weight; it swings at ω² = m g d / (m L²/12 + m d²)
+    // (relative 1e-10: a 1 × 1 eigenproblem of exact matrices).
+    let scene = Scene::from_path("scenes/pendulum.toml").unwrap();
+    let d = (0.25f64 * 0.25 + 0.433 * 0.433).sqrt();
+    let eq = scene.equilibrium().unwrap();
+    assert!((named(&eq.positions, "rod.x")).abs() < 1e-12, "{:?}", eq.positions);
+    assert!((named(&eq.positions, "rod.y") + d).abs() < 1e-12, "{:?}", eq.positions);
+    assert!(eq.stable && eq.stiffness.len() == 1 && eq.free_directions.is_empty());
+    // The reaction on the ground from the rod: its weight, downward.
+    assert!(
+        (named(&eq.reactions, "pivot.fy") + G).abs() < 1e-10,
+        "{:?}",
+        eq.reactions
+    );
+    assert!(named(&eq.reactions, "pivot.fx").abs() < 1e-10, "{:?}", eq.reactions);
+    let modes = scene.modes().unwrap();
+    let expected = (G * d / (1.0 / 12.0 + d * d)).sqrt() / (2.0 * std::f64::consts::PI);
+    assert_eq!(modes.frequencies.len(), 1);
+    assert!(
+        (modes.frequencies[0] - expected).abs() < 1e-10 * expected,
+        "{} Hz, expected {expected}",
+        modes.frequencies[0]
+    );
+    assert_eq!(modes.damping_ratios, [0.0]);
+}
+
+/// Two point masses `m` on massless links of length 1 hanging from the ground, each given a
+/// tiny inertia 1e-12 kg·m² about its centre (a planar body has one; it changes the frequencies
+/// by 1e-12 relative). `reversed` lists the bodies and joints in the other order.
+fn double_pendulum(reversed: bool, start_angle: f64) -> Scene {
+    let (s, c) = start_angle.sin_cos();
+    let upper = format!(
+        "[[bodies]]\nname = \"upper\"\nmass = 1.0\ninertia = 1e-12\nposition = [{}, {}]\nangle = {start_angle}\n",
+        s, -c
+    );
+    let lower = format!(
+        "[[bodies]]\nname = \"lower\"\nmass = 1.0\ninertia = 1e-12\nposition = [{}, {}]\nangle = {start_angle}\n",
+        2.0 * s,
+        -2.0 * c
+    );
+    let shoulder =
+        "[[joints]]\nname = \"shoulder\"\ntype = \"revolute\"\nbodies = [\"ground\", \"upper\"]\nat = [0.0, 0.0]\n";
+    let elbow = format!(
+        "[[joints]]\nname = \"elbow\"\ntype = \"revolute\"\nbodies = [\"upper\", \"lower\"]\nat = [{s}, {}]\n",
+        -c
+    );
+    let parts = if reversed {
+        [lower, upper, elbow, shoulder.to_string()]
+    } else {
+        [upper, lower, shoulder.to_string(), elbow]
+    };
+    let text = format!("[scene]\ngravity = [0.0, -9.81]\n{}", parts.join("\n"));
+    Scene::from_toml(&text, "double pendulum").unwrap()
+}
+
+#[test]
+fn a_double_pendulum_of_point_masses_has_its_two_closed_form_modes() {
+    // ω² = (g/L)(2 ∓ √2) and amplitude ratios x_lower / x_upper = 1 ± √2 (the links' angles in
+    // ratio ±√2). Written both ways and started 0.4 rad off: the same equilibrium (hanging) and
+    // modes. Tolerances: frequencies 1e-9 relative (the 1e-12 inertias and a 2 × 2 eigenproblem),
+    // shape ratios 1e-9.
+    let sqrt2 = 2.0f64.sqrt();
+    let expected = [
+        (G * (2.0 - sqrt2)).sqrt() / (2.0 * std::f64::consts::PI),
+        (G * (2.0 + sqrt2)).sqrt() / (2.0 * std::f64::consts::PI),
+    ];
+    for (reversed, start) in [(false, 0.0), (true, 0.0), (false, 0.4), (true, -0.3)] {
+        let scene = double_pendulum(reversed, start);
+        let modes = scene.modes().unwrap();
+        let eq = &modes.equilibrium;
+        assert!(eq.stable);
+        assert!(
+            (named(&eq.positions, "lower.y") + 2.0).abs() < 1e-12,
+            "{:?}",
+            eq.positions
+        );
+        assert!(named(&eq.positions, "lower.x").abs() < 1e-12, "{:?}", eq.positions);
+        for (k, f) in expected.iter().enumerate() {
+            let got = modes.frequencies[k];
+            assert!(
+                (got - f).abs() < 1e-9 * f,
+                "reversed {reversed}, start {start}: mode {k} at {got} Hz, expected {f}"
+            );
+        }
+        let column = |name: &str| modes.columns.iter().position(|c| c == name).unwrap();
+        let (xu, xl) = (column("upper.x"), column("lower.x"));
+        for (k, ratio) in [1.0 + sqrt2, 1.0 - sqrt2].iter().enumerate() {
+            let shape = &modes.shapes[k];
+            let got = shape[xl] / shape[xu];
+            assert!((got - ratio).abs() < 1e-9, "mode {k}: x ratio {got}, expected {ratio}");
+        }
+    }
+}
+
+/// A slider of mass `m` on a vertical guide hanging from a spring-damper (stiffness `k`,
+/// damping `c`, free length 1) attached to the ground at the origin.
+fn hanging_spring(m: f64, k: f64, c: f64) -> Scene {
+    let text = format!(
+        r#"
+[scene]
+gravity = [0.0, -9.81]
+[[bodies]]
+name = "slider"
+mass = {m}
+inertia = 0.1
+position = [0.0, -1.0]
+[[joints]]
+name = "guide"
+type = "prismatic"
+bodies = ["ground", "slider"]
+at = [0.0, -1.0]
+axis = [0.0, 1.0]
+[[forces]]
+name = "spring"
+type = "spring-damper"
+bodies = ["ground", "slider"]
+at = [[0.0, 0.0], [0.0, -1.0]]
+stiffness = {k}
+damping = {c}
+free_length = 1.0
+"#
+    );
+    Scene::from_toml(&text, "hanging spring").unwrap()
+}
+
+#[test]
+fn a_mass_on_a_spring_rests_at_its_static_deflection_and_rings_at_its_frequency() {
+    // y = −1 − m g / k; ω_n = √(k/m), ζ = c / (2√(k m)) (the single pair of eigenvalues of the
+    // first-order system: 1e-10 relative).
+    let (m, k, c) = (2.0, 400.0, 4.0);
+    let scene = hanging_spring(m, k, c);
+    let eq = scene.equilibrium().unwrap();
+    let y = named(&eq.positions, "slider.y");
+    assert!((y - (-1.0 - m * G / k)).abs() < 1e-12, "y = {y}");
+    assert!(eq.stable);
+    // The guide carries no force along its axis, and nothing across it.
+    assert!(named(&eq.reactions, "guide.fx").abs() < 1e-10, "{:?}", eq.reactions);
+    let modes = scene.modes().unwrap();
+    let (wn, zeta) = ((k / m).sqrt(), c / (2.0 * (k * m).sqrt()));
+    let f = wn / (2.0 * std::f64::consts::PI);
+    assert!((modes.frequencies[0] - f).abs() < 1e-10 * f, "{:?}", modes.frequencies);
+    assert!(
+        (modes.damping_ratios[0] - zeta).abs() < 1e-10,
+        "{:?}",
+        modes.damping_ratios
+    );
+}
+
+#[test]
+fn a_slider_crank_held_by_its_driver_balances_the_piston_force_by_virtual_work() {
+    // Crank r = 0.1 at 50°, rod l = 0.3, a piston force F = 200 N along −x on the slider, no
+    // gravity; a driver holds the crank's angle. By virtual work the driver's torque is
+    // T = −F ∂x/∂θ with x = r cos θ + √(l² − r² sin² θ): the driver's effort equals it to 1e-9
+    // relative (the multipliers of an exact solve).
+    let (r, l, theta, force) = (0.1f64, 0.3f64, 50f64.to_radians(), 200.0);
+    let (s, c) = theta.sin_cos();
+    let pin = [r * c, r * s];
+    let x = r * c + (l * l - r * r * s * s).sqrt();
+    let rod_angle = (-pin[1]).atan2(x - pin[0]);
+    let text = format!(
+        r#"
+[scene]
+gravity = [0.0, 0.0]
+[[bodies]]
+name = "crank"
+mass = 1.0
+inertia = 0.01
+position = [{cx}, {cy}]
+angle = {theta}
+[[bodies]]
+name = "rod"
+mass = 1.0
+inertia = 0.01
+position = [{rx}, {ry}]
+angle = {rod_angle}
+[[bodies]]
+name = "piston"
+mass = 1.0
+inertia = 0.01
+position = [{x}, 0.0]
+[[joints]]
+name = "A"
+type = "revolute"
+bodies = ["ground", "crank"]
+at = [0.0, 0.0]
+[[joints]]
+name = "B"
+type = "revolute"
+bodies = ["crank", "rod"]
+at = [{px}, {py}]
+[[joints]]
+name = "C"
+type = "revolute"
+bodies = ["rod", "piston"]
+at = [{x}, 0.0]
+[[joints]]
+name = "guide"
+type = "prismatic"
+bodies = ["ground", "piston"]
+at = [{x}, 0.0]
+axis = [1.0, 0.0]
+[[drivers]]
+name = "hold"
+type = "joint-angle"
+joint = "A"
+function = {{ kind = "linear", rate = 0.0 }}
+[[forces]]
+name = "gas"
+type = "force"
+body = "piston"
+value = [{gas:.1}, 0.0]
+"#,
+        cx = pin[0] / 2.0,
+        cy = pin[1] / 2.0,
+        rx = (pin[0] + x) / 2.0,
+        ry = pin[1] / 2.0,
+        px = pin[0],
+        py = pin[1],
+        gas = -force,
+    );
+    let scene = Scene::from_toml(&text, "held slider-crank").unwrap();
+    let eq = scene.equilibrium().unwrap();
+    let dx_dtheta = -r * s - r * r * s * c / (l * l - r * r * s * s).sqrt();
+    let torque = -(-force) * dx_dtheta;
+    let effort = named(&eq.reactions, "hold.effort");
+    assert!(
+        (effort.abs() - torque.abs()).abs() < 1e-9 * torque.abs(),
+        "effort {effort}, virtual work {torque}"
+    );
+    assert!(eq.stiffness.is_empty(), "a fully driven mechanism has no free motion");
+}
+
+#[test]
+fn a_spherical_pendulum_swings_about_both_axes_and_spins_freely() {
+    // A body of 3 kg hanging d = 0.8 m below a spherical joint, principal moments 0.05 and 0.07
+    // about its horizontal x and y axes: ω² = m g d / (J + m d²) about each (1e-10 relative); the
+    // spin about the vertical has no stiffness: a neutral direction named with the equilibrium,
+    // a mode of 0 Hz.
+    let text = r#"
+[scene]
+gravity = [0.0, 0.0, -9.81]
+[[bodies]]
+name = "bob"
+mass = 3.0
+inertia = [0.05, 0.07, 0.02]
+position = [0.0, 0.0, -0.8]
+[[joints]]
+name = "pivot"
+type = "spherical"
+bodies = ["ground", "bob"]
+at = [0.0, 0.0, 0.0]
+"#;
+    let scene = Scene::from_toml(text, "spherical pendulum").unwrap();
+    let modes = scene.modes().unwrap();
+    let eq = &modes.equilibrium;
+    assert!(!eq.stable, "a free spin is not a stable equilibrium");
+    assert_eq!(eq.free_directions.len(), 1, "{:?}", eq.free_directions);
+    assert!(eq.free_directions[0].contains("bob.wz"), "{:?}", eq.free_directions);
+    let (m, d) = (3.0, 0.8);
+    let f = |j: f64| (m * G * d / (j + m * d * d)).sqrt() / (2.0 * std::f64::consts::PI);
+    assert!(modes.frequencies[0].abs() < 1e-6, "{:?}", modes.frequencies);
+    for (k, j) in [(1, 0.07), (2, 0.05)] {
+        let got = modes.frequencies[k];
+        assert!(
+            (got - f(j)).abs() < 1e-10 * f(j),
+            "mode {k}: {got} Hz, expected {}",
+            f(j)
+        );
+    }
+    assert!((named(&eq.positions, "bob.z") + d).abs() < 1e-12, "{:?}", eq.positions);
+}
+
+#[test]
+fn a_free_body_under_gravity_has_no_equilibrium_and_says_so() {
+    let text = r#"
+[scene]
+gravity = [0.0, -9.81]
+[[bodies]]
+name = "stone"
+mass = 2.0
+inertia = 0.1
+position = [0.0, 1.0]
+"#;
+    let scene = Scene::from_toml(text, "falling stone").unwrap();
+    let e = scene.equilibrium().unwrap_err();
+    assert!(matches!(e, EquilibriumError::Mechanism { force, .. } if (force - 2.0 * G).abs() < 1e-9), "{e:?}");
+    let text = e.to_string();
+    assert!(text.contains("stone.y"), "{text}");
+    assert!(text.contains("there is none: a net force of 19.62"), "{text}");
+    assert!(!text.contains('\n'));
+}
