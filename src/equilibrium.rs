@@ -18,6 +18,9 @@
 //! or a step that does not decrease the residual adds `μ M` to `K` (Levenberg–Marquardt with the
 //! mass matrix as the metric), removed again as full steps succeed.
 //!
+//! Where this ends at an unstable equilibrium or at none, it starts again from where the scene's
+//! motion with kinetic damping comes to rest ([`crate::relaxation`]).
+//!
 //! At the equilibrium, the reduced stiffness `K_r = Bᵀ K B` relative to the reduced mass (`B` the
 //! velocity transformation of coordinate partitioning: the admissible motions) says whether it is
 //! stable; a direction in which the stiffness vanishes is a neutral mechanism, reported with the
@@ -118,8 +121,30 @@ const STEP_LIMIT: f64 = 0.5;
 const MU_LARGEST: f64 = 1e8;
 
 impl Scene {
-    /// The static equilibrium nearest the scene's position (see the module documentation).
+    /// The static equilibrium where the scene comes to rest (see the module documentation):
+    /// Newton's method from the scene's position, and where that ends at an unstable equilibrium
+    /// or finds none, from the position where the scene's motion with kinetic damping comes to
+    /// rest ([`crate::relaxation`]).
     pub fn equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
+        let first = self.equilibrium_from(&self.q);
+        let settled = match &first {
+            Ok(eq) if eq.unstable_directions.is_empty() => return first,
+            Err(EquilibriumError::Redundant(_)) => return first,
+            // Also where a free direction with a net force was found: it may be free only where
+            // Newton's method stopped (a top lying horizontal has no stiffness along its fall).
+            _ => crate::relaxation::settled(self),
+        };
+        match settled {
+            Some(q) => match self.equilibrium_from(&q) {
+                Ok(eq) if eq.unstable_directions.is_empty() || first.is_err() => Ok(eq),
+                _ => first,
+            },
+            None => first,
+        }
+    }
+
+    /// Newton's method on the static equations from positions `q0` (assembled).
+    fn equilibrium_from(&self, q0: &[f64]) -> Result<Equilibrium, EquilibriumError> {
         let system = self.model.as_system();
         let sys = system.constraints();
         let (n, m) = (system.layout().n_v(), system.num_equations());
@@ -131,7 +156,7 @@ impl Scene {
         }
         let mut tangent = ResidualTangent::new(system);
         let mut mass = system.mass_storage();
-        system.mass(&self.q, &mut mass);
+        system.mass(q0, &mut mass);
         // The matrix's entries: the tangent's, the mass blocks' (the regularization), `C_q`, `C_qᵀ`.
         let mut entries: Vec<(usize, usize)> = tangent.pattern().entries().collect();
         entries.extend(mass.entries().map(|(r, c, _)| (r, c)));
@@ -142,7 +167,7 @@ impl Scene {
             .map_err(|e| EquilibriumError::Model(e.to_string()))?;
         let (mut values, mut scratch) = (sys.values(), sys.values());
         let (zero_v, zero_a) = (vec![0.0; n], vec![0.0; n]);
-        let mut q = self.q.clone();
+        let mut q = q0.to_vec();
         let mut lambda = vec![0.0; m];
         let mut f = vec![0.0; n + m];
         // Scales: the generalized forces at the start, the positions' size.

@@ -27,6 +27,7 @@ mod joint_map;
 pub mod mechanism;
 pub mod modes;
 pub mod output;
+pub mod relaxation;
 pub mod scene;
 pub mod simulation;
 pub mod simulator;

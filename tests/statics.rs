@@ -308,9 +308,51 @@ position = [0.0, 1.0]
 "#;
     let scene = Scene::from_toml(text, "falling stone").unwrap();
     let e = scene.equilibrium().unwrap_err();
-    assert!(matches!(e, EquilibriumError::Mechanism { force, .. } if (force - 2.0 * G).abs() < 1e-9), "{e:?}");
+    assert!(
+        matches!(e, EquilibriumError::Mechanism { force, .. } if (force - 2.0 * G).abs() < 1e-9),
+        "{e:?}"
+    );
     let text = e.to_string();
     assert!(text.contains("stone.y"), "{text}");
     assert!(text.contains("there is none: a net force of 19.62"), "{text}");
     assert!(!text.contains('\n'));
+}
+
+#[test]
+fn scenes_started_far_from_rest_settle_where_their_motion_comes_to_rest() {
+    // The shipped double pendulum starts horizontal: Newton's method from there ends at an
+    // unstable equilibrium, and the motion with kinetic damping brings it to the hanging one.
+    // Two uniform rods (m = L = 1) in absolute angles: M = m L² [4/3 1/2; 1/2 1/3],
+    // K = m g L diag(3/2, 1/2), so ω² = g (3 ∓ √1008 / 14) (1e-9 relative).
+    let scene = Scene::from_path("scenes/double-pendulum.toml").unwrap();
+    let modes = scene.modes().unwrap();
+    assert!(modes.equilibrium.stable);
+    assert!((named(&modes.equilibrium.positions, "lower.y") + 1.5).abs() < 1e-12);
+    for (k, sign) in [(0, -1.0), (1, 1.0)] {
+        let w2 = G * (3.0 + sign * 1008f64.sqrt() / 14.0);
+        let f = w2.sqrt() / (2.0 * std::f64::consts::PI);
+        let got = modes.frequencies[k];
+        assert!((got - f).abs() < 1e-9 * f, "mode {k}: {got} Hz, expected {f}");
+    }
+    // The shipped heavy top lies horizontal (its centre 1 m from the ball joint, 15 kg, moments
+    // 0.234375 about the horizontal axes): it comes to hang, neutral about its symmetry axis, and
+    // swings at ω² = m g d / (J + m d²) about both horizontal axes (1e-10 relative).
+    let scene = Scene::from_path("scenes/heavy-top.toml").unwrap();
+    let modes = scene.modes().unwrap();
+    let eq = &modes.equilibrium;
+    assert!(
+        (named(&eq.positions, "top.z") + 1.0).abs() < 1e-12,
+        "{:?}",
+        eq.positions
+    );
+    assert_eq!(eq.free_directions.len(), 1, "{:?}", eq.free_directions);
+    let f = (15.0 * G / (0.234375 + 15.0)).sqrt() / (2.0 * std::f64::consts::PI);
+    assert!(modes.frequencies[0].abs() < 1e-6, "{:?}", modes.frequencies);
+    for k in [1, 2] {
+        assert!(
+            (modes.frequencies[k] - f).abs() < 1e-10 * f,
+            "{:?}, expected {f}",
+            modes.frequencies
+        );
+    }
 }
