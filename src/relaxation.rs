@@ -1,4 +1,4 @@
-//! Where a scene comes to rest: its motion with kinetic damping ([`settled`]), the start that
+//! Where a scene comes to rest: its motion with kinetic damping (`settled`), the start that
 //! [`crate::Scene::equilibrium`] takes when Newton's method from the scene's own position ends at
 //! an unstable equilibrium or at none.
 //!
