@@ -191,16 +191,7 @@ impl Scene {
         // a pendulum has none).
         sys.evaluate(t, &q, &zero_v, &mut values);
         {
-            let nt = tangent.dr_dq().len();
-            let nm = mass.entries().count();
-            let nj = values.jacobian.len();
-            let a = lu.values_mut();
-            a[..nt].fill(0.0);
-            for (o, (_, _, v)) in a[nt..nt + nm].iter_mut().zip(mass.entries()) {
-                *o = v;
-            }
-            a[nt + nm..nt + nm + nj].copy_from_slice(&values.jacobian);
-            a[nt + nm + nj..].copy_from_slice(&values.jacobian);
+            fill(&mut lu, None, tangent.dr_dq().len(), 1.0, &mass, &values.jacobian);
             if lu.factor().is_ok() {
                 step[..n].copy_from_slice(&q_force);
                 step[n..].fill(0.0);
@@ -241,16 +232,14 @@ impl Scene {
             tangent.differentiate(system, &mut mass, &mut scratch, &at);
             system.mass(&q, &mut mass);
             // `values` holds the constraint values at `q` (from its residual).
-            let nt = tangent.dr_dq().len();
-            let nm = mass.entries().count();
-            let nj = values.jacobian.len();
-            let a = lu.values_mut();
-            a[..nt].copy_from_slice(tangent.dr_dq());
-            for (o, (_, _, v)) in a[nt..nt + nm].iter_mut().zip(mass.entries()) {
-                *o = mu * v;
-            }
-            a[nt + nm..nt + nm + nj].copy_from_slice(&values.jacobian);
-            a[nt + nm + nj..].copy_from_slice(&values.jacobian);
+            fill(
+                &mut lu,
+                Some(tangent.dr_dq()),
+                tangent.dr_dq().len(),
+                mu,
+                &mass,
+                &values.jacobian,
+            );
             let solved = lu.factor().is_ok() && {
                 step.iter_mut().zip(&f).for_each(|(s, x)| *s = -x);
                 lu.solve_in_place(&mut step);
@@ -352,8 +341,9 @@ impl Scene {
             &mut row,
         );
         let names = rows.names();
-        let position_names = position_column_names(&self.model, names);
-        let positions = position_names.into_iter().map(|(k, name)| (name, row[k])).collect();
+        let positions = (rows.state_columns(&self.model).0.into_iter())
+            .map(|k| (names[k].clone(), row[k]))
+            .collect();
         let reactions = rows.reaction_columns().map(|k| (names[k].clone(), row[k])).collect();
         (positions, reactions)
     }
@@ -420,6 +410,31 @@ impl Scene {
     }
 }
 
+/// Writes `[K + μ M, C_qᵀ; C_q 0]` into `lu`'s values, in the order of its entries: the `nt`
+/// tangent values (`None`: zero), the mass blocks times `mu`, `C_q`, `C_qᵀ`.
+fn fill(
+    lu: &mut PatternLu,
+    tangent: Option<&[f64]>,
+    nt: usize,
+    mu: f64,
+    mass: &dalembert_system::BlockDiagonal,
+    jacobian: &[f64],
+) {
+    let a = lu.values_mut();
+    let (k, rest) = a.split_at_mut(nt);
+    match tangent {
+        Some(t) => k.copy_from_slice(t),
+        None => k.fill(0.0),
+    }
+    let (m, rest) = rest.split_at_mut(rest.len() - 2 * jacobian.len());
+    for (o, (_, _, v)) in m.iter_mut().zip(mass.entries()) {
+        *o = mu * v;
+    }
+    let (cq, cqt) = rest.split_at_mut(jacobian.len());
+    cq.copy_from_slice(jacobian);
+    cqt.copy_from_slice(jacobian);
+}
+
 /// The largest diagonal entry of the mass matrix (the unit of the regularization).
 fn mass_scale(mass: &dalembert_system::BlockDiagonal) -> f64 {
     mass.entries()
@@ -457,19 +472,6 @@ pub(crate) fn relative_stiffness(r: &Reduced) -> (Vec<f64>, Vec<Vec<f64>>) {
         })
         .collect();
     (values, shapes)
-}
-
-/// `(index in the row, name)` of each body's position columns (`x, y, angle` or `x, y, z, e0,
-/// …, e3`: the first `n_q / bodies` body columns).
-fn position_column_names(model: &crate::Mechanism, names: &[String]) -> Vec<(usize, String)> {
-    let bodies = model.num_bodies().max(1);
-    let (per_q, per_v) = (model.num_positions() / bodies, model.num_velocities() / bodies);
-    (0..model.num_bodies())
-        .flat_map(|b| {
-            let first = 1 + b * (per_q + per_v);
-            (first..first + per_q).map(|k| (k, names[k].clone()))
-        })
-        .collect()
 }
 
 /// A direction over named coordinates as its largest components: `crank.angle 0.89, slider.x

@@ -422,8 +422,10 @@ impl Simulator {
                 qd.len()
             )));
         }
-        let (q_names, v_names) = state_names(&self.simulation, &self.rows);
-        for (x, name) in q.iter().zip(&q_names).chain(qd.iter().zip(&v_names)) {
+        let (q_columns, v_columns) = self.rows.state_columns(&self.simulation.model);
+        let names = self.rows.names();
+        for (x, &k) in q.iter().zip(&q_columns).chain(qd.iter().zip(&v_columns)) {
+            let name = &names[k];
             if !x.is_finite() {
                 return Err(SimulatorError::State(format!("{name} = {x} is not finite")));
             }
@@ -527,18 +529,4 @@ fn failure(error: IntegrationError, statistics: Statistics) -> SimulatorError {
         error,
         statistics: Box::new(statistics),
     }))
-}
-
-/// The names of the positions and velocities (`slider.x`, `top.e0`, `top.wx`), from the output's
-/// body columns.
-fn state_names(simulation: &Simulation, rows: &Rows) -> (Vec<String>, Vec<String>) {
-    let bodies = simulation.model.num_bodies().max(1);
-    let (per_q, per_v) = (simulation.q.len() / bodies, simulation.qd.len() / bodies);
-    let body_columns = &rows.names()[1..1 + bodies * (per_q + per_v)];
-    let (mut q, mut v) = (Vec::new(), Vec::new());
-    for block in body_columns.chunks(per_q + per_v) {
-        q.extend_from_slice(&block[..per_q]);
-        v.extend_from_slice(&block[per_q..]);
-    }
-    (q, v)
 }

@@ -117,43 +117,13 @@ fn a_double_pendulum_of_point_masses_has_its_two_closed_form_modes() {
     }
 }
 
-/// A slider of mass `m` on a vertical guide hanging from a spring-damper (stiffness `k`,
-/// damping `c`, free length 1) attached to the ground at the origin.
-fn hanging_spring(m: f64, k: f64, c: f64) -> Scene {
-    let text = format!(
-        r#"
-[scene]
-gravity = [0.0, -9.81]
-[[bodies]]
-name = "slider"
-mass = {m}
-inertia = 0.1
-position = [0.0, -1.0]
-[[joints]]
-name = "guide"
-type = "prismatic"
-bodies = ["ground", "slider"]
-at = [0.0, -1.0]
-axis = [0.0, 1.0]
-[[forces]]
-name = "spring"
-type = "spring-damper"
-bodies = ["ground", "slider"]
-at = [[0.0, 0.0], [0.0, -1.0]]
-stiffness = {k}
-damping = {c}
-free_length = 1.0
-"#
-    );
-    Scene::from_toml(&text, "hanging spring").unwrap()
-}
-
 #[test]
 fn a_mass_on_a_spring_rests_at_its_static_deflection_and_rings_at_its_frequency() {
     // y = −1 − m g / k; ω_n = √(k/m), ζ = c / (2√(k m)) (the single pair of eigenvalues of the
     // first-order system: 1e-10 relative).
+    // tests/data/hanging-spring.toml: m = 2 kg, k = 400 N/m, c = 4 N·s/m.
     let (m, k, c) = (2.0, 400.0, 4.0);
-    let scene = hanging_spring(m, k, c);
+    let scene = Scene::from_path("tests/data/hanging-spring.toml").unwrap();
     let eq = scene.equilibrium().unwrap();
     let y = named(&eq.positions, "slider.y");
     assert!((y - (-1.0 - m * G / k)).abs() < 1e-12, "y = {y}");

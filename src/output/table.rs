@@ -53,6 +53,22 @@ impl Rows {
         self.first_reaction..self.names.len() - TRAILING_COLUMNS.len()
     }
 
+    /// The indices of the position columns and of the velocity columns of `model` (its bodies'
+    /// columns, each body's positions first: `slider.x`, `slider.y`, `slider.angle`, then
+    /// `slider.vx`, …), in the order of `q` and `q̇`.
+    pub fn state_columns(&self, model: &Mechanism) -> (Vec<usize>, Vec<usize>) {
+        let bodies = model.num_bodies();
+        let per_q = model.num_positions() / bodies.max(1);
+        let per_v = model.num_velocities() / bodies.max(1);
+        let (mut q, mut v) = (Vec::new(), Vec::new());
+        for b in 0..bodies {
+            let first = 1 + b * (per_q + per_v);
+            q.extend(first..first + per_q);
+            v.extend(first + per_q..first + per_q + per_v);
+        }
+        (q, v)
+    }
+
     /// Appends the row of sample `s` (one number per column) to `row`: positions and velocities,
     /// the reactions from the sample's multipliers, energy and constraint violations.
     pub fn push(&mut self, s: &Sample<'_>, row: &mut Vec<f64>) {

@@ -13,29 +13,7 @@ from conftest import ROOT
 
 G = 9.81
 
-SPRING = """
-[scene]
-gravity = [0.0, -9.81]
-[[bodies]]
-name = "slider"
-mass = 2.0
-inertia = 0.1
-position = [0.0, -1.0]
-[[joints]]
-name = "guide"
-type = "prismatic"
-bodies = ["ground", "slider"]
-at = [0.0, -1.0]
-axis = [0.0, 1.0]
-[[forces]]
-name = "spring"
-type = "spring-damper"
-bodies = ["ground", "slider"]
-at = [[0.0, 0.0], [0.0, -1.0]]
-stiffness = 400.0
-damping = 4.0
-free_length = 1.0
-"""
+SPRING = (ROOT / "tests" / "data" / "hanging-spring.toml").read_text()
 
 
 def test_a_mass_on_a_spring_rests_and_rings_at_its_closed_forms():

@@ -26,7 +26,7 @@
 //! factorization without the tangent terms is set up on `R` alone.
 
 use dalembert_system::linalg::{Backend, LinalgError, PatternLu, SaddlePoint};
-use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem, ResidualTangent, TangentAt, TangentPattern};
+use dalembert_system::{BlockDiagonal, ConstraintValues, MultibodySystem, ResidualTangent, TangentPattern};
 
 /// Largest `(β' ‖∂r/∂q‖ + γ' ‖∂r/∂v‖) / ‖M‖` (row-sum norms) for which the tangent terms are
 /// dropped from the matrix: Newton then contracts by about that ratio per iteration.
@@ -71,14 +71,8 @@ struct Reduced {
     x: Vec<f64>,
 }
 
-/// The trial state a matrix is built at.
-pub(crate) struct Trial<'a> {
-    pub t: f64,
-    pub q: &'a [f64],
-    pub v: &'a [f64],
-    pub qdd: &'a [f64],
-    pub lambda: &'a [f64],
-}
+/// The trial state a matrix is built at: the state a tangent is taken at.
+pub(crate) use dalembert_system::TangentAt as Trial;
 
 impl IterationMatrix {
     /// Storage for `system`'s iteration matrix; `independent`: the independent equations of a
@@ -175,14 +169,7 @@ impl IterationMatrix {
         values: &mut ConstraintValues,
         at: &Trial<'_>,
     ) -> u64 {
-        let trial = TangentAt {
-            t: at.t,
-            q: at.q,
-            v: at.v,
-            qdd: at.qdd,
-            lambda: at.lambda,
-        };
-        self.analytic = self.tangent.differentiate(system, mass, values, &trial);
+        self.analytic = self.tangent.differentiate(system, mass, values, at);
         let cost = if self.analytic {
             0
         } else {
@@ -433,14 +420,7 @@ mod tests {
                 passes <= n && (n <= 6 || passes < n),
                 "{name}: {passes} passes for {n} columns"
             );
-            let trial = TangentAt {
-                t: at.t,
-                q: at.q,
-                v: at.v,
-                qdd: at.qdd,
-                lambda: at.lambda,
-            };
-            tangent.differences(&*system, &mut mass, &mut values, &trial);
+            tangent.differences(&*system, &mut mass, &mut values, &at);
             for (velocity, got) in [(false, tangent.dr_dq()), (true, tangent.dr_dv())] {
                 let plain = plain_tangent(&*system, &at, velocity);
                 let scale = plain.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
