@@ -38,9 +38,6 @@ use thiserror::Error;
 /// Why no equilibrium was found (one line naming the cause).
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum EquilibriumError {
-    /// The constraints are redundant at the scene's position (the equations named).
-    #[error("equilibrium: redundant constraint equations at the scene's position ({0}); the static solve needs independent ones")]
-    Redundant(String),
     /// A direction of the admissible motions in which nothing resists, and a net force along it:
     /// no position balances it.
     #[error("equilibrium: there is none: a net force of {} acts along {direction}, in which nothing resists (zero stiffness)", dalembert_system::Shortest(*.force))]
@@ -129,7 +126,6 @@ impl Scene {
         let first = self.equilibrium_from(&self.q);
         let settled = match &first {
             Ok(eq) if eq.unstable_directions.is_empty() => return first,
-            Err(EquilibriumError::Redundant(_)) => return first,
             // Also where a free direction with a net force was found: it may be free only where
             // Newton's method stopped (a top lying horizontal has no stiffness along its fall).
             _ => crate::relaxation::settled(self),
@@ -149,11 +145,13 @@ impl Scene {
         let sys = system.constraints();
         let (n, m) = (system.layout().n_v(), system.num_equations());
         let t = 0.0;
+        // Redundant equations are left out of the Newton system (a maximal independent set keeps
+        // the same positions); their multipliers are the minimum-norm ones at the end.
         let structure = self.structure().map_err(|e| EquilibriumError::Model(e.to_string()))?;
-        if !structure.redundant.is_empty() {
-            let names: Vec<String> = structure.redundant.iter().map(|e| e.to_string()).collect();
-            return Err(EquilibriumError::Redundant(names.join(", ")));
-        }
+        let rows = structure.independent_rows;
+        let r = rows.len();
+        let mut slot = vec![usize::MAX; m];
+        rows.iter().enumerate().for_each(|(k, &row)| slot[row] = k);
         let mut tangent = ResidualTangent::new(system);
         let mut mass = system.mass_storage();
         system.mass(q0, &mut mass);
@@ -161,37 +159,59 @@ impl Scene {
         let mut entries: Vec<(usize, usize)> = tangent.pattern().entries().collect();
         entries.extend(mass.entries().map(|(r, c, _)| (r, c)));
         let pattern = sys.pattern();
-        entries.extend(pattern.entries().iter().map(|&(r, c)| (n + r, c)));
-        entries.extend(pattern.entries().iter().map(|&(r, c)| (c, n + r)));
-        let mut lu = PatternLu::new(n + m, entries, PatternLu::DENSE_LIMIT)
+        let kept: Vec<usize> = (0..pattern.entries().len())
+            .filter(|&e| slot[pattern.entries()[e].0] != usize::MAX)
+            .collect();
+        let at_kept = |e: &usize| (slot[pattern.entries()[*e].0], pattern.entries()[*e].1);
+        entries.extend(kept.iter().map(at_kept).map(|(k, c)| (n + k, c)));
+        entries.extend(kept.iter().map(at_kept).map(|(k, c)| (c, n + k)));
+        let mut lu = PatternLu::new(n + r, entries, PatternLu::DENSE_LIMIT)
             .map_err(|e| EquilibriumError::Model(e.to_string()))?;
+        // `C_q`'s values on the independent rows.
+        let mut jacobian = vec![0.0; kept.len()];
+        let kept_jacobian = |values: &dalembert_system::ConstraintValues, out: &mut [f64]| {
+            out.iter_mut().zip(&kept).for_each(|(o, &e)| *o = values.jacobian[e]);
+        };
         let (mut values, mut scratch) = (sys.values(), sys.values());
         let (zero_v, zero_a) = (vec![0.0; n], vec![0.0; n]);
         let mut q = q0.to_vec();
-        let mut lambda = vec![0.0; m];
-        let mut f = vec![0.0; n + m];
+        // The independent equations' multipliers, and all of them (the others 0).
+        let mut lambda = vec![0.0; r];
+        let mut full = vec![0.0; m];
+        let mut f = vec![0.0; n + r];
         // Scales: the generalized forces at the start, the positions' size.
         let mut q_force = vec![0.0; n];
         system.applied_forces(t, &q, &zero_v, &mut q_force);
         let force_scale = 1.0 + q_force.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         let length_scale = 1.0 + q.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let residual = |q: &[f64], lambda: &[f64], mass: &mut _, values: &mut _, f: &mut [f64]| {
+        let scatter = |lambda: &[f64], full: &mut [f64]| {
+            full.fill(0.0);
+            rows.iter().zip(lambda).for_each(|(&row, &l)| full[row] = l);
+        };
+        let residual = |q: &[f64],
+                        lambda: &[f64],
+                        full: &mut [f64],
+                        mass: &mut _,
+                        values: &mut dalembert_system::ConstraintValues,
+                        f: &mut [f64]| {
+            scatter(lambda, full);
             let (r, c) = f.split_at_mut(n);
-            system.dynamics_residual(t, (q, &zero_v), (&zero_a, lambda), (mass, values), r);
-            c.copy_from_slice(&values.c);
+            system.dynamics_residual(t, (q, &zero_v), (&zero_a, full), (mass, values), r);
+            c.iter_mut().zip(&rows).for_each(|(ci, &row)| *ci = values.c[row]);
             let force = r.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            let violation = c.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let violation = values.c.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             let merit = r.iter().map(|x| (x / force_scale).powi(2)).sum::<f64>()
                 + c.iter().map(|x| (x / length_scale).powi(2)).sum::<f64>();
             (force, violation, merit)
         };
-        let mut step = vec![0.0; n + m];
+        let mut step = vec![0.0; n + r];
         // The first multipliers: those of the motion at rest here, `[M C_qᵀ; C_q 0] [q̈; λ] =
         // [Q; 0]`, so that the first tangent has the constraints' geometric stiffness (with λ = 0
         // a pendulum has none).
         sys.evaluate(t, &q, &zero_v, &mut values);
         {
-            fill(&mut lu, None, tangent.dr_dq().len(), 1.0, &mass, &values.jacobian);
+            kept_jacobian(&values, &mut jacobian);
+            fill(&mut lu, None, tangent.dr_dq().len(), 1.0, &mass, &jacobian);
             if lu.factor().is_ok() {
                 step[..n].copy_from_slice(&q_force);
                 step[n..].fill(0.0);
@@ -201,7 +221,7 @@ impl Scene {
                 }
             }
         }
-        let (mut force, mut violation, mut merit) = residual(&q, &lambda, &mut mass, &mut values, &mut f);
+        let (mut force, mut violation, mut merit) = residual(&q, &lambda, &mut full, &mut mass, &mut values, &mut f);
         let (mut q_try, mut lambda_try) = (q.clone(), lambda.clone());
         let mut iterations = 0;
         // The regularization `μ M` added to `K` (1/s²): 0 while Newton's steps decrease the
@@ -219,26 +239,29 @@ impl Scene {
         while !(converged(force, violation) && polished) {
             polished = converged(force, violation);
             if iterations == MAX_ITERATIONS || mu > MU_LARGEST * mu_unit {
-                return Err(self.no_equilibrium(&q, &lambda, iterations, force, violation));
+                scatter(&lambda, &mut full);
+                return Err(self.no_equilibrium(&q, &full, iterations, force, violation));
             }
             iterations += 1;
+            scatter(&lambda, &mut full);
             let at = TangentAt {
                 t,
                 q: &q,
                 v: &zero_v,
                 qdd: &zero_a,
-                lambda: &lambda,
+                lambda: &full,
             };
             tangent.differentiate(system, &mut mass, &mut scratch, &at);
             system.mass(&q, &mut mass);
             // `values` holds the constraint values at `q` (from its residual).
+            kept_jacobian(&values, &mut jacobian);
             fill(
                 &mut lu,
                 Some(tangent.dr_dq()),
                 tangent.dr_dq().len(),
                 mu,
                 &mass,
-                &values.jacobian,
+                &jacobian,
             );
             let solved = lu.factor().is_ok() && {
                 step.iter_mut().zip(&f).for_each(|(s, x)| *s = -x);
@@ -263,7 +286,7 @@ impl Scene {
                 for (l, (l0, d)) in lambda_try.iter_mut().zip(lambda.iter().zip(&step[n..])) {
                     *l = l0 + alpha * d;
                 }
-                let trial = residual(&q_try, &lambda_try, &mut mass, &mut values, &mut f);
+                let trial = residual(&q_try, &lambda_try, &mut full, &mut mass, &mut values, &mut f);
                 let decreased = if polished {
                     trial.2 <= merit
                 } else {
@@ -287,8 +310,19 @@ impl Scene {
                 break;
             } else {
                 // Back at (q, λ): its residual and constraint values again, and a larger μ.
-                (force, violation, merit) = residual(&q, &lambda, &mut mass, &mut values, &mut f);
+                (force, violation, merit) = residual(&q, &lambda, &mut full, &mut mass, &mut values, &mut f);
                 mu = if mu == 0.0 { mu_unit * 1e-6 } else { mu * 10.0 };
+            }
+        }
+        scatter(&lambda, &mut full);
+        let mut lambda = full;
+        if r < m {
+            // Redundant equations: the multipliers of least norm that balance the applied forces,
+            // as the minimum-norm treatment gives them in a run.
+            sys.evaluate(t, &q, &zero_v, &mut values);
+            system.applied_forces(t, &q, &zero_v, &mut q_force);
+            if let Some(l) = dalembert_system::structure::minimum_norm_multipliers(sys, &values, &q_force) {
+                lambda = l;
             }
         }
         let reduced = reduced_matrices(system, t, &q, &lambda, &mut tangent)?;

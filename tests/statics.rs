@@ -326,3 +326,26 @@ fn scenes_started_far_from_rest_settle_where_their_motion_comes_to_rest() {
         );
     }
 }
+
+#[test]
+fn a_parallelogram_with_a_redundant_crank_balances_and_swings_at_its_closed_form() {
+    // The shipped parallelogram (three 1 kg cranks of 1 m pinned at their top ends, a 2 kg coupler
+    // translating; one crank redundant): it hangs with every crank vertical; T = ½ (3 m L²/3 +
+    // m_c L²) θ̇², V = (3 m L/2 + m_c L) g (1 − cos θ), so ω² = 3.5 g / 3 (1e-10 relative). The
+    // multipliers are the minimum-norm ones, as in a run: by symmetry each crank's pin carries its
+    // own weight and a third of the coupler's, 9.81 + 6.54 N (1e-9).
+    let scene = Scene::from_path("scenes/redundant-parallelogram.toml").unwrap();
+    let modes = scene.modes().unwrap();
+    let eq = &modes.equilibrium;
+    assert!(eq.stable);
+    let f = (3.5 * G / 3.0).sqrt() / (2.0 * std::f64::consts::PI);
+    assert!(
+        (modes.frequencies[0] - f).abs() < 1e-10 * f,
+        "{:?}, expected {f}",
+        modes.frequencies
+    );
+    for pin in ["A", "E", "D"] {
+        let fy = named(&eq.reactions, &format!("{pin}.fy"));
+        assert!((fy + G + 2.0 * G / 3.0).abs() < 1e-9, "{pin}.fy = {fy}");
+    }
+}
