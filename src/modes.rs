@@ -9,7 +9,7 @@
 //! order system, `ω_n = |s|`, `ζ = −Re s / |s|` (an overdamped pair of real eigenvalues
 //! `s₁ s₂`: `ω_n = √(s₁ s₂)`, `ζ = −(s₁ + s₂) / (2 ω_n)`), and the shapes stay the undamped ones.
 
-use crate::equilibrium::{reduced_matrices, Equilibrium, EquilibriumError};
+use crate::equilibrium::{reduced_matrices, relative_stiffness, Equilibrium, EquilibriumError};
 use crate::Scene;
 use dalembert_system::ResidualTangent;
 use nalgebra::DMatrix;
@@ -59,36 +59,27 @@ impl Scene {
         }
         let m = (&r.m + r.m.transpose()) * 0.5;
         let k = (&r.k + r.k.transpose()) * 0.5;
-        let chol = m.clone().cholesky().ok_or_else(|| {
-            EquilibriumError::Model(
+        if m.clone().cholesky().is_none() {
+            return Err(EquilibriumError::Model(
                 "the mass matrix is singular on the admissible motions (a body without mass or inertia moves)".into(),
-            )
-        })?;
-        let l = chol.l();
-        let l_inv = l.clone().try_inverse().ok_or_else(|| {
-            EquilibriumError::Model("the mass matrix on the admissible motions cannot be inverted".into())
-        })?;
-        let a = &l_inv * &k * l_inv.transpose();
-        let a = (&a + a.transpose()) * 0.5;
-        let eig = a.symmetric_eigen();
-        let mut order: Vec<usize> = (0..dof).collect();
-        order.sort_by(|&x, &y| eig.eigenvalues[x].total_cmp(&eig.eigenvalues[y]));
-        let omega: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i].max(0.0).sqrt()).collect();
+            ));
+        }
+        // The undamped problem K_r φ = ω² M_r φ: its eigenvalues ascending and the velocities B φ.
+        let (squares, velocities) = relative_stiffness(&r);
         let (frequencies, damping_ratios) = if r.d.iter().all(|&x| x == 0.0) {
-            (omega.iter().map(|w| w / (2.0 * PI)).collect(), vec![0.0; dof])
+            let f = squares.iter().map(|w2| w2.max(0.0).sqrt() / (2.0 * PI)).collect();
+            (f, vec![0.0; dof])
         } else {
             damped(&m, &r.d, &k)?
         };
-        // Shapes: φ_i = L⁻ᵀ y, the velocities B φ_i, the positions' change T(q) B φ_i.
+        // Shapes: the positions' change T(q) B φ, scaled to a largest component of 1.
         let n_q = system.layout().n_q();
         let columns: Vec<String> = equilibrium.positions.iter().map(|(c, _)| c.clone()).collect();
-        let shapes = order
+        let shapes = velocities
             .iter()
-            .map(|&i| {
-                let phi = l_inv.transpose() * eig.eigenvectors.column(i);
-                let v = &r.b * phi;
+            .map(|v| {
                 let mut dq = vec![0.0; n_q];
-                system.position_rates(&equilibrium.q, v.as_slice(), &mut dq);
+                system.position_rates(&equilibrium.q, v, &mut dq);
                 let (largest, at) =
                     dq.iter().enumerate().fold(
                         (0.0f64, 0),

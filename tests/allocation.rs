@@ -345,6 +345,23 @@ fn stepping_allocates_nothing_after_setup() {
     );
 }
 
+/// The allocations of `iterations` rounds of the simulator's loop on `scene` after its
+/// construction: the input (if any) set, an advance to a time between two steps, the reaction
+/// column read, one step.
+fn simulator_loop(scene: &dalembert::Scene, reaction: &str, input: Option<&str>, iterations: usize) -> usize {
+    let mut sim = scene.simulator().unwrap();
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    for k in 1..=iterations {
+        if let Some(name) = input {
+            sim.set_input(name, (k as f64).sin()).unwrap();
+        }
+        sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
+        sim.value(reaction).unwrap();
+        sim.step().unwrap();
+    }
+    ALLOCATIONS.load(Ordering::Relaxed) - before
+}
+
 /// The simulator's loop (an input set, an advance to a time between two steps, a reaction read, a
 /// step) allocates nothing after construction either: every formulation × method × stabilization,
 /// on a planar slider-crank and a spatial one, each with a motor torque that is an input. Counted
@@ -382,17 +399,7 @@ fn the_simulator_loop_allocates_nothing() {
                     scene.settings.method = Method::of(entry);
                     scene.settings.stabilization = Stabilization::parse(name).unwrap();
                     scene.settings.step = 1e-3;
-                    let count = |iterations: usize| {
-                        let mut sim = scene.simulator().unwrap();
-                        let before = ALLOCATIONS.load(Ordering::Relaxed);
-                        for k in 1..=iterations {
-                            sim.set_input("motor", (k as f64).sin()).unwrap();
-                            sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
-                            sim.value(&reaction).unwrap();
-                            sim.step().unwrap();
-                        }
-                        ALLOCATIONS.load(Ordering::Relaxed) - before
-                    };
+                    let count = |iterations| simulator_loop(&scene, &reaction, Some("motor"), iterations);
                     let (short, long) = (count(50), count(100));
                     if long > short {
                         failures.push(format!(
@@ -430,16 +437,7 @@ fn the_simulator_loop_in_joint_coordinates_allocates_nothing() {
             scene.settings.formulation = formulation;
             scene.settings.method = Method::of(entry);
             scene.settings.step = 1e-3;
-            let count = |iterations: usize| {
-                let mut sim = scene.simulator().unwrap();
-                let before = ALLOCATIONS.load(Ordering::Relaxed);
-                for k in 1..=iterations {
-                    sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
-                    sim.value(&reaction).unwrap();
-                    sim.step().unwrap();
-                }
-                ALLOCATIONS.load(Ordering::Relaxed) - before
-            };
+            let count = |iterations| simulator_loop(&scene, &reaction, None, iterations);
             let (short, long) = (count(50), count(100));
             if long > short {
                 failures.push(format!(
