@@ -48,6 +48,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             IntegratorOptions::fixed(Method::generalized_alpha(0.8), 1e-4, every),
         ),
     ]);
+    settings.extend([1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1e-4].iter().map(|&h| {
+        (
+            format!("ali3-p, h = {h:e}"),
+            IntegratorOptions::fixed(Method::ali3p(0.0), h, every),
+        )
+    }));
     println!("N-four-bar, N = {n}, {end} s; error = largest |B0 - exact| over 400 output steps");
     for kind in FormulationKind::ALL {
         for (name, options) in &settings {

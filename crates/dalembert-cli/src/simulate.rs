@@ -35,7 +35,7 @@ pub struct RunArgs {
     /// augmented | embedding | amalgamated
     #[arg(long)]
     formulation: Option<String>,
-    /// symplectic-euler | rk4 | dopri5 | generalized-alpha
+    /// symplectic-euler | rk4 | dopri5 | generalized-alpha | ali3-p
     #[arg(long)]
     integrator: Option<String>,
     /// The methods' parameters (`--rtol`, `--atol`, `--rho-inf`), from the integrators' registry.

@@ -109,6 +109,7 @@ pub static METHODS: &[&MethodEntry] = &[
     &methods::rk4::ENTRY,
     &methods::dopri5::ENTRY,
     &methods::generalized_alpha::ENTRY,
+    &methods::ali3p::ENTRY,
 ];
 
 /// The names of [`METHODS`].

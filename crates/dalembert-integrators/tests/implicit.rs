@@ -155,3 +155,61 @@ fn energy_drift_of_each_method_on_the_double_pendulum() {
         );
     }
 }
+
+/// ALI3-P on the double pendulum, t = 1 s: the error against an RK4 reference (h = 1/8000, ≈ 3e-10
+/// accurate) falls at order 2 (fitted slope within ±0.3), with `C = 0` to the Newton tolerance.
+#[test]
+fn ali3p_is_second_order() {
+    let mech = mechanisms::double_pendulum(
+        DoublePendulum {
+            m: [1.0, 1.0],
+            l: [1.0, 1.0],
+        },
+        [0.3, 1.0],
+        [0.0, 2.0],
+        [0.0, 0.0],
+    );
+    let (qr, qdr, _) = run(&mech, 1.0, &IntegratorOptions::fixed(Method::rk4(), 1.0 / 8000.0, 1.0)).unwrap();
+    let reference = [qr, qdr].concat();
+    let steps = [1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0, 1.0 / 800.0];
+    let errs: Vec<f64> = steps
+        .iter()
+        .map(|&h| {
+            let (q, qd, s) = run(&mech, 1.0, &IntegratorOptions::fixed(Method::ali3p(0.0), h, 1.0)).unwrap();
+            assert!(
+                s.max_constraint_violation <= 1e-10,
+                "|C| {}",
+                s.max_constraint_violation
+            );
+            max_diff(&[q, qd].concat(), &reference)
+        })
+        .collect();
+    let xs: Vec<f64> = steps.iter().map(|h: &f64| h.ln()).collect();
+    let ys: Vec<f64> = errs.iter().map(|e| e.ln()).collect();
+    let (mx, my) = (xs.iter().sum::<f64>() / 4.0, ys.iter().sum::<f64>() / 4.0);
+    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    assert!((slope - 2.0).abs() <= 0.3, "slope {slope}, errors {errs:?}");
+}
+
+/// ALI3-P on the four-bar for 5 s at h = 1 ms: `C = 0` to the Newton tolerance at every step, the
+/// velocity constraints to 1e-9 after the projection, and the energy of this conservative system
+/// within 1e-4 of its scale (24.47 J): the trapezoidal rule has no numerical damping, so what
+/// changes is its bounded O(h²) oscillation, not a drift. Measured: |C| 2.2e-15, |Ċ| 8.5e-12,
+/// energy 4.4e-5 J.
+#[test]
+fn ali3p_keeps_the_four_bar_closed() {
+    let mech = mechanisms::four_bar(std::f64::consts::PI, 0.0, 0.0, false);
+    let (_, _, s) = run(&mech, 5.0, &IntegratorOptions::fixed(Method::ali3p(0.0), 1e-3, 0.1)).unwrap();
+    assert!(
+        s.max_constraint_violation <= 1e-10,
+        "|C| {}",
+        s.max_constraint_violation
+    );
+    assert!(s.max_velocity_violation <= 1e-9, "|Ċ| {}", s.max_velocity_violation);
+    assert!(
+        s.max_energy_change < 1e-4 * 24.47,
+        "energy change {}",
+        s.max_energy_change
+    );
+}

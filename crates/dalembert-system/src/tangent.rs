@@ -139,6 +139,11 @@ impl TangentPattern {
         &self.row_idx[self.column(j)]
     }
 
+    /// The index of entry `(i, j)` in the values, or `None` when it is outside the pattern.
+    pub fn position(&self, i: usize, j: usize) -> Option<usize> {
+        self.rows(j).binary_search(&i).ok().map(|k| self.col_ptr[j] + k)
+    }
+
     /// Groups of columns no two of which share a row: each is perturbed at once in one residual
     /// difference.
     pub fn passes(&self) -> &[Vec<usize>] {
@@ -170,9 +175,9 @@ impl<'a> TangentValues<'a> {
     }
 
     fn entry(&mut self, i: usize, j: usize) -> Option<usize> {
-        let found = self.pattern.rows(j).binary_search(&i).ok();
+        let found = self.pattern.position(i, j);
         self.outside |= found.is_none();
-        found.map(|k| self.pattern.col_ptr[j] + k)
+        found
     }
 
     /// Adds `value` to `∂r_i/∂q_j` (velocity coordinates `i`, `j`).
