@@ -897,7 +897,10 @@ fn ali3p_passes_flat_positions_of_the_redundant_parallelogram() {
     let mech = mechanisms::parallelogram(phi0, w0, true);
     let t_end = 3.0;
     let exact = parallelogram_reference(phi0, w0, 3.0, 3.5, t_end);
-    assert!(exact > phi0 + 4.0 * std::f64::consts::PI - 0.3, "four passages: {exact}");
+    assert!(
+        exact > phi0 + 4.0 * std::f64::consts::PI - 0.3,
+        "four passages: {exact}"
+    );
     let aug = AugmentedOptions {
         redundancy: RedundancyTreatment::MinimumNorm,
         ..Default::default()

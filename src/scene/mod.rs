@@ -40,7 +40,7 @@ pub fn parse_redundancy(s: &str) -> Option<RedundancyTreatment> {
 }
 
 /// The one-line error for a name that is not one of `names`: `unknown integrator 'rk5' (expected
-/// symplectic-euler, rk4, dopri5, generalized-alpha)`. The integrators' names come from the
+/// symplectic-euler, rk4, dopri5, generalized-alpha, ali3-p)`. The integrators' names come from the
 /// registry ([`dalembert_integrators::method_names`]).
 /// When one of `names` is close to `value` (a likely typo), `; did you mean 'NAME'?` is added.
 pub fn unknown_name(what: &str, value: &str, names: &[&str]) -> String {

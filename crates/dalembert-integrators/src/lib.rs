@@ -38,10 +38,10 @@ mod statistics;
 mod stepper;
 mod vector_state;
 
-pub use methods::ali3p::ALI3P_AUTOMATIC_RATIO;
 pub use branch::{BRANCH_SWITCH_ENERGY, BRANCH_SWITCH_JUMP, BRANCH_SWITCH_SHARE};
 pub use driver::{integrate, integrate_cancellable, Integration, Sample};
 pub use error::{IntegrationError, IntegrationFailure};
+pub use methods::ali3p::ALI3P_AUTOMATIC_RATIO;
 pub use options::IntegratorOptions;
 pub use registry::{method_names, Applies, Build, Method, MethodEntry, Parameter, TradeAxis, MAX_PARAMETERS, METHODS};
 pub use stabilization::Stabilization;

@@ -286,7 +286,7 @@ impl PyScene {
     }
 
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
-    /// line's flags do); the methods' parameters (`rtol`, `atol`, `rho_inf`) are keywords too. Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
+    /// line's flags do); the methods' parameters (`rtol`, `atol`, `rho_inf`, `penalty`) are keywords too. Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
     /// so far) when the run stops early; with `strict=True` also when a conservative model's
     /// energy drifts by more than 1 % (otherwise a warning). `coordinates="joint"` runs a spatial
     /// tree in joint coordinates (same outputs). The GIL is released during the run, and Ctrl-C

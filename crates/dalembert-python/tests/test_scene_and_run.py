@@ -150,7 +150,7 @@ def test_bad_keywords_name_the_keyword(scenes):
     scene = dalembert.Scene.load(scenes / "slider-crank.toml")
     with pytest.raises(ValueError, match="^step must be positive, got -0.001$"):
         scene.simulate(step=-1e-3)
-    with pytest.raises(ValueError, match=r"^unknown integrator 'rk5' \(expected symplectic-euler, rk4, dopri5, generalized-alpha\); did you mean 'rk4'\?$"):
+    with pytest.raises(ValueError, match=r"^unknown integrator 'rk5' \(expected symplectic-euler, rk4, dopri5, generalized-alpha, ali3-p\); did you mean 'rk4'\?$"):
         scene.simulate(integrator="rk5")
     # A mistyped keyword: every keyword listed, the nearest suggested.
     with pytest.raises(TypeError, match=r"^simulate\(\) got an unexpected keyword 'ende' \(keywords: end, formulation, integrator, step, every, stabilization, redundant, coordinates, strict, rtol, atol, rho_inf\); did you mean 'end'\?$"):

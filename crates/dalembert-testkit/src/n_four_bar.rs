@@ -124,3 +124,116 @@ pub fn crank_rk4(theta: f64, omega: f64, k: f64, c: f64, h: f64, steps: usize) -
     }
     (th, w)
 }
+
+/// One way of writing the benchmark's model ([`NFourBar::variant`]): the same bodies, masses,
+/// joints and initial state as [`NFourBar::toml`], listed and stated differently.
+#[derive(Debug, Clone)]
+pub struct Variant {
+    /// The scene.
+    pub toml: String,
+    /// Index of the first crank (whose tip is `B₀`) among the scene's bodies.
+    pub first_crank: usize,
+    /// What was varied, for messages.
+    pub description: String,
+}
+
+impl NFourBar {
+    /// The model written the `seed`-th way: bodies and joints in shuffled orders, each joint's
+    /// bodies in either order, each joint given by its global point (`at`) or by the two bodies'
+    /// local points (`points`), and (for odd seeds) every body's position and angle moved by up to
+    /// 1e-12 (the start is assembled again, so the state stays consistent). Seed 0 is
+    /// [`NFourBar::toml`] as written.
+    pub fn variant(&self, end: f64, seed: u64) -> Variant {
+        use crate::fuzz::Rng;
+        if seed == 0 {
+            return Variant {
+                toml: self.toml(end),
+                first_crank: Self::FIRST_CRANK,
+                description: "as written".into(),
+            };
+        }
+        let n = self.n;
+        let mut rng = Rng::new(seed);
+        // Bodies: (name, centre, angle); joints: (name, body a, body b, global point, local a, local b).
+        let mut bodies: Vec<(String, [f64; 2], f64)> = (0..=n)
+            .map(|i| (format!("crank-{i}"), [i as f64, 0.5], FRAC_PI_2))
+            .chain((0..n).map(|i| (format!("coupler-{i}"), [i as f64 + 0.5, 1.0], 0.0)))
+            .collect();
+        type Joint = (String, String, String, [f64; 2], [f64; 2], [f64; 2]);
+        let mut joints: Vec<Joint> = Vec::new();
+        for i in 0..=n {
+            let x = i as f64;
+            let crank = format!("crank-{i}");
+            joints.push((format!("O{i}"), "ground".into(), crank, [x, 0.0], [x, 0.0], [-0.5, 0.0]));
+        }
+        for i in 0..n {
+            let x = i as f64;
+            let (left, right, coupler) = (format!("crank-{i}"), format!("crank-{}", i + 1), format!("coupler-{i}"));
+            joints.push((
+                format!("L{i}"),
+                left,
+                coupler.clone(),
+                [x, 1.0],
+                [0.5, 0.0],
+                [-0.5, 0.0],
+            ));
+            joints.push((format!("R{i}"), coupler, right, [x + 1.0, 1.0], [0.5, 0.0], [0.5, 0.0]));
+        }
+        shuffle(&mut rng, &mut bodies);
+        shuffle(&mut rng, &mut joints);
+        let perturb = seed % 2 == 1;
+        let mut s =
+            format!("[scene]\nname = \"N-four-bar, N = {n} (IFToMM A02), variant {seed}\"\ngravity = [0.0, -{G}]\n\n");
+        for (name, c, angle) in &bodies {
+            let mut d = [0.0; 3];
+            if perturb {
+                for v in &mut d {
+                    *v = 1e-12 * (2.0 * (rng.next_u64() as f64 / u64::MAX as f64) - 1.0);
+                }
+            }
+            s += &format!(
+                "[[bodies]]\nname = \"{name}\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [{:?}, {:?}]\nangle = {:?}\n",
+                c[0] + d[0],
+                c[1] + d[1],
+                angle + d[2]
+            );
+            if name == "crank-0" {
+                s += "angular_velocity = -1.0\n";
+            }
+            s += "\n";
+        }
+        let mut by_points = 0;
+        for (name, a, b, at, la, lb) in &joints {
+            let (a, b, la, lb) = if rng.below(2) == 1 {
+                (b, a, lb, la)
+            } else {
+                (a, b, la, lb)
+            };
+            s += &format!("[[joints]]\nname = \"{name}\"\ntype = \"revolute\"\nbodies = [\"{a}\", \"{b}\"]\n");
+            if rng.below(2) == 1 {
+                by_points += 1;
+                s += &format!("points = [[{:?}, {:?}], [{:?}, {:?}]]\n\n", la[0], la[1], lb[0], lb[1]);
+            } else {
+                s += &format!("at = [{:?}, {:?}]\n\n", at[0], at[1]);
+            }
+        }
+        s += &format!("[simulation]\nend = {end:?}\noutput_every = 0.05\n");
+        let first_crank = bodies.iter().position(|b| b.0 == "crank-0").unwrap_or(0);
+        Variant {
+            toml: s,
+            first_crank,
+            description: format!(
+                "variant {seed}: bodies and joints shuffled (crank-0 is body {first_crank}), {by_points} of {} joints by local points{}",
+                joints.len(),
+                if perturb { ", positions moved by up to 1e-12" } else { "" }
+            ),
+        }
+    }
+}
+
+/// Fisher–Yates shuffle with `rng`.
+fn shuffle<T>(rng: &mut crate::fuzz::Rng, items: &mut [T]) {
+    for i in (1..items.len()).rev() {
+        items.swap(i, rng.below(i + 1));
+    }
+}

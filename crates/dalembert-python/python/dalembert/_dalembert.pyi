@@ -108,7 +108,7 @@ class Scene:
         redundant: Optional[str] = None,
         coordinates: Optional[str] = None,
         strict: bool = False,
-        **parameters: float,  # the methods' parameters from the registry: rtol, atol, rho_inf
+        **parameters: float,  # the methods' parameters from the registry: rtol, atol, rho_inf, penalty
     ) -> Run: ...
     def simulator(
         self,

@@ -100,7 +100,10 @@ fn build(m: &Method, s: Setup<'_>) -> Result<Box<dyn Stepper>, IntegrationError>
     let system = f.system();
     let mut mass = system.mass_storage();
     system.mass(q0, &mut mass);
-    let largest = mass.entries().filter(|(i, j, _)| i == j).fold(0.0f64, |a, (_, _, v)| a.max(v));
+    let largest = mass
+        .entries()
+        .filter(|(i, j, _)| i == j)
+        .fold(0.0f64, |a, (_, _, v)| a.max(v));
     let matrix = LeadingMatrix::new(system, &mass).map_err(|e| DynamicsError::Singular {
         time: s.t0,
         what: format!("ALI3-P's leading matrix: {e}"),
@@ -281,7 +284,11 @@ impl Ali3p {
                     };
                     self.evaluations += self.matrix.differentiate(system, &mut self.mass, &mut self.values, &at);
                 }
-                if self.matrix.factor(&self.mass, &self.values, (beta, gamma), beta * alpha).is_err() {
+                if self
+                    .matrix
+                    .factor(&self.mass, &self.values, (beta, gamma), beta * alpha)
+                    .is_err()
+                {
                     return Err(self.fail());
                 }
                 self.factorizations += 1;
