@@ -184,7 +184,11 @@ fn singular_or(e: IntegrationError, f: &dyn Formulation, t: f64, y: &[f64], meth
             method,
             step,
             involved,
-            advice: "its Newton iteration does not converge there (the iteration matrix [M C_qᵀ; C_q 0] loses rank with C_q) and halving the step only lands nearer, so the run stops: pass singular positions with a fixed-step rk4 with projection (docs/stability.md)",
+            advice: if method == crate::methods::ali3p::ENTRY.name {
+                "its Newton iteration does not converge there and halving the step only lands nearer, so the run stops: take a larger step, or rk4 with projection (docs/stability.md)"
+            } else {
+                "its Newton iteration does not converge there (the iteration matrix [M C_qᵀ; C_q 0] loses rank with C_q) and halving the step only lands nearer, so the run stops: pass singular positions with ali3-p (augmented formulation), whose matrix stays regular there, or a fixed-step rk4 with projection (docs/stability.md)"
+            },
         },
         None => e,
     }

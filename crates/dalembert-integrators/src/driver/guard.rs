@@ -60,7 +60,7 @@ impl SingularPassGuard {
                 method,
                 step: next,
                 involved,
-                advice: "an adaptive error-controlled step resolves the perturbed geometry there and may leave on the other branch, and no checked step bridged it, so the run stops: pass singular positions with a fixed-step rk4 with projection (docs/stability.md)",
+                advice: "an adaptive error-controlled step resolves the perturbed geometry there and may leave on the other branch, and no checked step bridged it, so the run stops: pass singular positions with ali3-p (augmented formulation) or a fixed-step rk4 with projection (docs/stability.md)",
             }),
             None => Ok(()),
         }
