@@ -153,7 +153,7 @@ def test_bad_keywords_name_the_keyword(scenes):
     with pytest.raises(ValueError, match=r"^unknown integrator 'rk5' \(expected symplectic-euler, rk4, dopri5, generalized-alpha, ali3-p\); did you mean 'rk4'\?$"):
         scene.simulate(integrator="rk5")
     # A mistyped keyword: every keyword listed, the nearest suggested.
-    with pytest.raises(TypeError, match=r"^simulate\(\) got an unexpected keyword 'ende' \(keywords: end, formulation, integrator, step, every, stabilization, redundant, coordinates, strict, rtol, atol, rho_inf\); did you mean 'end'\?$"):
+    with pytest.raises(TypeError, match=r"^simulate\(\) got an unexpected keyword 'ende' \(keywords: end, formulation, integrator, step, every, stabilization, redundant, coordinates, strict, rtol, atol, rho_inf, penalty\); did you mean 'end'\?$"):
         scene.simulate(ende=1.0)
     with pytest.raises(TypeError, match=r"did you mean 'rho_inf'\?$"):
         scene.simulate(rho_ind=0.5)
