@@ -223,14 +223,14 @@ fn ali3p_passes_every_way_of_writing_the_model() {
     // ALI3-P (h = 1 ms, the automatic penalty) on ten ways of writing A02 N = 2
     // (`NFourBar::variant`: bodies and joints shuffled, joints by global or local points, odd
     // seeds with the start moved by up to 1e-12 and run to 21 s). Measured 2026-11-26
-    // (`cargo run --release --example n_four_bar_variants -- 2`): 4.1e-4 on every 20 s variant and
-    // 4.7e-4 on every 21 s one; RK4 with projection at the same step gives 1e-8 on the variants as
+    // (`cargo run --release --example n_four_bar_variants -- 2`): 4.6e-4 on every 20 s variant and
+    // 5.2e-4 on every 21 s one; RK4 with projection at the same step gives 1e-8 on the variants as
     // written but 1.5e-4 … 5.3e-4 on those moved by 1e-12, and the augmented one stops on one
     // (`BranchSwitch` at 18.2 s). Asserted: every variant within the benchmark's 1e-3, and the
     // error nearly independent of how the model is written: the variants of one end time agree to
-    // 1e-6 (measured spread 4e-9 on 4.1e-4 for those as written, 2.7e-7 on 4.7e-4 for those moved
-    // by 1e-12: their error is the method's truncation error, and the passes amplify rounding by
-    // 1e5 at most, where RK4's error moves by 5e-4).
+    // 1e-6 (measured spread 3.9e-9 on 4.6e-4 for those as written, 7.0e-7 on 5.2e-4 for those
+    // moved by 1e-12: their error is the method's truncation error, and the passes amplify rounding
+    // by 7e5 at most, where RK4's error moves by 5e-4).
     let bar = NFourBar { n: 2 };
     let mut by_end: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
     for seed in 0..10u64 {
