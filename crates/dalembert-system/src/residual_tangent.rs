@@ -84,6 +84,28 @@ impl ResidualTangent {
         false
     }
 
+    /// [`ResidualTangent::differentiate`], then `mass` and `values` evaluated at `at` again (the
+    /// differences leave them elsewhere): whether the tangent was the analytic one, and the
+    /// residual evaluations spent (0 for the analytic one). What an implicit integrator's matrix
+    /// calls before it is built at `at`.
+    pub fn differentiate_at(
+        &mut self,
+        system: &dyn MultibodySystem,
+        mass: &mut BlockDiagonal,
+        values: &mut ConstraintValues,
+        at: &TangentAt<'_>,
+    ) -> (bool, u64) {
+        let analytic = self.differentiate(system, mass, values, at);
+        system.mass(at.q, mass);
+        system.constraints().evaluate(at.t, at.q, at.v, values);
+        let cost = if analytic {
+            0
+        } else {
+            4 * self.pattern.passes().len() as u64
+        };
+        (analytic, cost)
+    }
+
     /// `∂r/∂q` and `∂r/∂v` by central differences of the residual, column passes at a time,
     /// whether or not the system has analytic derivatives (which they check).
     pub fn differences(

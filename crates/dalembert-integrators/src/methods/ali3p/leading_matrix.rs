@@ -95,15 +95,10 @@ impl LeadingMatrix {
         values: &mut ConstraintValues,
         at: &TangentAt<'_>,
     ) -> u64 {
-        self.analytic = self.tangent.differentiate(system, mass, values, at);
+        let (analytic, cost) = self.tangent.differentiate_at(system, mass, values, at);
+        self.analytic = analytic;
         self.differentiated = true;
-        system.mass(at.q, mass);
-        system.constraints().evaluate(at.t, at.q, at.v, values);
-        if self.analytic {
-            0
-        } else {
-            4 * self.tangent.pattern().passes().len() as u64
-        }
+        cost
     }
 
     /// Builds `f_q` from `mass` and `values` (at the state the tangent was taken at or near) with

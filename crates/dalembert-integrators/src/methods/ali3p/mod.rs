@@ -242,13 +242,9 @@ impl Ali3p {
         let sys = system.constraints();
         // Start from the linear extrapolation of the last two steps' accelerations and
         // multipliers (their error is O(h²) against O(h) for the last values).
-        let ratio = if self.h_prev.is_nan() { 0.0 } else { h / self.h_prev };
-        for (p, (now, before)) in self.work.a.iter_mut().zip(self.a.iter().zip(&self.a_prev)) {
-            *p = now + ratio * (now - before);
-        }
-        for (p, (now, before)) in self.work.lam.iter_mut().zip(self.lambda.iter().zip(&self.lambda_prev)) {
-            *p = now + ratio * (now - before);
-        }
+        let ratio = super::step_ratio(h, self.h_prev);
+        super::extrapolate(&mut self.work.a, &self.a, &self.a_prev, ratio);
+        super::extrapolate(&mut self.work.lam, &self.lambda, &self.lambda_prev, ratio);
         let start_scale = 1.0 + self.a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let mut factored = false;
         let mut rebuilt = false;

@@ -169,20 +169,14 @@ impl IterationMatrix {
         values: &mut ConstraintValues,
         at: &Trial<'_>,
     ) -> u64 {
-        self.analytic = self.tangent.differentiate(system, mass, values, at);
-        let cost = if self.analytic {
-            0
-        } else {
-            4 * self.tangent.pattern().passes().len() as u64
-        };
+        // `mass` and `values` are left at the trial state, as the residual there left them.
+        let (analytic, cost) = self.tangent.differentiate_at(system, mass, values, at);
+        self.analytic = analytic;
         self.norms = (
             Self::row_sum_norm(self.tangent.pattern(), self.tangent.dr_dq(), &mut self.v),
             Self::row_sum_norm(self.tangent.pattern(), self.tangent.dr_dv(), &mut self.v),
         );
         self.differentiated = true;
-        // Leave `mass` and `values` at the trial state, as the residual there left them.
-        system.mass(at.q, mass);
-        system.constraints().evaluate(at.t, at.q, at.v, values);
         cost
     }
 

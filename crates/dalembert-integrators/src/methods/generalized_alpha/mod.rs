@@ -410,13 +410,9 @@ impl GeneralizedAlpha {
         // Start from the linear extrapolation of the last two steps' q̈ and λ: its error is O(h²)
         // against O(h) for the last values (measured on a chain of 16 links at h = 1e-3: the first
         // update falls from 1.7e-2 to ~1e-4 of the acceleration scale).
-        let ratio = if self.h_prev.is_nan() { 0.0 } else { h / self.h_prev };
-        for (p, (now, before)) in self.work.qdd.iter_mut().zip(self.qdd.iter().zip(&self.qdd_prev)) {
-            *p = now + ratio * (now - before);
-        }
-        for (p, (now, before)) in self.work.lam.iter_mut().zip(self.lambda.iter().zip(&self.lambda_prev)) {
-            *p = now + ratio * (now - before);
-        }
+        let ratio = super::step_ratio(h, self.h_prev);
+        super::extrapolate(&mut self.work.qdd, &self.qdd, &self.qdd_prev, ratio);
+        super::extrapolate(&mut self.work.lam, &self.lambda, &self.lambda_prev, ratio);
         // Factors built for this step size are reused (modified Newton) until they have served
         // `MATRIX_LIFETIME` steps.
         if self.matrix_h != h || self.matrix_age >= MATRIX_LIFETIME || self.matrix.uses_kkt() {
