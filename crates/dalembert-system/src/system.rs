@@ -86,13 +86,25 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         (mass, values): (&mut BlockDiagonal, &mut crate::ConstraintValues),
         r: &mut [f64],
     ) {
+        self.constraints().evaluate(t, q, v, values);
+        self.dynamics_residual_evaluated(t, (q, v), (qdd, lambda), (mass, values), r);
+    }
+
+    /// [`Self::dynamics_residual`] with `values` already evaluated at `(t, q, v)` (an implicit
+    /// method that needed `C` there first: ALI3-P's multipliers `λ* + α C`). Refreshes `mass`.
+    fn dynamics_residual_evaluated(
+        &self,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        (qdd, lambda): (&[f64], &[f64]),
+        (mass, values): (&mut BlockDiagonal, &crate::ConstraintValues),
+        r: &mut [f64],
+    ) {
         self.applied_forces(t, q, v, r);
         r.iter_mut().for_each(|x| *x = -*x);
         self.mass(q, mass);
         mass.mul_add(1.0, qdd, r);
-        let sys = self.constraints();
-        sys.evaluate(t, q, v, values);
-        sys.jacobian_transpose_mul_add(values, 1.0, lambda, r);
+        self.constraints().jacobian_transpose_mul_add(values, 1.0, lambda, r);
     }
 
     /// Adds the analytic tangent of the dynamic residual `r = M(q) q̈ + C_qᵀ λ − Q(t, q, v)` at

@@ -264,11 +264,11 @@ impl Ali3p {
             for ((e, l), c) in w.eq.iter_mut().zip(&w.lam).zip(&self.values.c) {
                 *e = l + alpha * c;
             }
-            system.dynamics_residual(
+            system.dynamics_residual_evaluated(
                 t1,
                 (&w.q1, &w.v1),
                 (&w.a, &w.eq),
-                (&mut self.mass, &mut self.values),
+                (&mut self.mass, &self.values),
                 &mut w.res,
             );
             self.evaluations += 1;
