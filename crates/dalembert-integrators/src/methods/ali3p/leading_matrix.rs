@@ -114,13 +114,7 @@ impl LeadingMatrix {
         for ((o, dq), dv) in out.iter_mut().zip(self.tangent.dr_dq()).zip(self.tangent.dr_dv()) {
             *o = beta * dq + gamma * dv;
         }
-        for (&at, (_, _, m)) in self.mass_at.iter().zip(mass.entries()) {
-            out[at] += m;
-        }
-        let j = &values.jacobian;
-        for &(at, a, b) in &self.pairs {
-            out[at] += weight * j[a] * j[b];
-        }
+        add_mass_and_penalty(out, (&self.mass_at, &self.pairs), mass, values, weight);
         self.lu.factor()
     }
 
@@ -133,13 +127,7 @@ impl LeadingMatrix {
     ) -> Result<(), LinalgError> {
         let out = self.projection.values_mut();
         out.fill(0.0);
-        for (&at, (_, _, m)) in self.mass_at.iter().zip(mass.entries()) {
-            out[at] += m;
-        }
-        let j = &values.jacobian;
-        for &(at, a, b) in &self.pairs {
-            out[at] += weight * j[a] * j[b];
-        }
+        add_mass_and_penalty(out, (&self.mass_at, &self.pairs), mass, values, weight);
         self.projection.factor()
     }
 
@@ -151,5 +139,23 @@ impl LeadingMatrix {
     /// `x ← f_q⁻¹ x` with the last factors.
     pub fn solve(&mut self, x: &mut [f64]) {
         self.lu.solve_in_place(x);
+    }
+}
+
+/// `out += M + weight C_qᵀ C_q` on the pattern's entries (`mass_at`, `pairs`: the scatter maps of
+/// [`LeadingMatrix`]), for both the Newton and the projection matrix.
+fn add_mass_and_penalty(
+    out: &mut [f64],
+    (mass_at, pairs): (&[usize], &[(usize, usize, usize)]),
+    mass: &BlockDiagonal,
+    values: &ConstraintValues,
+    weight: f64,
+) {
+    for (&at, (_, _, m)) in mass_at.iter().zip(mass.entries()) {
+        out[at] += m;
+    }
+    let j = &values.jacobian;
+    for &(at, a, b) in pairs {
+        out[at] += weight * j[a] * j[b];
     }
 }
