@@ -126,6 +126,15 @@ impl From<Function> for KeyValue {
     }
 }
 
+impl KeyValue {
+    /// An inline table of keys, as `orientation = { quaternion = [1, 0, 0, 0] }` writes one.
+    pub fn table<const N: usize>(entries: [(&str, KeyValue); N]) -> Self {
+        KeyValue(Value::Table(
+            entries.into_iter().map(|(k, v)| (k.to_string(), v.0)).collect(),
+        ))
+    }
+}
+
 /// A function of time as a scene writes it (`{ kind = "harmonic", … }`), or a named input.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Function(Table);
@@ -340,6 +349,11 @@ impl ModelBuilder {
             t.insert(key.into(), value.into().0);
         }
         self
+    }
+
+    /// The model as a scene file's tables.
+    pub(crate) fn into_table(self) -> Table {
+        self.file
     }
 
     /// The model as a scene file's text.

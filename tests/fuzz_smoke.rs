@@ -24,10 +24,15 @@ fn env_u64(name: &str, default: u64) -> u64 {
 }
 
 fn texts(dir: &Path) -> Vec<String> {
+    texts_of(dir, "toml")
+}
+
+/// The text of every file in `dir` whose name ends `.extension`.
+fn texts_of(dir: &Path, extension: &str) -> Vec<String> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter(|p| p.extension().is_some_and(|e| e == extension))
         .collect();
     paths.sort();
     paths
@@ -109,6 +114,27 @@ fn scene_loader_never_panics() {
         tally.multiline
     );
     // The mutants exercise both paths: some still load, most are refused.
+    assert!(tally.accepted > runs / 100 && tally.rejected > runs / 4, "{tally:?}");
+}
+
+#[test]
+fn urdf_reader_never_panics() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seeds = texts_of(&root.join("scenes/robots"), "urdf");
+    seeds.extend(texts_of(&root.join("tests/bad_inputs"), "urdf"));
+    seeds.extend(texts_of(&root.join("tests/bad_inputs/models"), "urdf"));
+    let runs = env_u64("DALEMBERT_FUZZ_RUNS", 20_000);
+    let tally = fuzz("urdf", &seeds, runs, env_u64("DALEMBERT_FUZZ_SEED", 1), &|text| {
+        Scene::from_urdf(text, "fuzz.urdf")
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    });
+    assert!(tally.crashes.is_empty(), "panics on: {:?}", tally.crashes);
+    assert!(
+        tally.multiline.is_empty(),
+        "errors not on one line: {:#?}",
+        tally.multiline
+    );
     assert!(tally.accepted > runs / 100 && tally.rejected > runs / 4, "{tally:?}");
 }
 

@@ -15,7 +15,7 @@ mod planar;
 mod spatial;
 
 pub use planar::PLANAR_BODY_COLUMNS;
-pub use spatial::{SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS};
+pub use spatial::{SPATIAL_BODY_COLUMNS, SPATIAL_JOINT_COLUMNS, SPATIAL_JOINT_VALUE_COLUMNS};
 
 /// What a kind of model (planar bodies, spatial bodies, later flexible ones) provides beyond the
 /// system seam, so that scenes' analyses, output, the command line and Python serve it without

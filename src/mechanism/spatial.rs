@@ -4,7 +4,8 @@
 use super::{ColumnWriter, ModelKind};
 use dalembert_integrators::Sample;
 use dalembert_spatial::frame::Frame;
-use dalembert_spatial::{Model, Reaction};
+use dalembert_spatial::joint_values::unwrap_angle;
+use dalembert_spatial::{JointValueKind, Model, Reaction};
 use dalembert_system::MultibodySystem;
 use std::any::Any;
 use std::sync::Arc;
@@ -18,6 +19,11 @@ pub const SPATIAL_BODY_COLUMNS: [&str; 13] = [
 /// The columns of a spatial joint: force and moment (about the joint's point) that its second body
 /// exerts on its first, global components.
 pub const SPATIAL_JOINT_COLUMNS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
+
+/// The joint-space columns of a revolute or prismatic joint, after all the bodies' columns: its
+/// angle (continuous over a run) or displacement, 0 in the file's configuration, and its rate
+/// ([`dalembert_spatial::joint_values`]).
+pub const SPATIAL_JOINT_VALUE_COLUMNS: [&str; 2] = ["q", "qd"];
 
 impl ModelKind for Model {
     fn system(&self) -> &dyn MultibodySystem {
@@ -64,6 +70,8 @@ impl ModelKind for Model {
                 joints
             ],
             drivers: Model::driver_names(&self).count(),
+            joint_values: vec![(0.0, 0.0); self.joint_value_names().count()],
+            previous: vec![0.0; self.joint_value_names().count()],
             model: self,
         })
     }
@@ -83,15 +91,22 @@ struct SpatialColumns {
     model: Arc<Model>,
     reactions: Vec<Reaction>,
     drivers: usize,
+    /// Scratch space of the joint values (`<joint>.q`, `<joint>.qd`).
+    joint_values: Vec<(f64, f64)>,
+    /// Each joint value of the previous row (0 before the first): angles are unwrapped against
+    /// it so that a joint's angle is continuous over a run.
+    previous: Vec<f64>,
 }
 
 impl ColumnWriter for SpatialColumns {
     fn body_columns(&self) -> Vec<String> {
-        self.model
-            .bodies()
-            .iter()
+        let bodies = self.model.bodies().iter();
+        let mut names: Vec<String> = bodies
             .flat_map(|b| SPATIAL_BODY_COLUMNS.iter().map(move |c| format!("{}.{c}", b.name)))
-            .collect()
+            .collect();
+        let joints = self.model.joint_value_names();
+        names.extend(joints.flat_map(|(j, _)| SPATIAL_JOINT_VALUE_COLUMNS.map(|c| format!("{j}.{c}"))));
+        names
     }
 
     fn reaction_columns(&self) -> Vec<String> {
@@ -108,6 +123,15 @@ impl ColumnWriter for SpatialColumns {
             let f = Frame::of(i, s.q, s.qd);
             row.extend_from_slice(&s.q[7 * i..7 * i + 7]);
             row.extend(f.v.iter().chain(f.w.iter()));
+        }
+        self.model.joint_values_into(s.q, s.qd, &mut self.joint_values);
+        let kinds = self.model.joint_value_names().map(|(_, k)| k);
+        for ((value, rate), (last, kind)) in self.joint_values.iter_mut().zip(self.previous.iter_mut().zip(kinds)) {
+            if kind == JointValueKind::Angle {
+                *value = unwrap_angle(*last, *value);
+            }
+            *last = *value;
+            row.extend([*value, *rate]);
         }
         self.model.reactions_into(s.t, s.q, s.lambda, &mut self.reactions);
         for r in &self.reactions {

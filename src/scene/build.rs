@@ -401,6 +401,7 @@ pub(crate) fn assembled(
         drawing,
         source: ctx.text.to_string(),
         origin: ctx.file.to_string(),
+        notes: Vec::new(),
     })
 }
 

@@ -15,7 +15,9 @@ mod run_settings;
 mod spatial;
 mod spatial_forces;
 mod strict;
+mod urdf;
 mod values;
+mod xml;
 
 pub use error::{one_line, SceneError};
 pub use overrides::{RunOverrides, Spelling};
@@ -140,6 +142,10 @@ pub struct Scene {
     pub source: String,
     /// The name of the scene's origin in errors (the file's path).
     pub origin: String,
+    /// What the reader left out of the model, one line each, for the user to see (a URDF's
+    /// joint friction, elements that carry no dynamics it reads; `docs/import.md`). Empty for a
+    /// TOML scene.
+    pub notes: Vec<String>,
 }
 
 /// Why `mechanism` cannot run in joint coordinates (one line naming the element), or `None`.
@@ -198,15 +204,46 @@ impl Scene {
         )
     }
 
-    /// Reads, builds and assembles a scene file.
+    /// Reads, builds and assembles a scene file: a TOML scene, or a URDF robot description
+    /// (a name ending `.urdf`; [`Scene::from_urdf`]).
     pub fn from_path(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        let origin = path.display().to_string();
+        let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+        if urdf {
+            let size = std::fs::metadata(path).map_err(|e| SceneError::io(path, e))?.len();
+            if size > xml::MAX_BYTES as u64 {
+                return Err(SceneError::at(
+                    &origin,
+                    "",
+                    None,
+                    format!("{size} bytes is more than a model file may hold ({})", xml::MAX_BYTES),
+                ));
+            }
+        }
         let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(path, e))?;
-        Scene::from_toml(&text, &path.display().to_string())
+        if urdf {
+            return Scene::from_urdf(&text, &origin);
+        }
+        Scene::from_toml(&text, &origin)
+    }
+
+    /// Builds and assembles the scene a URDF robot description gives (`docs/import.md`): a body
+    /// per moving link, the links joined by fixed joints merged, the root fixed to the ground, at
+    /// rest with every joint at 0 under gravity `(0, 0, −9.81)`. Its [`Scene::source`] is the
+    /// scene's TOML text, so sweeps and [`Scene::with_values`] work on it as on a file's;
+    /// `origin` names the file in errors, which give the element's line.
+    pub fn from_urdf(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        urdf::scene(text, origin)
     }
 
     /// Builds and assembles a scene from TOML text; `origin` names it in errors.
     pub fn from_toml(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        if let Ok(tables) = toml::from_str::<toml::Table>(text) {
+            if urdf::reference(&tables).is_some() {
+                return urdf::around(tables, text, origin);
+            }
+        }
         if is_spatial(text) {
             let file: spatial::SpatialFile = toml::from_str(text).map_err(|e| {
                 spatial::planar_body_in_spatial_scene(text, origin)

@@ -38,6 +38,48 @@ pub(crate) struct SpatialFile {
     #[serde(default)]
     pub forces: Vec<Spanned<ForceDef>>,
     pub simulation: Option<Spanned<SimDef>>,
+    pub initial: Option<Spanned<InitialDef>>,
+}
+
+/// A TOML scene around a URDF robot (`[scene] urdf`): the keys it may add, checked before the
+/// robot's elements join them.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(dead_code)]
+pub(crate) struct AroundFile {
+    pub scene: AroundMeta,
+    #[serde(default)]
+    pub bodies: Vec<Spanned<BodyDef>>,
+    #[serde(default)]
+    pub joints: Vec<Spanned<JointDef>>,
+    #[serde(default)]
+    pub drivers: Vec<Spanned<DriverDef>>,
+    #[serde(default)]
+    pub forces: Vec<Spanned<ForceDef>>,
+    pub simulation: Option<Spanned<SimDef>>,
+    pub initial: Option<Spanned<InitialDef>>,
+}
+
+/// The `[scene]` of a scene around a robot.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(dead_code)]
+pub(crate) struct AroundMeta {
+    pub urdf: String,
+    pub name: Option<String>,
+    #[serde(default, deserialize_with = "strict::xyz_opt")]
+    pub gravity: Option<[f64; 3]>,
+}
+
+/// `[initial]`: joint values and rates to start from, measured from the file's configuration
+/// (`docs/scenes.md`, "Starting away from the file's configuration").
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct InitialDef {
+    #[serde(default)]
+    pub joints: std::collections::BTreeMap<String, f64>,
+    #[serde(default)]
+    pub rates: std::collections::BTreeMap<String, f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -476,7 +518,14 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         model.force(f);
     }
     let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
-    let (q, qd) = model.initial_state();
+    let (mut q, mut qd) = model.initial_state();
+    if let Some(initial) = &file.initial {
+        let span = Some(initial.span());
+        let moves = initial_moves(initial.get_ref(), &file.drivers).map_err(|m| ctx.err(span.clone(), m))?;
+        model
+            .move_joints(&mut q, &mut qd, &moves)
+            .map_err(|e| ctx.err(span, format!("[initial]: {e}")))?;
+    }
     let mechanism: crate::mechanism::Mechanism = Arc::new(model).into();
     let settings = build::settings(
         ctx.file,
@@ -487,6 +536,29 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     build::check_coordinates(&ctx, file.simulation.as_ref(), &mechanism, &settings)?;
     let name = file.scene.name.unwrap_or_else(|| origin.to_string());
     build::assembled(&ctx, name, mechanism, (q, qd, weights), settings, Drawing::default())
+}
+
+/// The joint moves `[initial]` asks for; a driven joint is refused (its driver sets its motion).
+fn initial_moves(
+    initial: &InitialDef,
+    drivers: &[Spanned<DriverDef>],
+) -> Result<Vec<dalembert_spatial::joint_values::JointMove>, String> {
+    let names: std::collections::BTreeSet<&String> = initial.joints.keys().chain(initial.rates.keys()).collect();
+    let mut moves = Vec::with_capacity(names.len());
+    for name in names {
+        if let Some(d) = drivers.iter().find(|d| d.get_ref().joint.as_ref() == Some(name)) {
+            return Err(format!(
+                "[initial]: joint '{name}' is driven by '{}', whose function sets its motion",
+                d.get_ref().name
+            ));
+        }
+        moves.push(dalembert_spatial::joint_values::JointMove {
+            joint: name.clone(),
+            value: initial.joints.get(name).copied().unwrap_or(0.0),
+            rate: initial.rates.get(name).copied().unwrap_or(0.0),
+        });
+    }
+    Ok(moves)
 }
 
 /// The joint a `[[joints]]` table describes.

@@ -2,7 +2,7 @@
 
 use dalembert::output::fixed;
 use dalembert::scene::{RunOverrides, Spelling};
-use dalembert::{CheckReport, Scene};
+use dalembert::CheckReport;
 use std::path::PathBuf;
 
 /// Arguments of `check`.
@@ -16,7 +16,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let mut scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    let mut scene = crate::paths::load_scene(&a.scene)?;
     if a.redundant.is_some() {
         let o = RunOverrides {
             redundant: a.redundant.clone(),

@@ -1,7 +1,7 @@
 //! `dalembert inverse`: [`dalembert::Scene::inverse`] printed and written as CSV.
 
 use dalembert::output::{fixed, Rows};
-use dalembert::{CsvOutput, Scene};
+use dalembert::CsvOutput;
 use std::path::PathBuf;
 
 /// Arguments of `inverse`.
@@ -21,7 +21,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    let scene = crate::paths::load_scene(&a.scene)?;
     let model = scene.model.clone();
     let end = a.end.unwrap_or(scene.settings.end);
     let every = a.every.unwrap_or(scene.settings.output_every);

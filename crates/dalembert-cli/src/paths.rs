@@ -1,6 +1,17 @@
 //! Output files checked against the command's input files before anything is written.
 
+use dalembert::Scene;
 use std::path::Path;
+
+/// Loads a scene file (TOML or URDF) and prints what its reader left out of the model
+/// ([`Scene::notes`]) as `note:` lines on standard error.
+pub fn load_scene(path: impl AsRef<Path>) -> Result<Scene, String> {
+    let scene = Scene::from_path(path).map_err(|e| e.to_string())?;
+    for n in &scene.notes {
+        eprintln!("note: {n}");
+    }
+    Ok(scene)
+}
 
 /// An error when `output` is one of `inputs`, however either is spelled (`./s.toml`, an absolute
 /// path, a symbolic or hard link): writing it would destroy the input before it is read, or

@@ -65,7 +65,7 @@ pub struct RunArgs {
 
 /// Loads the scene and applies the command-line overrides (warnings printed).
 pub fn load(path: &std::path::Path, a: &RunArgs) -> Result<Scene, String> {
-    let mut scene = Scene::from_path(path).map_err(|e| e.to_string())?;
+    let mut scene = crate::paths::load_scene(path)?;
     let o = RunOverrides {
         formulation: a.formulation.clone(),
         integrator: a.integrator.clone(),

@@ -13,7 +13,7 @@ pub struct Args {
 }
 
 fn load(a: &Args) -> Result<Scene, String> {
-    Scene::from_path(&a.scene).map_err(|e| e.to_string())
+    crate::paths::load_scene(&a.scene)
 }
 
 /// `name = value` pairs on one line.

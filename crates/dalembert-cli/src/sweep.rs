@@ -1,7 +1,7 @@
 //! `dalembert sweep`: one scene run for every combination of values, on all cores.
 
 use dalembert::sweep::{cartesian, split_list, sweep_streaming, Output, SweepCsv, SweepRow};
-use dalembert::{Scene, SceneValue};
+use dalembert::SceneValue;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -34,7 +34,7 @@ pub struct Args {
 }
 
 pub fn run(a: Args) -> Result<(), String> {
-    let scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    let scene = crate::paths::load_scene(&a.scene)?;
     if let Some(end) = a.end {
         if !(end.is_finite() && end > 0.0) {
             return Err(format!("--end must be positive, got {end}"));

@@ -3,7 +3,6 @@
 
 use dalembert::output::shortest;
 use dalembert::trade::{trade_cancellable, TradeGrid, TradeRun};
-use dalembert::Scene;
 use plotters::prelude::*;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -62,7 +61,7 @@ pub fn run(a: Args) -> Result<(), String> {
             return Err(format!("{flag}: every value must be positive and finite, got {v}"));
         }
     }
-    let scene = Scene::from_path(&a.scene).map_err(|e| e.to_string())?;
+    let scene = crate::paths::load_scene(&a.scene)?;
     let grid = TradeGrid {
         formulations: a.formulations,
         integrators: a.integrators,

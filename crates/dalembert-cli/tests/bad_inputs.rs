@@ -3,7 +3,8 @@
 //! `# expect:` line, and a non-zero exit: never a panic, never a silent success.
 //!
 //! File format: line 1 `# expect: MESSAGE` (`{file}` stands for the file's path), line 2
-//! `# args: check` or `# args: simulate FLAGS…`, then the scene.
+//! `# args: check` or `# args: simulate FLAGS…`, then the scene. A URDF case (`.urdf`) writes
+//! the two lines as XML comments: `<!-- expect: MESSAGE -->`, `<!-- args: check -->`.
 
 use std::process::Command;
 
@@ -13,7 +14,7 @@ fn every_bad_input_gets_its_one_line_error() {
     let mut paths: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter(|p| p.extension().is_some_and(|e| e == "toml" || e == "urdf"))
         .collect();
     paths.sort();
     assert!(paths.len() >= 100, "{} cases", paths.len());
@@ -22,16 +23,17 @@ fn every_bad_input_gets_its_one_line_error() {
         let bytes = std::fs::read(path).unwrap();
         let text = String::from_utf8_lossy(&bytes);
         let mut lines = text.lines();
-        let expect = lines
-            .next()
-            .and_then(|l| l.strip_prefix("# expect: "))
-            .expect("# expect: line");
-        let args: Vec<&str> = lines
-            .next()
-            .and_then(|l| l.strip_prefix("# args: "))
-            .expect("# args: line")
-            .split_whitespace()
-            .collect();
+        let header = |line: Option<&str>, key: &str| -> Option<String> {
+            let line = line?;
+            let hash = line.strip_prefix(&format!("# {key}: "));
+            let xml = line
+                .strip_prefix(&format!("<!-- {key}: "))
+                .and_then(|l| l.strip_suffix(" -->"));
+            hash.or(xml).map(String::from)
+        };
+        let expect = header(lines.next(), "expect").expect("an expect: line");
+        let args_line = header(lines.next(), "args").expect("an args: line");
+        let args: Vec<&str> = args_line.split_whitespace().collect();
         let file = path.to_str().unwrap();
         let out = Command::new(env!("CARGO_BIN_EXE_dalembert"))
             .arg(args[0])

@@ -1,0 +1,161 @@
+"""URDF import against Pinocchio: the same robot file, read by both, run from rest under gravity.
+
+Pinocchio (`pin`, a test-only dependency) reads the URDF with its own parser and integrates
+nothing: its articulated-body algorithm `pin.aba` gives the joint accelerations, and scipy's DOP853
+integrates them at tolerances far below the bar. dalembert reads the same file into absolute
+coordinates (a body per moving link, fixed links merged) and runs it with each formulation and in
+joint coordinates; its `JOINT.q` columns are compared with Pinocchio's joint angles."""
+
+import numpy as np
+import pinocchio as pin  # a test dependency (the package's `test` extra installs `pin`)
+import pytest
+from scipy.integrate import solve_ivp
+
+import dalembert
+
+ROBOTS = ["ur5", "kinova"]
+
+
+def pinocchio_angles(path, end, start=None, rates=None):
+    """Joint angles and rates of the robot in `path` at `end`, from the joint angles `start` and
+    rates `rates` (mappings by joint name; absent joints at 0), by Pinocchio's ABA. Continuous
+    joints are (cos, sin) pairs in Pinocchio's configuration; the angle is integrated instead."""
+    model = pin.buildModelFromUrdf(str(path))
+    data = model.createData()
+    joints = list(model.joints)[1:]
+
+    def configuration(theta):
+        q = np.zeros(model.nq)
+        for k, j in enumerate(joints):
+            if j.nq == 1:
+                q[j.idx_q] = theta[k]
+            else:
+                q[j.idx_q : j.idx_q + 2] = np.cos(theta[k]), np.sin(theta[k])
+        return q
+
+    def rate(_, x):
+        theta, v = x[: model.nv], x[model.nv :]
+        return np.concatenate([v, pin.aba(model, data, configuration(theta), v, np.zeros(model.nv))])
+
+    names = list(model.names)[1:]
+    x0 = np.array([(start or {}).get(n, 0.0) for n in names] + [(rates or {}).get(n, 0.0) for n in names])
+    x = solve_ivp(rate, (0.0, end), x0, method="DOP853", rtol=1e-12, atol=1e-13).y[:, -1]
+    return dict(zip(list(model.names)[1:], x[: model.nv])), dict(zip(list(model.names)[1:], x[model.nv :]))
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_urdf_run_from_rest_matches_pinocchio(scenes, robot):
+    """The state at 0.5 s within 1e-7 rad of Pinocchio's, every formulation and both coordinate
+    choices (the issue's bar; dopri5 at rtol 1e-11 is ~1e-9 from exact here, the formulations
+    agree to round-off)."""
+    path = scenes / "robots" / f"{robot}.urdf"
+    angles, rates = pinocchio_angles(path, 0.5)
+    scene = dalembert.Scene.load(path)
+    assert angles, "the robot has joints"
+    runs = [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")]
+    runs.append(dict(coordinates="joint"))
+    for settings in runs:
+        run = scene.simulate(end=0.5, integrator="dopri5", rtol=1e-11, atol=1e-12, **settings)
+        assert abs(run["t"][-1] - 0.5) < 1e-12
+        for name, expected in angles.items():
+            got = run[f"{name}.q"][-1]
+            assert abs(got - expected) < 1e-7, f"{robot} {settings} {name}: {got} vs Pinocchio {expected}"
+            got = run[f"{name}.qd"][-1]
+            assert abs(got - rates[name]) < 1e-6, f"{robot} {settings} {name} rate: {got} vs {rates[name]}"
+        moved = max(abs(v) for v in angles.values())
+        assert moved > 0.04, "the arm falls far enough for the comparison to mean something (4e5 times the bar)"
+
+
+def absolute_state(model, data, scene_bodies, local_centres, theta, rate, joints):
+    """dalembert's absolute state (centre of mass, Euler parameters; centre-of-mass velocity,
+    body-frame angular velocity per body) at joint angles `theta` and rates `rate`, from
+    Pinocchio's forward kinematics: each body's axes are its link's frame, its centre of mass at
+    `local_centres[body]` in that frame."""
+    q = np.zeros(model.nq)
+    for k, j in enumerate(joints):
+        if j.nq == 1:
+            q[j.idx_q] = theta[k]
+        else:
+            q[j.idx_q : j.idx_q + 2] = np.cos(theta[k]), np.sin(theta[k])
+    pin.forwardKinematics(model, data, q, rate)
+    pin.updateFramePlacements(model, data)
+    positions, velocities = [], []
+    for body in scene_bodies:
+        f = model.getFrameId(body)
+        R, p = data.oMf[f].rotation, data.oMf[f].translation
+        twist = pin.getFrameVelocity(model, data, f, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+        arm = R @ local_centres[body]
+        x, y, z, w = pin.Quaternion(R).coeffs()
+        positions += [*(p + arm), w, x, y, z]
+        velocities += [*(twist.linear + np.cross(twist.angular, arm)), *(R.T @ twist.angular)]
+    return positions, velocities
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+def test_urdf_motion_from_random_states_matches_pinocchio(scenes, robot):
+    """From 12 random states (angles in ±π, rates in ±2 rad/s), placed in dalembert from
+    Pinocchio's forward kinematics: the assembly moves the state by less than 1e-12 (the two
+    readers place every link alike), and 0.05 s later the joint angles agree within 1e-9 rad
+    (dopri5 at 1e-12 against DOP853 at 1e-13: both ~1e-11 from exact over this span), with each
+    formulation and in joint coordinates."""
+    path = scenes / "robots" / f"{robot}.urdf"
+    model = pin.buildModelFromUrdf(str(path))
+    data = model.createData()
+    joints = list(model.joints)[1:]
+    names = list(model.names)[1:]
+    scene = dalembert.Scene.load(path)
+    # Each body's centre of mass in its link's frame, from dalembert's file configuration and
+    # Pinocchio's placement of the links there.
+    q0 = scene.simulator().state[0]
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    centres = {}
+    for k, body in enumerate(scene.bodies):
+        frame = data.oMf[model.getFrameId(body)]
+        centres[body] = frame.rotation.T @ (q0[7 * k : 7 * k + 3] - frame.translation)
+    rng = np.random.default_rng(20261126)
+    for _ in range(12):
+        theta = rng.uniform(-np.pi, np.pi, model.nv)
+        rate = rng.uniform(-2.0, 2.0, model.nv)
+
+        def configuration(t):
+            q = np.zeros(model.nq)
+            for k, j in enumerate(joints):
+                if j.nq == 1:
+                    q[j.idx_q] = t[k]
+                else:
+                    q[j.idx_q : j.idx_q + 2] = np.cos(t[k]), np.sin(t[k])
+            return q
+
+        def flow(_, x):
+            return np.concatenate([x[model.nv :], pin.aba(model, data, configuration(x[: model.nv]), x[model.nv :], np.zeros(model.nv))])
+
+        end = solve_ivp(flow, (0.0, 0.05), np.concatenate([theta, rate]), method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1]
+        q, v = absolute_state(model, data, scene.bodies, centres, theta, rate, joints)
+        for settings in [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")] + [dict(coordinates="joint")]:
+            sim = scene.simulator(integrator="dopri5", rtol=1e-12, atol=1e-13, **settings)
+            moved = sim.set_state(q, v)
+            assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12, f"{robot}: assembly moved {moved}"
+            sim.advance_to(0.05)
+            for k, name in enumerate(names):
+                got, expected = sim[f"{name}.q"], end[k]
+                gap = abs((got - expected + np.pi) % (2 * np.pi) - np.pi)
+                assert gap < 1e-9, f"{robot} {settings} {name}: {got} vs Pinocchio {expected}"
+
+
+def test_scene_around_a_urdf_starts_where_it_says(scenes):
+    """`scenes/robots/ur5-swing.toml` names `ur5.urdf` and starts three joints away from the file's
+    pose and the base turning (`[initial]`): its first row reads those values and rates back
+    (1e-14: they are set by rotating the links beyond each joint), and at 0.5 s it is within 1e-7
+    rad of Pinocchio's run from the same joint state."""
+    import tomllib
+
+    path = scenes / "robots" / "ur5-swing.toml"
+    initial = tomllib.loads(path.read_text())["initial"]
+    start, rates = initial.get("joints", {}), initial.get("rates", {})
+    angles, speeds = pinocchio_angles(scenes / "robots" / "ur5.urdf", 0.5, start, rates)
+    run = dalembert.Scene.load(path).simulate(end=0.5, integrator="dopri5", rtol=1e-11, atol=1e-12)
+    for name in angles:
+        assert abs(run[f"{name}.q"][0] - start.get(name, 0.0)) < 1e-14, name
+        assert abs(run[f"{name}.qd"][0] - rates.get(name, 0.0)) < 1e-14, name
+        assert abs(run[f"{name}.q"][-1] - angles[name]) < 1e-7, f"{name}: {run[f'{name}.q'][-1]} vs {angles[name]}"
+        assert abs(run[f"{name}.qd"][-1] - speeds[name]) < 1e-6, name
