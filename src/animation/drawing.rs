@@ -105,10 +105,13 @@ pub enum Mark {
 /// Everything the viewer draws of a scene, apart from the motion itself.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Drawing {
-    /// The moving bodies, in coordinate order.
+    /// The moving bodies, in coordinate order (planar scenes).
     pub bodies: Vec<BodyDrawing>,
-    /// Joints, guides, links and springs.
+    /// Joints, guides, links and springs (planar scenes).
     pub marks: Vec<Mark>,
+    /// A spatial scene's solids and joints, drawn by the 3D viewer (`None` for a planar scene).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub spatial: Option<super::SpatialDrawing>,
 }
 
 impl Drawing {
@@ -144,7 +147,24 @@ impl Drawing {
 
     /// Index of the body called `name`.
     pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.bodies.iter().position(|b| b.name == name)
+        self.body_names().iter().position(|b| *b == name)
+    }
+
+    /// The moving bodies' names, in coordinate order (planar or spatial).
+    pub fn body_names(&self) -> Vec<&str> {
+        match &self.spatial {
+            Some(s) => s.bodies.iter().map(|b| b.name.as_str()).collect(),
+            None => self.bodies.iter().map(|b| b.name.as_str()).collect(),
+        }
+    }
+
+    /// The numbers of a body's pose in a frame: `x, y, angle` (planar) or `x, y, z, e0, e1, e2,
+    /// e3` (spatial), named as the output's columns.
+    pub fn pose_columns(&self) -> &'static [&'static str] {
+        match self.spatial {
+            Some(_) => &["x", "y", "z", "e0", "e1", "e2", "e3"],
+            None => &["x", "y", "angle"],
+        }
     }
 }
 

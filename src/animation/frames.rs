@@ -4,22 +4,35 @@ use super::Drawing;
 use crate::output::{read_columns, ResultCsvError};
 use std::io::Read;
 
-/// Poses `[x, y, angle]` of every body at increasing times.
+/// Poses of every body at increasing times: `[x, y, angle]` (planar) or `[x, y, z, e0, e1, e2,
+/// e3]` (spatial) per body.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Frames {
     /// Times (s), increasing.
     pub times: Vec<f64>,
-    /// Poses, frame after frame: `3 × bodies` numbers per frame.
+    /// Poses, frame after frame: `per_body × bodies` numbers per frame.
     pub poses: Vec<f64>,
     /// Number of bodies.
     pub bodies: usize,
+    /// Numbers per body in a pose: 3 (planar) or 7 (spatial).
+    pub per_body: usize,
 }
 
 impl Frames {
-    /// No frames yet, for `bodies` bodies.
+    /// No frames yet, for `bodies` planar bodies.
     pub fn new(bodies: usize) -> Self {
         Frames {
             bodies,
+            per_body: 3,
+            ..Frames::default()
+        }
+    }
+
+    /// No frames yet, for the bodies of `drawing` (planar or spatial).
+    pub fn for_drawing(drawing: &Drawing) -> Self {
+        Frames {
+            bodies: drawing.body_names().len(),
+            per_body: drawing.pose_columns().len(),
             ..Frames::default()
         }
     }
@@ -34,9 +47,10 @@ impl Frames {
         self.times.is_empty()
     }
 
-    /// Appends the frame at `t` from the system positions `q` (`[x, y, θ]` per body).
+    /// Appends the frame at `t` from the system positions `q` (`[x, y, θ]` or `[x, y, z, e0,
+    /// e1, e2, e3]` per body).
     pub fn push(&mut self, t: f64, q: &[f64]) {
-        debug_assert_eq!(q.len(), 3 * self.bodies);
+        debug_assert_eq!(q.len(), self.per_body * self.bodies);
         self.times.push(t);
         self.poses.extend_from_slice(q);
     }
@@ -50,8 +64,12 @@ impl Frames {
         if n <= max {
             return self.clone();
         }
-        let mut out = Frames::new(self.bodies);
-        let w = 3 * self.bodies;
+        let mut out = Frames {
+            bodies: self.bodies,
+            per_body: self.per_body,
+            ..Frames::default()
+        };
+        let w = self.per_body * self.bodies;
         for i in 0..max {
             let k = ((i as f64) * (n - 1) as f64 / (max - 1) as f64).round() as usize;
             out.push(self.times[k], &self.poses[k * w..(k + 1) * w]);
@@ -59,15 +77,22 @@ impl Frames {
         out
     }
 
-    /// Reads the frames of `drawing`'s bodies from a result CSV written by `simulate` (columns `t`
-    /// and `<body>.x`, `.y`, `.angle`; other columns are ignored). `origin` names the file in
-    /// errors: a missing column, a field that is not a finite number, times that do not increase.
-    pub fn from_csv(reader: impl Read, drawing: &Drawing, origin: &str) -> Result<Frames, ResultCsvError> {
-        let names: Vec<String> = drawing
-            .bodies
+    /// The output columns that hold the poses of `drawing`'s bodies, in a frame's order.
+    pub fn columns(drawing: &Drawing) -> Vec<String> {
+        let names = drawing.body_names();
+        let pose = drawing.pose_columns();
+        names
             .iter()
-            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{}.{c}", b.name)))
-            .collect();
+            .flat_map(|b| pose.iter().map(move |c| format!("{b}.{c}")))
+            .collect()
+    }
+
+    /// Reads the frames of `drawing`'s bodies from a result CSV written by `simulate` (columns `t`
+    /// and each body's pose, [`Frames::columns`]; other columns are ignored). `origin` names the
+    /// file in errors: a missing column, a field that is not a finite number, times that do not
+    /// increase.
+    pub fn from_csv(reader: impl Read, drawing: &Drawing, origin: &str) -> Result<Frames, ResultCsvError> {
+        let names = Frames::columns(drawing);
         let table = read_columns(reader, origin, &names).map_err(|mut e| {
             if e.line == Some(1) && e.message.starts_with("no column") {
                 e.message = format!("does not match the scene: {}", e.message);
@@ -84,7 +109,7 @@ impl Frames {
         Ok(Frames {
             times: table.times,
             poses: table.values,
-            bodies: drawing.bodies.len(),
+            ..Frames::for_drawing(drawing)
         })
     }
 }

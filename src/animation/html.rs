@@ -8,6 +8,14 @@ use std::fmt;
 const TEMPLATE: &str = include_str!("viewer.html");
 const SCRIPT: &str = include_str!("viewer.js");
 
+/// The 3D viewer's page and script (spatial scenes), and three.js, inlined likewise: the
+/// single-file ES module build `three.module.min.js` of the npm package `three` 0.159.0 (MIT
+/// licence, `src/animation/THREE-LICENSE`), the last release that ships one file (later releases
+/// split the library across modules that would need a bundler to inline).
+const TEMPLATE_3D: &str = include_str!("viewer3d.html");
+const SCRIPT_3D: &str = include_str!("viewer3d.js");
+const THREE: &str = include_str!("three.module.min.js");
+
 /// Frames kept by default: 60 frames per second over 40 s of playback at 1×, more than a screen
 /// can show for shorter runs, and a page that opens quickly for any run length.
 pub const DEFAULT_MAX_FRAMES: usize = 2400;
@@ -17,9 +25,9 @@ pub const DEFAULT_MAX_FRAMES: usize = 2400;
 pub struct Trace {
     /// Index of the body.
     pub body: usize,
-    /// The point in the body's frame.
-    pub point: [f64; 2],
-    /// Label, `body:x,y`.
+    /// The point in the body's frame (`[x, y]`, or `[x, y, z]` in a spatial scene).
+    pub point: Vec<f64>,
+    /// Label, `body:x,y` (`body:x,y,z`).
     pub label: String,
 }
 
@@ -37,28 +45,36 @@ impl std::error::Error for TraceError {}
 
 impl Trace {
     /// Parses `BODY:X,Y` (a point at local coordinates `X, Y` of body `BODY`, metres), e.g.
-    /// `coupler:0.5,0`. Errors name the specification and say what is wrong.
+    /// `coupler:0.5,0`; `BODY:X,Y,Z` in a spatial scene. Errors name the specification and say
+    /// what is wrong.
     pub fn parse(spec: &str, drawing: &Drawing) -> Result<Trace, TraceError> {
+        let spatial = drawing.spatial.is_some();
+        let form = if spatial { "X,Y,Z" } else { "X,Y" };
         let bad = |why: String| TraceError(format!("trace '{spec}': {why}"));
         let (name, point) = spec
             .rsplit_once(':')
-            .ok_or_else(|| bad("expected BODY:X,Y (a point in the body's frame, metres)".into()))?;
+            .ok_or_else(|| bad(format!("expected BODY:{form} (a point in the body's frame, metres)")))?;
         let body = drawing.body_index(name).ok_or_else(|| {
-            let names: Vec<&str> = drawing.bodies.iter().map(|b| b.name.as_str()).collect();
-            bad(format!("unknown body '{name}' (bodies: {})", names.join(", ")))
+            bad(format!(
+                "unknown body '{name}' (bodies: {})",
+                drawing.body_names().join(", ")
+            ))
         })?;
-        let xy: Vec<&str> = point.split(',').collect();
+        let parts: Vec<&str> = point.split(',').collect();
+        let count = if spatial { 3 } else { 2 };
+        let what = if spatial { "three" } else { "two" };
+        if parts.len() != count {
+            return Err(bad(format!("'{point}' is not {what} numbers {form}")));
+        }
         let parse = |s: &str| s.trim().parse::<f64>().ok().filter(|v| v.is_finite());
-        match xy.as_slice() {
-            [x, y] => match (parse(x), parse(y)) {
-                (Some(x), Some(y)) => Ok(Trace {
-                    body,
-                    point: [x, y],
-                    label: spec.to_string(),
-                }),
-                _ => Err(bad(format!("'{point}' is not two finite numbers X,Y"))),
-            },
-            _ => Err(bad(format!("'{point}' is not two numbers X,Y"))),
+        let values: Option<Vec<f64>> = parts.iter().map(|p| parse(p)).collect();
+        match values {
+            Some(point) => Ok(Trace {
+                body,
+                point,
+                label: spec.to_string(),
+            }),
+            None => Err(bad(format!("'{point}' is not {what} finite numbers {form}"))),
         }
     }
 }
@@ -135,9 +151,15 @@ impl<'a> Viewer<'a> {
         let json = serde_json::to_string(&data)
             .unwrap_or_else(|_| "{}".into())
             .replace("</", "<\\/");
-        TEMPLATE
+        let (template, script) = match self.drawing.spatial {
+            Some(_) => (TEMPLATE_3D, SCRIPT_3D),
+            None => (TEMPLATE, SCRIPT),
+        };
+        // The data goes in last: no text of the user's can hold a placeholder that is replaced.
+        template
             .replace("{{title}}", &escape_html(self.title))
-            .replace("{{script}}", SCRIPT)
+            .replace("{{three}}", THREE)
+            .replace("{{script}}", script)
             .replace("{{data}}", &json)
     }
 }

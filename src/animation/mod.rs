@@ -14,7 +14,7 @@
 //! let scene = Scene::from_toml(include_str!("../../scenes/pendulum.toml"), "pendulum.toml").unwrap();
 //! let mut sim = scene.simulation();
 //! sim.end = 0.5;
-//! let mut frames = Frames::new(scene.drawing.bodies.len());
+//! let mut frames = Frames::for_drawing(&scene.drawing);
 //! sim.run(&mut |s| frames.push(s.t, s.q)).unwrap();
 //! let trace = Trace::parse("rod:0.5,0", &scene.drawing).unwrap();
 //! let html = Viewer::new(&scene.name, &scene.drawing).trace(trace).html(&frames);
@@ -24,8 +24,10 @@
 mod drawing;
 mod frames;
 mod html;
+mod solid;
 
 pub(crate) use drawing::xy;
 pub use drawing::{BodyDrawing, DrawBody, Drawing, Mark, Shape};
 pub use frames::Frames;
 pub use html::{Trace, TraceError, Viewer, DEFAULT_MAX_FRAMES};
+pub use solid::{inertia_box, JointMark, Solid, SolidBody, SpatialDrawing};

@@ -15,7 +15,7 @@ use super::names::{Ctx, Names};
 use super::spatial_forces::{self, ForceDef};
 use super::strict::{self, Inertia3, Points3};
 use super::{build, Scene};
-use crate::animation::Drawing;
+use crate::animation::{Drawing, Solid, SpatialDrawing};
 use dalembert_spatial::body;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
 use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
@@ -526,6 +526,11 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             .move_joints(&mut q, &mut qd, &moves)
             .map_err(|e| ctx.err(span, format!("[initial]: {e}")))?;
     }
+    let shapes: Vec<Option<Solid>> = file.bodies.iter().map(|b| solid(b.get_ref())).collect();
+    let drawing = Drawing {
+        spatial: Some(SpatialDrawing::of(&model, &shapes)),
+        ..Drawing::default()
+    };
     let mechanism: crate::mechanism::Mechanism = Arc::new(model).into();
     let settings = build::settings(
         ctx.file,
@@ -535,7 +540,22 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     )?;
     build::check_coordinates(&ctx, file.simulation.as_ref(), &mechanism, &settings)?;
     let name = file.scene.name.unwrap_or_else(|| origin.to_string());
-    build::assembled(&ctx, name, mechanism, (q, qd, weights), settings, Drawing::default())
+    build::assembled(&ctx, name, mechanism, (q, qd, weights), settings, drawing)
+}
+
+/// The solid a body's `shape` gives the viewer (`None`: no shape, or one the inertia check
+/// refuses).
+fn solid(def: &BodyDef) -> Option<Solid> {
+    let s = def.shape.as_ref()?;
+    match (s.sphere, s.cuboid, &s.cylinder) {
+        (Some(radius), None, None) => Some(Solid::Sphere { radius }),
+        (None, Some(size), None) => Some(Solid::Box { size }),
+        (None, None, Some(c)) => Some(Solid::Cylinder {
+            radius: c.radius,
+            length: c.length,
+        }),
+        _ => None,
+    }
 }
 
 /// The joint moves `[initial]` asks for; a driven joint is refused (its driver sets its motion).

@@ -159,10 +159,7 @@ type Read<'a> = (ModelBuilder, HashMap<String, Node<'a, 'a>>, Vec<String>);
 
 /// The elements of the robot in `text`, and where each link and joint is in it (for errors the
 /// scene builder finds).
-fn read<'a>(
-    src: &Source<'a>,
-    doc: &'a roxmltree::Document<'a>,
-) -> Result<Read<'a>, SceneError> {
+fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'a>, SceneError> {
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(src.err(

@@ -7,15 +7,16 @@ use std::path::PathBuf;
 /// Arguments of `animate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Scene file (TOML).
+    /// Scene file (TOML, or a URDF robot).
     scene: PathBuf,
     #[command(flatten)]
     run: RunArgs,
     /// Replay a result CSV written by `simulate --output` instead of simulating.
     #[arg(long)]
     from: Option<PathBuf>,
-    /// Draw the path of a body point, BODY:X,Y in the body's frame (metres); repeatable.
-    #[arg(long, value_name = "BODY:X,Y")]
+    /// Draw the path of a body point, BODY:X,Y in the body's frame (metres; BODY:X,Y,Z in a
+    /// spatial scene); repeatable.
+    #[arg(long, value_name = "BODY:X,Y[,Z]")]
     trace: Vec<String>,
     /// Largest number of frames kept in the page (a long run is thinned evenly).
     #[arg(long, default_value_t = DEFAULT_MAX_FRAMES)]
@@ -27,12 +28,6 @@ pub struct Args {
 
 pub fn run(a: Args) -> Result<(), String> {
     let scene = load(&a.scene, &a.run)?;
-    if scene.model.is_spatial() {
-        return Err(format!(
-            "{}: the scene is spatial and the animation viewer draws planar scenes only (simulate --output writes its motion as CSV)",
-            a.scene.display()
-        ));
-    }
     let traces = a
         .trace
         .iter()
@@ -57,7 +52,7 @@ pub fn run(a: Args) -> Result<(), String> {
             (frames, None)
         }
         None => {
-            let mut frames = Frames::new(scene.drawing.bodies.len());
+            let mut frames = Frames::for_drawing(&scene.drawing);
             let result = scene
                 .simulation()
                 .run_cancellable(&mut |s| frames.push(s.t, s.q), crate::interrupt_flag());

@@ -333,6 +333,187 @@ fn the_page_renders_the_simulated_positions_in_chromium() {
     assert!(differing > 2000, "only {differing} pixels changed");
 }
 
+/// The pixel of global point `p` on the screenshot, by the page's own camera (`data-view`: the
+/// column-major view-projection matrix and the canvas' rectangle in the window).
+fn project(view: &str, p: [f64; 3]) -> (f64, f64) {
+    let at = view.find("\"matrix\":[").unwrap() + 10;
+    let end = at + view[at..].find(']').unwrap();
+    let m: Vec<f64> = view[at..end].split(',').map(|x| x.parse().unwrap()).collect();
+    let row = |r: usize| m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r];
+    let w = row(3);
+    let (x, y) = (row(0) / w, row(1) / w);
+    let (left, top) = (json_number(view, "left"), json_number(view, "top"));
+    let (width, height) = (json_number(view, "width"), json_number(view, "height"));
+    (left + 0.5 * (x + 1.0) * width, top + 0.5 * (1.0 - y) * height)
+}
+
+/// Reads `t` and each body's centre of mass `x, y, z` from a result CSV.
+fn centres(csv: &Path, bodies: &[String]) -> Vec<(f64, Vec<[f64; 3]>)> {
+    let mut rdr = csv::Reader::from_path(csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let cols: Vec<[usize; 3]> = bodies
+        .iter()
+        .map(|b| [col(&format!("{b}.x")), col(&format!("{b}.y")), col(&format!("{b}.z"))])
+        .collect();
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            let v = |k: usize| r[k].parse::<f64>().unwrap();
+            (v(0), cols.iter().map(|c| [v(c[0]), v(c[1]), v(c[2])]).collect())
+        })
+        .collect()
+}
+
+/// Every pixel within `r` of `(x, y)` on `png` that is within `tolerance` (per channel) of `color`.
+fn count_near(png: &Png, (x, y): (f64, f64), r: i64, color: [u8; 3], tolerance: i32) -> usize {
+    let (cx, cy) = (x.round() as i64, y.round() as i64);
+    let height = (png.rgba.len() / 4 / png.width) as i64;
+    let mut n = 0;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            let (px, py) = (cx + dx, cy + dy);
+            if px < 0 || py < 0 || px >= png.width as i64 || py >= height {
+                continue;
+            }
+            let p = png.pixel(px as usize, py as usize);
+            n += usize::from((0..3).all(|i| (i32::from(p[i]) - i32::from(color[i])).abs() <= tolerance));
+        }
+    }
+    n
+}
+
+/// Every spatial scene and both shipped robots in the 3D viewer: the page loads three.js from
+/// itself and reports no script error; at each time the centre of mass of every body (from the
+/// CSV of the same run, projected by the page's own camera) carries its marker, a 4 px square of
+/// #111111 centred there: within 1 px of the point, at least 4 of its pixels (a drawing 5 px
+/// off leaves none); between two times the picture changes where a body moved.
+#[test]
+fn the_3d_viewer_draws_every_spatial_scene_where_the_run_puts_it() {
+    let Some(browser) = chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have Chromium (.ci/run installs Debian's package)"
+        );
+        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+        return;
+    };
+    let budget = "--virtual-time-budget=5000"; // three.js is imported before the first drawing
+    let size = (800, 560);
+    let mut cases: Vec<(String, Vec<f64>)> = [
+        "arm-6",
+        "bricard",
+        "heavy-top",
+        "rssr",
+        "slider-crank-3d",
+        "spatial-chain-16",
+    ]
+    .iter()
+    .map(|s| (scene(&format!("{s}.toml")), vec![0.6]))
+    .collect();
+    cases.push((scene("robots/ur5.urdf"), vec![0.6]));
+    cases.push((scene("robots/kinova.urdf"), vec![0.6]));
+    cases.push((scene("robots/ur5-swing.toml"), vec![0.2, 0.7]));
+    cases[0].1 = vec![0.25, 0.75];
+    let mut dump_size = None;
+    for (path, times) in &cases {
+        let name = Path::new(path).file_stem().unwrap().to_string_lossy().into_owned();
+        let (csv, page) = (tmp(&format!("{name}-3d.csv")), tmp(&format!("{name}-3d.html")));
+        let (ok, _, err) = dalembert(&[
+            "simulate",
+            path,
+            "--end",
+            "0.8",
+            "--every",
+            "0.05",
+            "--output",
+            csv.to_str().unwrap(),
+        ]);
+        assert!(ok, "{name}: {err}");
+        let (ok, _, err) = dalembert(&[
+            "animate",
+            path,
+            "--from",
+            csv.to_str().unwrap(),
+            "--output",
+            page.to_str().unwrap(),
+        ]);
+        assert!(ok, "{name}: {err}");
+        let bodies: Vec<String> = dalembert::Scene::from_path(path).unwrap().model.body_names();
+        let rows = centres(&csv, &bodies);
+        let at = |t: f64| rows.iter().find(|r| (r.0 - t).abs() < 1e-9).unwrap().1.clone();
+        // The window that gives a dumped page the screenshot's viewport (see the planar test).
+        let dump = *dump_size.get_or_insert_with(|| {
+            let probe = browse(
+                &browser,
+                &format!("file://{}#t=0", page.display()),
+                size,
+                &["--dump-dom", budget],
+            );
+            let seen = attribute(&probe, "<body", "data-viewport").unwrap();
+            let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
+            (size.0, 2 * size.1 - seen_height)
+        });
+        let mut shots = Vec::new();
+        for &t in times {
+            let url = format!("file://{}#t={t}", page.display());
+            let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);
+            assert_eq!(
+                attribute(&dom, "<body", "data-status").as_deref(),
+                Some("ready"),
+                "{name}: {dom}"
+            );
+            assert_eq!(attribute(&dom, "<body", "data-errors"), None, "{name}: script errors");
+            assert_eq!(
+                attribute(&dom, "<body", "data-viewport"),
+                Some(format!("{}x{}", size.0, size.1))
+            );
+            let view = attribute(&dom, "<canvas", "data-view").unwrap();
+            let shot = tmp(&format!("{name}-{t}.png"));
+            browse(
+                &browser,
+                &url,
+                size,
+                &[&format!("--screenshot={}", shot.display()), budget],
+            );
+            let png = Png::read(&shot);
+            for (k, c) in at(t).into_iter().enumerate() {
+                let px = project(&view, c);
+                let n = count_near(&png, px, 1, [0x11; 3], 12);
+                assert!(
+                    n >= 4,
+                    "{name} t = {t}: {}'s centre at ({:.1}, {:.1}) px has no marker ({n} pixels)",
+                    bodies[k],
+                    px.0,
+                    px.1
+                );
+            }
+            shots.push((png, view));
+        }
+        if let [(a, view_a), (b, view_b)] = shots.as_slice() {
+            // The body that moved most on the screen: its marker is where it is at each time only.
+            let (t_a, t_b) = (times[0], times[1]);
+            let moved = (0..bodies.len())
+                .map(|k| (k, project(view_a, at(t_a)[k]), project(view_b, at(t_b)[k])))
+                .max_by(|x, y| {
+                    let d = |p: &(usize, (f64, f64), (f64, f64))| (p.2 .0 - p.1 .0).hypot(p.2 .1 - p.1 .1);
+                    d(x).total_cmp(&d(y))
+                })
+                .unwrap();
+            let (_, pa, pb) = moved;
+            assert!((pb.0 - pa.0).hypot(pb.1 - pa.1) > 20.0, "{name}: nothing moves visibly");
+            assert_eq!(
+                count_near(a, pb, 1, [0x11; 3], 12),
+                0,
+                "{name}: the later marker is already drawn"
+            );
+            assert!(count_near(b, pb, 1, [0x11; 3], 12) >= 4);
+            let differing = a.rgba.chunks(4).zip(b.rgba.chunks(4)).filter(|(x, y)| x != y).count();
+            assert!(differing > 2000, "{name}: only {differing} pixels changed");
+        }
+    }
+}
+
 #[test]
 fn every_shipped_scene_animates() {
     let dir = format!("{}/../../scenes", env!("CARGO_MANIFEST_DIR"));
@@ -354,23 +535,20 @@ fn every_shipped_scene_animates() {
             page.to_str().unwrap(),
         ]);
         let scene = dalembert::Scene::from_path(&path).unwrap();
-        if scene.model.is_spatial() {
-            // The viewer draws planar scenes: a spatial one is refused in one line, no page.
-            assert!(
-                !ok && err.contains("draws planar scenes only"),
-                "{}: {err}",
-                path.display()
-            );
-            assert!(!page.exists(), "{}", page.display());
-            continue;
-        }
         assert!(ok, "{}: {err}", path.display());
         assert!(out.contains("51 frames"), "{}: {out}", path.display());
         let html = std::fs::read_to_string(&page).unwrap();
-        for b in &scene.drawing.bodies {
-            assert!(html.contains(&format!("\"name\":\"{}\"", b.name)), "{}", b.name);
+        for b in scene.drawing.body_names() {
+            assert!(html.contains(&format!("\"name\":\"{b}\"")), "{b}");
         }
+        // A spatial scene gets the 3D viewer, with three.js inlined; a planar one the 2D viewer.
+        assert_eq!(
+            html.contains("three-source"),
+            scene.model.is_spatial(),
+            "{}",
+            path.display()
+        );
         count += 1;
     }
-    assert!(count >= 8, "found {count} planar scenes");
+    assert!(count >= 14, "found {count} scenes");
 }

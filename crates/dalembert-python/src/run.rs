@@ -162,21 +162,13 @@ impl PyRun {
                 "max_frames must be at least 2, got {max_frames}"
             )));
         }
-        if self.scene.model.is_spatial() {
-            return Err(PyValueError::new_err(format!(
-                "scene '{}' is spatial: the animation viewer draws planar scenes only",
-                self.scene.name
-            )));
-        }
-        let bodies = self.scene.model.body_names();
-        let mut frames = Frames::new(bodies.len());
-        let cols: Vec<usize> = bodies
+        let mut frames = Frames::for_drawing(&self.scene.drawing);
+        let cols: Vec<usize> = Frames::columns(&self.scene.drawing)
             .iter()
-            .flat_map(|b| ["x", "y", "angle"].map(|c| format!("{b}.{c}")))
             .map(|n| {
                 self.table
-                    .index(&n)
-                    .ok_or_else(|| PyValueError::new_err(self.table.unknown_column(&n)))
+                    .index(n)
+                    .ok_or_else(|| PyValueError::new_err(self.table.unknown_column(n)))
             })
             .collect::<PyResult<_>>()?;
         let mut q = vec![0.0; cols.len()];
