@@ -15,6 +15,7 @@ mod run_settings;
 mod spatial;
 mod spatial_forces;
 mod strict;
+mod tree;
 mod urdf;
 mod values;
 mod xml;
