@@ -139,6 +139,26 @@ fn urdf_reader_never_panics() {
 }
 
 #[test]
+fn mjcf_reader_never_panics() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seeds = texts_of(&root.join("scenes/mjcf"), "xml");
+    seeds.extend(texts_of(&root.join("tests/bad_inputs"), "xml"));
+    let runs = env_u64("DALEMBERT_FUZZ_RUNS", 20_000);
+    let tally = fuzz("mjcf", &seeds, runs, env_u64("DALEMBERT_FUZZ_SEED", 1), &|text| {
+        Scene::from_mjcf(text, "fuzz.xml")
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    });
+    assert!(tally.crashes.is_empty(), "panics on: {:?}", tally.crashes);
+    assert!(
+        tally.multiline.is_empty(),
+        "errors not on one line: {:#?}",
+        tally.multiline
+    );
+    assert!(tally.accepted > runs / 100 && tally.rejected > runs / 4, "{tally:?}");
+}
+
+#[test]
 fn result_csv_reader_never_panics() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scene = Scene::from_path(root.join("scenes/four-bar.toml")).unwrap();

@@ -3,7 +3,7 @@
 //! point and axis. The 3D viewer (`viewer3d.js`) draws it at every frame from the bodies' poses.
 
 use dalembert_spatial::Model;
-use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::Serialize;
 
 /// A body's solid, centred on its centre of mass, in its own axes (see [`SolidBody::rotation`]).
@@ -102,13 +102,12 @@ impl SpatialDrawing {
                 },
                 None => {
                     let (moments, axes) = principal(&b.inertia);
-                    let q = UnitQuaternion::from_matrix(&axes);
                     SolidBody {
                         name: b.name.clone(),
                         solid: Solid::Box {
                             size: inertia_box(b.mass, moments),
                         },
-                        rotation: [q.w, q.i, q.j, q.k],
+                        rotation: dalembert_spatial::euler_parameters::from_rotation(&axes),
                         from_inertia: true,
                         points: Vec::new(),
                     }

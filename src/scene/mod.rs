@@ -9,6 +9,7 @@ mod build;
 mod error;
 mod format;
 mod functions;
+mod mjcf;
 mod names;
 mod overrides;
 mod run_settings;
@@ -205,13 +206,16 @@ impl Scene {
         )
     }
 
-    /// Reads, builds and assembles a scene file: a TOML scene, or a URDF robot description
-    /// (a name ending `.urdf`; [`Scene::from_urdf`]).
+    /// Reads, builds and assembles a scene file: a TOML scene, a URDF robot description (a name
+    /// ending `.urdf`; [`Scene::from_urdf`]) or an MJCF model (`.xml`, `.mjcf`;
+    /// [`Scene::from_mjcf`]).
     pub fn from_path(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let origin = path.display().to_string();
-        let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-        if urdf {
+        let extension = path.extension().map(|e| e.to_ascii_lowercase());
+        let urdf = extension.as_ref().is_some_and(|e| e == "urdf");
+        let mjcf = extension.as_ref().is_some_and(|e| e == "xml" || e == "mjcf");
+        if urdf || mjcf {
             let size = std::fs::metadata(path).map_err(|e| SceneError::io(path, e))?.len();
             if size > xml::MAX_BYTES as u64 {
                 return Err(SceneError::at(
@@ -226,6 +230,9 @@ impl Scene {
         if urdf {
             return Scene::from_urdf(&text, &origin);
         }
+        if mjcf {
+            return Scene::from_mjcf(&text, &origin);
+        }
         Scene::from_toml(&text, &origin)
     }
 
@@ -236,6 +243,14 @@ impl Scene {
     /// `origin` names the file in errors, which give the element's line.
     pub fn from_urdf(text: &str, origin: &str) -> Result<Scene, SceneError> {
         urdf::scene(text, origin)
+    }
+
+    /// Builds and assembles the scene an MJCF model gives, from the subset `docs/import.md`
+    /// lists (a body per moving MuJoCo body, one joint each; inertias given or from geoms as
+    /// MuJoCo computes them; `equality connect` and `weld` exact; `motor` actuators as named
+    /// inputs); anything else is refused naming the element and its line.
+    pub fn from_mjcf(text: &str, origin: &str) -> Result<Scene, SceneError> {
+        mjcf::scene(text, origin)
     }
 
     /// Builds and assembles a scene from TOML text; `origin` names it in errors.

@@ -7,7 +7,7 @@
 use super::xml::Source;
 use super::{Scene, SceneError};
 use crate::builder::{body, force, joint, KeyValue, ModelBuilder};
-use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Vector3};
 use roxmltree::Node;
 use std::collections::HashMap;
 
@@ -43,9 +43,9 @@ pub(crate) struct Inertial {
     pub(crate) tensor: Matrix3<f64>,
 }
 
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub(crate) struct Link<'a, 'i> {
-    pub(crate) name: &'a str,
+    pub(crate) name: String,
     pub(crate) node: Node<'a, 'i>,
     pub(crate) inertial: Option<Inertial>,
 }
@@ -53,15 +53,16 @@ pub(crate) struct Link<'a, 'i> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Kind {
     Revolute,
+    Spherical,
     Prismatic,
     Fixed,
     Floating,
 }
 
 #[derive(Debug)]
-pub(crate) struct TreeJoint<'a> {
+pub(crate) struct TreeJoint {
     /// The name in the file.
-    pub(crate) file_name: &'a str,
+    pub(crate) file_name: String,
     /// The name in the scene (the file's, unless a link has it).
     pub(crate) name: String,
     pub(crate) kind: Kind,
@@ -133,7 +134,7 @@ impl Tree {
         src: &Source<'_>,
         robot: Node<'_, '_>,
         links: &[Link<'_, '_>],
-        joints: &[TreeJoint<'_>],
+        joints: &[TreeJoint],
         parent_joint: &[Option<usize>],
     ) -> Result<Tree, SceneError> {
         let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
@@ -223,10 +224,11 @@ impl Tree {
         src: &Source<'_>,
         name: &str,
         links: &[Link<'_, '_>],
-        joints: &[TreeJoint<'_>],
+        joints: &[TreeJoint],
+        part: &str,
     ) -> Result<ModelBuilder, SceneError> {
         let mut model = ModelBuilder::spatial(name).gravity([0.0, 0.0, -9.81]);
-        let body_name = |b: Option<usize>| b.map_or("ground", |b| links[self.principal[b]].name);
+        let body_name = |b: Option<usize>| b.map_or("ground", |b| links[self.principal[b]].name.as_str());
         for (b, &l) in self.principal.iter().enumerate() {
             let link = &links[l];
             if link.name == "ground" {
@@ -240,17 +242,19 @@ impl Tree {
                 return Err(src.err(
                     link.node,
                     format!(
-                        "link '{}' moves but has no mass: give it an <inertial> with a positive mass (or fix a link that has one to it)",
+                        "{part} '{}' moves but has no mass: give it an <inertial> with a positive mass (or fix a {part} that has one to it)",
                         link.name
                     ),
                 ));
             }
             let axes = self.world[l].r;
             let j = axes.transpose() * tensor * axes;
-            let p = UnitQuaternion::from_matrix(&axes);
-            let orientation = KeyValue::table([("quaternion", KeyValue::from([p.w, p.i, p.j, p.k]))]);
+            // Closed form (Shepperd): an iterative fit would not end on a matrix a malformed file
+            // made non-orthogonal.
+            let p = dalembert_spatial::euler_parameters::from_rotation(&axes);
+            let orientation = KeyValue::table([("quaternion", KeyValue::from(p))]);
             model = model.body(
-                body(link.name)
+                body(&link.name)
                     .mass(mass)
                     .set(
                         "inertia",
@@ -265,16 +269,17 @@ impl Tree {
             let kind = match j.kind {
                 Kind::Revolute => "revolute",
                 Kind::Prismatic => "prismatic",
+                Kind::Spherical => "spherical",
                 Kind::Fixed | Kind::Floating => continue,
             };
             let frame = self.world[j.child];
             let axis = frame.r * j.axis;
             let bodies = [body_name(self.body[j.parent]), body_name(self.body[j.child])];
-            model = model.joint(
-                joint(&j.name, kind, bodies)
-                    .at(<[f64; 3]>::from(frame.p))
-                    .axis(<[f64; 3]>::from(axis)),
-            );
+            let placed = joint(&j.name, kind, bodies).at(<[f64; 3]>::from(frame.p));
+            model = model.joint(match j.kind {
+                Kind::Spherical => placed,
+                _ => placed.axis(<[f64; 3]>::from(axis)),
+            });
             if j.damping > 0.0 {
                 let name = format!("{}-damping", j.name);
                 let damper = match j.kind {

@@ -123,13 +123,13 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'
         }
         skipped.note(node, &["inertial", "visual", "collision"], &[]);
         links.push(Link {
-            name: link,
+            name: link.to_string(),
             node,
             inertial: inertial(src, node)?,
         });
         places.insert(link.to_string(), node);
     }
-    let mut joints: Vec<TreeJoint<'a>> = Vec::new();
+    let mut joints: Vec<TreeJoint> = Vec::new();
     let mut notes = Vec::new();
     let mut with_friction = Vec::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
@@ -210,7 +210,7 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'
         parent_joint[child] = Some(joints.len());
         places.insert(joint_name.clone(), node);
         joints.push(TreeJoint {
-            file_name,
+            file_name: file_name.to_string(),
             name: joint_name,
             kind,
             parent,
@@ -234,7 +234,7 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'
         ));
     }
     notes.extend(skipped.lines());
-    Ok((tree.elements(src, name, &links, &joints)?, places, notes))
+    Ok((tree.elements(src, name, &links, &joints, "link")?, places, notes))
 }
 
 /// The scene a URDF file describes (see the module documentation); `origin` names the file in

@@ -3,7 +3,7 @@
 //! `# expect:` line, and a non-zero exit: never a panic, never a silent success.
 //!
 //! File format: line 1 `# expect: MESSAGE` (`{file}` stands for the file's path), line 2
-//! `# args: check` or `# args: simulate FLAGS…`, then the scene. A URDF case (`.urdf`) writes
+//! `# args: check` or `# args: simulate FLAGS…`, then the scene. A URDF or MJCF case (`.urdf`, `.xml`) writes
 //! the two lines as XML comments: `<!-- expect: MESSAGE -->`, `<!-- args: check -->`.
 
 use std::process::Command;
@@ -14,7 +14,7 @@ fn every_bad_input_gets_its_one_line_error() {
     let mut paths: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml" || e == "urdf"))
+        .filter(|p| p.extension().is_some_and(|e| e == "toml" || e == "urdf" || e == "xml"))
         .collect();
     paths.sort();
     assert!(paths.len() >= 100, "{} cases", paths.len());
