@@ -117,17 +117,22 @@ fn scene_loader_never_panics() {
     assert!(tally.accepted > runs / 100 && tally.rejected > runs / 4, "{tally:?}");
 }
 
-#[test]
-fn urdf_reader_never_panics() {
+/// Fuzzes a model-file reader on the files under `folders` (relative to the package root) whose
+/// names end `.extension`: no panic, every error one line, some mutants accepted.
+fn fuzz_reader(
+    name: &str,
+    folders: &[&str],
+    extension: &str,
+    load: &dyn Fn(&str) -> Result<Scene, dalembert::SceneError>,
+) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut seeds = texts_of(&root.join("scenes/robots"), "urdf");
-    seeds.extend(texts_of(&root.join("tests/bad_inputs"), "urdf"));
-    seeds.extend(texts_of(&root.join("tests/bad_inputs/models"), "urdf"));
+    let seeds: Vec<String> = folders
+        .iter()
+        .flat_map(|f| texts_of(&root.join(f), extension))
+        .collect();
     let runs = env_u64("DALEMBERT_FUZZ_RUNS", 20_000);
-    let tally = fuzz("urdf", &seeds, runs, env_u64("DALEMBERT_FUZZ_SEED", 1), &|text| {
-        Scene::from_urdf(text, "fuzz.urdf")
-            .map(|_| ())
-            .map_err(|e| e.to_string())
+    let tally = fuzz(name, &seeds, runs, env_u64("DALEMBERT_FUZZ_SEED", 1), &|text| {
+        load(text).map(|_| ()).map_err(|e| e.to_string())
     });
     assert!(tally.crashes.is_empty(), "panics on: {:?}", tally.crashes);
     assert!(
@@ -139,23 +144,15 @@ fn urdf_reader_never_panics() {
 }
 
 #[test]
+fn urdf_reader_never_panics() {
+    let folders = ["scenes/robots", "tests/bad_inputs", "tests/bad_inputs/models"];
+    fuzz_reader("urdf", &folders, "urdf", &|text| Scene::from_urdf(text, "fuzz.urdf"));
+}
+
+#[test]
 fn mjcf_reader_never_panics() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut seeds = texts_of(&root.join("scenes/mjcf"), "xml");
-    seeds.extend(texts_of(&root.join("tests/bad_inputs"), "xml"));
-    let runs = env_u64("DALEMBERT_FUZZ_RUNS", 20_000);
-    let tally = fuzz("mjcf", &seeds, runs, env_u64("DALEMBERT_FUZZ_SEED", 1), &|text| {
-        Scene::from_mjcf(text, "fuzz.xml")
-            .map(|_| ())
-            .map_err(|e| e.to_string())
-    });
-    assert!(tally.crashes.is_empty(), "panics on: {:?}", tally.crashes);
-    assert!(
-        tally.multiline.is_empty(),
-        "errors not on one line: {:#?}",
-        tally.multiline
-    );
-    assert!(tally.accepted > runs / 100 && tally.rejected > runs / 4, "{tally:?}");
+    let folders = ["scenes/mjcf", "tests/bad_inputs", "tests/data/imported"];
+    fuzz_reader("mjcf", &folders, "xml", &|text| Scene::from_mjcf(text, "fuzz.xml"));
 }
 
 #[test]

@@ -16,26 +16,27 @@ import dalembert
 ROBOTS = ["ur5", "kinova"]
 
 
+def configuration(model, theta):
+    """Pinocchio's configuration at joint angles `theta`: a continuous joint is a (cos, sin) pair."""
+    q = np.zeros(model.nq)
+    for k, j in enumerate(list(model.joints)[1:]):
+        if j.nq == 1:
+            q[j.idx_q] = theta[k]
+        else:
+            q[j.idx_q : j.idx_q + 2] = np.cos(theta[k]), np.sin(theta[k])
+    return q
+
+
 def pinocchio_angles(path, end, start=None, rates=None):
     """Joint angles and rates of the robot in `path` at `end`, from the joint angles `start` and
     rates `rates` (mappings by joint name; absent joints at 0), by Pinocchio's ABA. Continuous
     joints are (cos, sin) pairs in Pinocchio's configuration; the angle is integrated instead."""
     model = pin.buildModelFromUrdf(str(path))
     data = model.createData()
-    joints = list(model.joints)[1:]
-
-    def configuration(theta):
-        q = np.zeros(model.nq)
-        for k, j in enumerate(joints):
-            if j.nq == 1:
-                q[j.idx_q] = theta[k]
-            else:
-                q[j.idx_q : j.idx_q + 2] = np.cos(theta[k]), np.sin(theta[k])
-        return q
 
     def rate(_, x):
         theta, v = x[: model.nv], x[model.nv :]
-        return np.concatenate([v, pin.aba(model, data, configuration(theta), v, np.zeros(model.nv))])
+        return np.concatenate([v, pin.aba(model, data, configuration(model, theta), v, np.zeros(model.nv))])
 
     names = list(model.names)[1:]
     x0 = np.array([(start or {}).get(n, 0.0) for n in names] + [(rates or {}).get(n, 0.0) for n in names])
@@ -66,18 +67,12 @@ def test_urdf_run_from_rest_matches_pinocchio(scenes, robot):
         assert moved > 0.04, "the arm falls far enough for the comparison to mean something (4e5 times the bar)"
 
 
-def absolute_state(model, data, scene_bodies, local_centres, theta, rate, joints):
+def absolute_state(model, data, scene_bodies, local_centres, theta, rate):
     """dalembert's absolute state (centre of mass, Euler parameters; centre-of-mass velocity,
     body-frame angular velocity per body) at joint angles `theta` and rates `rate`, from
     Pinocchio's forward kinematics: each body's axes are its link's frame, its centre of mass at
     `local_centres[body]` in that frame."""
-    q = np.zeros(model.nq)
-    for k, j in enumerate(joints):
-        if j.nq == 1:
-            q[j.idx_q] = theta[k]
-        else:
-            q[j.idx_q : j.idx_q + 2] = np.cos(theta[k]), np.sin(theta[k])
-    pin.forwardKinematics(model, data, q, rate)
+    pin.forwardKinematics(model, data, configuration(model, theta), rate)
     pin.updateFramePlacements(model, data)
     positions, velocities = [], []
     for body in scene_bodies:
@@ -101,7 +96,6 @@ def test_urdf_motion_from_random_states_matches_pinocchio(scenes, robot):
     path = scenes / "robots" / f"{robot}.urdf"
     model = pin.buildModelFromUrdf(str(path))
     data = model.createData()
-    joints = list(model.joints)[1:]
     names = list(model.names)[1:]
     scene = dalembert.Scene.load(path)
     # Each body's centre of mass in its link's frame, from dalembert's file configuration and
@@ -117,20 +111,12 @@ def test_urdf_motion_from_random_states_matches_pinocchio(scenes, robot):
         theta = rng.uniform(-np.pi, np.pi, model.nv)
         rate = rng.uniform(-2.0, 2.0, model.nv)
 
-        def configuration(t):
-            q = np.zeros(model.nq)
-            for k, j in enumerate(joints):
-                if j.nq == 1:
-                    q[j.idx_q] = t[k]
-                else:
-                    q[j.idx_q : j.idx_q + 2] = np.cos(t[k]), np.sin(t[k])
-            return q
-
         def flow(_, x):
-            return np.concatenate([x[model.nv :], pin.aba(model, data, configuration(x[: model.nv]), x[model.nv :], np.zeros(model.nv))])
+            a = pin.aba(model, data, configuration(model, x[: model.nv]), x[model.nv :], np.zeros(model.nv))
+            return np.concatenate([x[model.nv :], a])
 
         end = solve_ivp(flow, (0.0, 0.05), np.concatenate([theta, rate]), method="DOP853", rtol=1e-13, atol=1e-14).y[:, -1]
-        q, v = absolute_state(model, data, scene.bodies, centres, theta, rate, joints)
+        q, v = absolute_state(model, data, scene.bodies, centres, theta, rate)
         for settings in [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")] + [dict(coordinates="joint")]:
             sim = scene.simulator(integrator="dopri5", rtol=1e-12, atol=1e-13, **settings)
             moved = sim.set_state(q, v)
