@@ -49,7 +49,7 @@ def test_heavy_top_keeps_its_conserved_quantities(scenes):
     assert np.ptp(r[:, 2]) > 0.1
 
 
-def test_spatial_columns_and_refusals(scenes, tmp_path):
+def test_spatial_columns_and_the_3d_viewer(scenes, tmp_path):
     scene = dalembert.Scene.load(scenes / "slider-crank-3d.toml")
     for c in ["crank.e0", "rod.wz", "C.fx", "C.mz", "guide.my"]:
         assert c in scene.columns
@@ -60,8 +60,13 @@ def test_spatial_columns_and_refusals(scenes, tmp_path):
     # The check's reactions are the first output row's (one computation).
     for c in ["C.fx", "C.mz", "guide.fz", "A.my"]:
         assert report["reactions"][c] == pytest.approx(run[c][0], rel=1e-12, abs=1e-15)
-    with pytest.raises(ValueError, match="spatial"):
-        run.animate(tmp_path / "x.html")
+    # The revolute and prismatic joints have joint columns; the crank's angle starts at 0 (the
+    # file's configuration) and its rate is the crank's angular velocity about the hinge.
+    assert run["A.q"][0] == 0.0 and run["A.qd"][0] != 0.0
+    assert "guide.q" in run.columns and "C.q" not in run.columns
+    # A spatial run animates in the 3D viewer.
+    run.animate(tmp_path / "x.html")
+    assert 'id="three-source"' in (tmp_path / "x.html").read_text()
 
 
 def test_joint_coordinates_give_the_absolute_run(scenes):
