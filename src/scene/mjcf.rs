@@ -6,7 +6,7 @@
 //! element and its line, or, for what carries no dynamics here (assets, sites, lights,
 //! contacts), skipped with a note.
 
-use super::tree::{quoted, scene_of, Inertial, Kind, Link, Pose, Read, Tree, TreeJoint, V3};
+use super::tree::{combined, quoted, scene_of, Inertial, Kind, Link, Pose, Read, Tree, TreeJoint, V3};
 use super::xml::{self, Source};
 use super::{Scene, SceneError};
 use crate::builder::{force, joint, Function};
@@ -22,6 +22,9 @@ pub(crate) fn scene(text: &str, origin: &str) -> Result<Scene, SceneError> {
     let read = Reader::new(&src, &doc)?.read()?;
     scene_of(&src, read, None)
 }
+
+/// The attributes that place a frame: `pos` and the five ways of giving an orientation.
+const FRAME_KEYS: [&str; 6] = ["pos", "quat", "axisangle", "euler", "xyaxes", "zaxis"];
 
 /// Attribute values by class, element tag and attribute (`<default>`).
 type Defaults<'a> = HashMap<String, HashMap<String, HashMap<String, &'a str>>>;
@@ -264,8 +267,9 @@ impl<'s, 'a> Reader<'s, 'a> {
     /// The frame `pos` and `quat` / `axisangle` / `euler` / `xyaxes` / `zaxis` give.
     fn frame(&self, node: Node<'a, 'a>) -> Result<Pose, SceneError> {
         let p = self.numbers::<3>(node, "pos")?.map_or(V3::zeros(), V3::from);
-        let given: Vec<&str> = ["quat", "axisangle", "euler", "xyaxes", "zaxis"]
-            .into_iter()
+        let given: Vec<&str> = FRAME_KEYS[1..]
+            .iter()
+            .copied()
             .filter(|k| node.attribute(*k).is_some())
             .collect();
         if given.len() > 1 {
@@ -327,21 +331,8 @@ impl<'s, 'a> Reader<'s, 'a> {
 
     /// An `<inertial>`: its frame, mass and `diaginertia` or `fullinertia`.
     fn inertial(&self, node: Node<'a, 'a>) -> Result<Inertial, SceneError> {
-        self.attributes(
-            node,
-            &[
-                "pos",
-                "quat",
-                "axisangle",
-                "euler",
-                "xyaxes",
-                "zaxis",
-                "mass",
-                "diaginertia",
-                "fullinertia",
-            ],
-            &[],
-        )?;
+        let known = [&FRAME_KEYS[..], &["mass", "diaginertia", "fullinertia"]].concat();
+        self.attributes(node, &known, &[])?;
         let frame = self.frame(node)?;
         let mass = self.number(node, "mass", f64::NAN)?;
         if mass.is_nan() || mass < 0.0 {
@@ -449,16 +440,7 @@ impl<'s, 'a> Reader<'s, 'a> {
         for g in body.children().filter(|c| c.has_tag_name("geom")) {
             parts.push(self.geom(g)?);
         }
-        let mass: f64 = parts.iter().map(|p| p.0).sum();
-        if parts.is_empty() || mass <= 0.0 {
-            return Ok(None);
-        }
-        let center = parts.iter().fold(V3::zeros(), |s, (m, c, _)| s + *m * c) / mass;
-        let tensor = parts.iter().fold(Matrix3::zeros(), |s, (m, c, j)| {
-            let d = c - center;
-            s + j + *m * (Matrix3::identity() * d.norm_squared() - d * d.transpose())
-        });
-        Ok(Some(Inertial {
+        Ok(combined(&parts).map(|(mass, center, tensor)| Inertial {
             frame: Pose {
                 p: center,
                 r: Matrix3::identity(),
@@ -654,20 +636,8 @@ impl<'s, 'a> Reader<'s, 'a> {
                     ))
                 }
             }
-            self.attributes(
-                c,
-                &[
-                    "name",
-                    "pos",
-                    "quat",
-                    "axisangle",
-                    "euler",
-                    "xyaxes",
-                    "zaxis",
-                    "childclass",
-                ],
-                &[],
-            )?;
+            let known = [&FRAME_KEYS[..], &["name", "childclass"]].concat();
+            self.attributes(c, &known, &[])?;
             let index = parts.len();
             let name = c.attribute("name").map_or_else(|| format!("body{index}"), String::from);
             if names.insert(name.clone(), index).is_some() {

@@ -118,6 +118,22 @@ impl Skipped {
 }
 
 /// The links' placement in the file's configuration and the body each belongs to.
+/// The mass, centre of mass and inertia about it of rigid parts given as (mass, centre, inertia
+/// about that centre), all in one frame: masses add, the centre is their weighted mean, and the
+/// inertias add about it by the parallel-axis theorem. `None` without mass.
+pub(crate) fn combined(parts: &[(f64, V3, Matrix3<f64>)]) -> Option<(f64, V3, Matrix3<f64>)> {
+    let mass: f64 = parts.iter().map(|p| p.0).sum();
+    if mass.is_nan() || mass <= 0.0 {
+        return None;
+    }
+    let center = parts.iter().fold(V3::zeros(), |s, (m, c, _)| s + *m * c) / mass;
+    let tensor = parts.iter().fold(Matrix3::zeros(), |s, (m, c, j)| {
+        let d = c - center;
+        s + j + *m * (Matrix3::identity() * d.norm_squared() - d * d.transpose())
+    });
+    Some((mass, center, tensor))
+}
+
 pub(crate) struct Tree {
     /// Each link's frame (world).
     pub(crate) world: Vec<Pose>,
@@ -207,16 +223,7 @@ impl Tree {
                 Some((i.mass, frame.p, frame.r * i.tensor * frame.r.transpose()))
             })
             .collect();
-        let mass: f64 = parts.iter().map(|p| p.0).sum();
-        if mass <= 0.0 {
-            return (0.0, V3::zeros(), Matrix3::zeros());
-        }
-        let center = parts.iter().fold(V3::zeros(), |s, (m, c, _)| s + *m * c) / mass;
-        let tensor = parts.iter().fold(Matrix3::zeros(), |s, (m, c, j)| {
-            let d = c - center;
-            s + j + *m * (Matrix3::identity() * d.norm_squared() - d * d.transpose())
-        });
-        (mass, center, tensor)
+        combined(&parts).unwrap_or((0.0, V3::zeros(), Matrix3::zeros()))
     }
 
     pub(crate) fn elements(
