@@ -120,6 +120,13 @@ impl<const N: usize> From<[&str; N]> for KeyValue {
     }
 }
 
+impl From<Vec<KeyValue>> for KeyValue {
+    /// An array of values, as `visual = [{ … }, { … }]` writes one.
+    fn from(xs: Vec<KeyValue>) -> Self {
+        KeyValue(Value::Array(xs.into_iter().map(|x| x.0).collect()))
+    }
+}
+
 impl From<Function> for KeyValue {
     fn from(f: Function) -> Self {
         KeyValue(Value::Table(f.0))
@@ -303,6 +310,14 @@ impl ModelBuilder {
     pub fn gravity(mut self, g: impl Into<KeyValue>) -> Self {
         if let Some(Value::Table(scene)) = self.file.get_mut("scene") {
             scene.insert("gravity".into(), g.into().0);
+        }
+        self
+    }
+
+    /// `[scene] KEY = value` (as `visual`, the ground's shapes in a spatial scene).
+    pub fn scene(mut self, key: &str, value: impl Into<KeyValue>) -> Self {
+        if let Some(Value::Table(scene)) = self.file.get_mut("scene") {
+            scene.insert(key.into(), value.into().0);
         }
         self
     }

@@ -1,6 +1,6 @@
 //! The HTML page: the drawing and the frames as inlined data, the viewer script and its style.
 
-use super::{Drawing, Frames};
+use super::{Drawing, Frames, LoadedMeshes};
 use serde::Serialize;
 use std::fmt;
 
@@ -87,6 +87,15 @@ pub struct Viewer<'a> {
     traces: Vec<Trace>,
     max_frames: usize,
     note: Option<String>,
+    meshes: LoadedMeshes,
+}
+
+/// A mesh in the page: little-endian f32 corners and u32 triangles (empty: every three corners
+/// are one), base64.
+#[derive(Serialize)]
+struct PageMesh {
+    positions: String,
+    indices: String,
 }
 
 #[derive(Serialize)]
@@ -95,6 +104,11 @@ struct Data<'a> {
     drawing: &'a Drawing,
     traces: &'a [Trace],
     note: Option<&'a str>,
+    meshes: Vec<PageMesh>,
+    /// For each body and visual, the index of its mesh in `meshes`.
+    mesh_of: &'a [Vec<Option<usize>>],
+    /// For each of the ground's visuals, the index of its mesh.
+    ground_mesh_of: &'a [Option<usize>],
     frames: usize,
     /// Times, little-endian f64, base64.
     times: String,
@@ -111,7 +125,21 @@ impl<'a> Viewer<'a> {
             traces: Vec::new(),
             max_frames: DEFAULT_MAX_FRAMES,
             note: None,
+            meshes: LoadedMeshes::default(),
         }
+    }
+
+    /// Draws the bodies' visual meshes, read by [`super::MeshSources::load`] (without them, a body
+    /// whose visuals are all meshes is drawn as its box of inertia). Their notes join the page's.
+    pub fn meshes(mut self, meshes: LoadedMeshes) -> Self {
+        for n in &meshes.notes {
+            self.note = Some(match self.note.take() {
+                Some(before) => format!("{before}; {n}"),
+                None => n.clone(),
+            });
+        }
+        self.meshes = meshes;
+        self
     }
 
     /// Draws the path of a body point.
@@ -126,9 +154,13 @@ impl<'a> Viewer<'a> {
         self
     }
 
-    /// A line shown under the controls, e.g. where and why a run stopped.
+    /// A line shown under the controls, e.g. where and why a run stopped (after any other).
     pub fn note(mut self, note: impl Into<String>) -> Self {
-        self.note = Some(note.into());
+        let note = note.into();
+        self.note = Some(match self.note.take() {
+            Some(before) => format!("{before}; {note}"),
+            None => note,
+        });
         self
     }
 
@@ -142,6 +174,17 @@ impl<'a> Viewer<'a> {
             drawing: self.drawing,
             traces: &self.traces,
             note: self.note.as_deref(),
+            meshes: self
+                .meshes
+                .meshes
+                .iter()
+                .map(|m| PageMesh {
+                    positions: base64(&m.positions.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()),
+                    indices: base64(&m.indices.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()),
+                })
+                .collect(),
+            mesh_of: &self.meshes.of,
+            ground_mesh_of: &self.meshes.ground,
             frames: frames.len(),
             times: base64(&times),
             poses: base64(&poses),

@@ -21,13 +21,18 @@
 //! assert!(html.starts_with("<!DOCTYPE html>") && !html.contains("<script src"));
 //! ```
 
+mod collada;
 mod drawing;
 mod frames;
 mod html;
+mod mesh;
+mod mesh_files;
 mod solid;
 
 pub(crate) use drawing::xy;
 pub use drawing::{BodyDrawing, DrawBody, Drawing, Mark, Shape};
 pub use frames::Frames;
 pub use html::{Trace, TraceError, Viewer, DEFAULT_MAX_FRAMES};
-pub use solid::{inertia_box, JointMark, Solid, SolidBody, SpatialDrawing};
+pub use mesh::Mesh;
+pub use mesh_files::{read_mesh, LoadedMeshes, MeshError, MeshSources, MAX_MESH_BYTES, MAX_TRIANGLES};
+pub use solid::{inertia_box, JointMark, Solid, SolidBody, SpatialDrawing, Visual};

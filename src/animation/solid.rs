@@ -1,13 +1,15 @@
 //! What a spatial scene looks like: each body as a solid (its scene shape, or the box with its
-//! mass and principal moments of inertia), the points where its joints attach, and each joint's
-//! point and axis. The 3D viewer (`viewer3d.js`) draws it at every frame from the bodies' poses.
+//! mass and principal moments of inertia), the shapes the scene gives to draw it with (its
+//! visuals: primitives and meshes), the points where its joints attach, and each joint's point and
+//! axis. The 3D viewer (`viewer3d.js`) draws it at every frame from the bodies' poses.
 
 use dalembert_spatial::Model;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::Serialize;
 
-/// A body's solid, centred on its centre of mass, in its own axes (see [`SolidBody::rotation`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// A body's solid, centred on its centre of mass, in its own axes (see [`SolidBody::rotation`]),
+/// or a visual's shape in the visual's frame ([`Visual`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
 #[non_exhaustive]
 pub enum Solid {
@@ -28,6 +30,29 @@ pub enum Solid {
         /// Length (m).
         length: f64,
     },
+    /// A triangle mesh from a file (STL, OBJ or COLLADA), read only when a page is written
+    /// ([`crate::animation::MeshSources`]).
+    Mesh {
+        /// The file as the scene names it: a path relative to the scene's folder, or
+        /// `package://NAME/PATH`.
+        file: String,
+        /// Scale along the mesh's x, y, z (its file's units to metres).
+        scale: [f64; 3],
+    },
+}
+
+/// A shape a scene gives to draw a body with (a URDF `<visual>`, a TOML body's `visual`), in the
+/// body's frame. A body with visuals is drawn with them instead of its box of inertia.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Visual {
+    /// The shape, in the visual's frame.
+    pub shape: Solid,
+    /// The visual frame's origin in the body frame (m).
+    pub position: [f64; 3],
+    /// Its axes in the body frame (Euler parameters `[e0, e1, e2, e3]`).
+    pub rotation: [f64; 4],
+    /// Where the scene declares it (`ur5.urdf line 44`), for messages.
+    pub declared: String,
 }
 
 /// One moving body as the 3D viewer draws it.
@@ -45,6 +70,8 @@ pub struct SolidBody {
     /// Points of the body where its joints attach (body frame): the viewer draws bars to them
     /// from the centre of mass, so that a chain of links reads as one.
     pub points: Vec<[f64; 3]>,
+    /// The shapes the scene gives to draw the body with (empty: its solid is drawn).
+    pub visuals: Vec<Visual>,
 }
 
 /// One joint as the 3D viewer draws it.
@@ -69,6 +96,8 @@ pub struct SpatialDrawing {
     pub bodies: Vec<SolidBody>,
     /// The joints.
     pub joints: Vec<JointMark>,
+    /// The ground's shapes (world frame; a robot's base).
+    pub ground: Vec<Visual>,
     /// Gravity (the viewer's "up" is against it).
     pub gravity: [f64; 3],
 }
@@ -86,19 +115,20 @@ pub fn inertia_box(m: f64, j: [f64; 3]) -> [f64; 3] {
 
 impl SpatialDrawing {
     /// The drawing of `model`, with the scene's shape of each body where it gives one
-    /// (`shapes[i]`; `None` draws the body's box of inertia).
-    pub fn of(model: &Model, shapes: &[Option<Solid>]) -> Self {
+    /// (`shapes[i]`; `None` draws the body's box of inertia) and its visuals (`visuals[i]`).
+    pub fn of(model: &Model, shapes: &[Option<Solid>], visuals: &[Vec<Visual>]) -> Self {
         let mut bodies: Vec<SolidBody> = model
             .bodies()
             .iter()
             .enumerate()
-            .map(|(i, b)| match shapes.get(i).copied().flatten() {
+            .map(|(i, b)| match shapes.get(i).cloned().flatten() {
                 Some(solid) => SolidBody {
                     name: b.name.clone(),
                     solid,
                     rotation: [1.0, 0.0, 0.0, 0.0],
                     from_inertia: false,
                     points: Vec::new(),
+                    visuals: Vec::new(),
                 },
                 None => {
                     let (moments, axes) = principal(&b.inertia);
@@ -110,10 +140,14 @@ impl SpatialDrawing {
                         rotation: dalembert_spatial::euler_parameters::from_rotation(&axes),
                         from_inertia: true,
                         points: Vec::new(),
+                        visuals: Vec::new(),
                     }
                 }
             })
             .collect();
+        for (body, v) in bodies.iter_mut().zip(visuals) {
+            body.visuals.clone_from(v);
+        }
         let joints: Vec<JointMark> = model
             .joint_geometry()
             .into_iter()
@@ -137,6 +171,7 @@ impl SpatialDrawing {
         SpatialDrawing {
             bodies,
             joints,
+            ground: Vec::new(),
             gravity: model.gravity().into(),
         }
     }

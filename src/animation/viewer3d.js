@@ -2,7 +2,7 @@
 // Data: the JSON element #dalembert-data (drawing.spatial, traces, base64 times and poses: per
 // body x, y, z, e0, e1, e2, e3). Address options: #t=1.5 opens paused at t = 1.5 s.
 // The page reports on <body>: data-status, data-time, data-errors, data-viewport,
-// data-first-draw-ms; on the canvas, data-view: the camera's view-projection matrix, the canvas'
+// data-first-draw-ms, data-meshes (the visual meshes drawn); on the canvas, data-view: the camera's view-projection matrix, the canvas'
 // place in the window and the bodies' colours (the rendering test projects with them).
 "use strict";
 const errors = [];
@@ -43,16 +43,38 @@ const MARKER = "#111111";
 // Each body's reach from its centre of mass (its solid and its joint points), and the box of the
 // centres over the run widened by the largest reach.
 const v3 = (a) => new THREE.Vector3(a[0], a[1], a[2]);
-function solidReach(s) {
+// Meshes (the bodies' visuals): little-endian f32 corners and u32 triangles.
+const meshGeometries = (data.meshes || []).map((m) => {
+  const geometry = new THREE.BufferGeometry();
+  geometry.setAttribute("position", new THREE.BufferAttribute(decode(m.positions, Float32Array), 3));
+  if (m.indices.length) geometry.setIndex(new THREE.BufferAttribute(decode(m.indices, Uint32Array), 1));
+  geometry.computeBoundingSphere();
+  return geometry;
+});
+const meshOf = (i, k) => (data.mesh_of && data.mesh_of[i] ? data.mesh_of[i][k] : null);
+function solidReach(s, mesh) {
   if (s.kind === "box") return 0.5 * Math.hypot(...s.size);
   if (s.kind === "sphere") return s.radius;
+  if (s.kind === "mesh") {
+    if (mesh === null || mesh === undefined) return 0;
+    const sphere = meshGeometries[mesh].boundingSphere;
+    return (sphere.center.length() + sphere.radius) * Math.max(...s.scale.map(Math.abs));
+  }
   return Math.hypot(s.radius, 0.5 * s.length);
 }
-let reach = 0;
-for (const b of drawing.bodies) {
-  reach = Math.max(reach, solidReach(b.solid));
-  for (const p of b.points) reach = Math.max(reach, Math.hypot(...p));
+// A body's reach from its centre of mass: its visuals' (those drawn), else its solid's.
+function bodyReach(b, i) {
+  const drawn = b.visuals.map((v, k) => (v.shape.kind !== "mesh" || meshOf(i, k) != null
+    ? Math.hypot(...v.position) + solidReach(v.shape, meshOf(i, k)) : -1)).filter((r) => r >= 0);
+  return drawn.length ? Math.max(...drawn) : solidReach(b.solid);
 }
+const groundMeshOf = (k) => (data.ground_mesh_of ? data.ground_mesh_of[k] : null);
+const ground = drawing.ground || [];
+let reach = 0;
+drawing.bodies.forEach((b, i) => {
+  reach = Math.max(reach, bodyReach(b, i));
+  for (const p of b.points) reach = Math.max(reach, Math.hypot(...p));
+});
 const lo = new THREE.Vector3(Infinity, Infinity, Infinity);
 const hi = new THREE.Vector3(-Infinity, -Infinity, -Infinity);
 for (let k = 0; k < nf; k++) {
@@ -71,6 +93,13 @@ for (const j of drawing.joints) {
     }
   }
 }
+// The ground's visuals (a robot's base), each a ball around its origin.
+ground.forEach((v, k) => {
+  if (v.shape.kind === "mesh" && groundMeshOf(k) == null) return;
+  const r = solidReach(v.shape, groundMeshOf(k));
+  lo.min(v3(v.position).subScalar(r - reach));
+  hi.max(v3(v.position).addScalar(r - reach));
+});
 if (!isFinite(lo.x)) { lo.set(-1, -1, -1); hi.set(1, 1, 1); }
 lo.subScalar(reach);
 hi.addScalar(reach);
@@ -114,7 +143,7 @@ function solidGeometry(s) {
 }
 // Each body's own size: the larger of its solid and its farthest joint point. Bars and joint
 // balls are kept small beside it, so that a chain of many short links stays a chain.
-const sizes = drawing.bodies.map((b) => Math.max(solidReach(b.solid), ...b.points.map((p) => Math.hypot(...p)), 0));
+const sizes = drawing.bodies.map((b, i) => Math.max(bodyReach(b, i), ...b.points.map((p) => Math.hypot(...p)), 0));
 // A bar between two points of a body (its frame).
 function bar(a, b, material, size) {
   const length = a.distanceTo(b);
@@ -127,13 +156,44 @@ function bar(a, b, material, size) {
 
 const bodies = [];
 const axisObjects = [];
+// Meshes are shaded face by face (their files' normals are not read), from both sides (a mirrored
+// scale turns faces inside out).
+let meshesDrawn = 0;
+// Adds the visuals to `owner` (a body's group, or the scene for the ground's); returns how many.
+function addVisuals(owner, visuals, meshIndex, tint) {
+  const material = new THREE.MeshStandardMaterial({ color: tint, roughness: 0.55, metalness: 0.05 });
+  let drawn = 0;
+  visuals.forEach((v, k) => {
+    let object;
+    if (v.shape.kind === "mesh") {
+      const m = meshIndex(k);
+      if (m === null || m === undefined) return;
+      object = new THREE.Mesh(meshGeometries[m], new THREE.MeshStandardMaterial({ color: tint, roughness: 0.55,
+        metalness: 0.05, flatShading: true, side: THREE.DoubleSide }));
+      object.scale.set(...v.shape.scale);
+      meshesDrawn++;
+    } else {
+      object = new THREE.Mesh(solidGeometry(v.shape), material);
+    }
+    object.position.copy(v3(v.position));
+    object.quaternion.copy(quaternionOf(v.rotation));
+    owner.add(object);
+    drawn++;
+  });
+  return drawn;
+}
+addVisuals(scene, ground, groundMeshOf, "#9a9a9a");
 for (let i = 0; i < nb; i++) {
   const b = drawing.bodies[i];
   const group = new THREE.Group();
   const material = new THREE.MeshStandardMaterial({ color: color(i), roughness: 0.55, metalness: 0.05 });
-  const solid = new THREE.Mesh(solidGeometry(b.solid), material);
-  solid.quaternion.copy(quaternionOf(b.rotation));
-  group.add(solid);
+  // The body's visuals where the scene gives them (a mesh not read is left out), else its solid.
+  const drawn = addVisuals(group, b.visuals, (k) => meshOf(i, k), color(i));
+  if (!drawn) {
+    const solid = new THREE.Mesh(solidGeometry(b.solid), material);
+    solid.quaternion.copy(quaternionOf(b.rotation));
+    group.add(solid);
+  }
   const barMaterial = new THREE.MeshStandardMaterial({ color: color(i), roughness: 0.7 });
   for (const p of b.points) {
     if (Math.hypot(...p) > least) group.add(bar(new THREE.Vector3(), v3(p), barMaterial, sizes[i]));
@@ -145,6 +205,7 @@ for (let i = 0; i < nb; i++) {
   scene.add(group);
   bodies.push(group);
 }
+document.body.dataset.meshes = String(meshesDrawn);
 // Joints: a dark ball at the joint's point on its first body, and its axis on demand.
 const jointMaterial = new THREE.MeshStandardMaterial({ color: "#404040", roughness: 0.4 });
 for (const j of drawing.joints) {

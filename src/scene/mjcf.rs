@@ -465,6 +465,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                 name: "world".to_string(),
                 node: world,
                 inertial: None,
+                visuals: Vec::new(),
             },
             offset: V3::zeros(),
         }];
@@ -755,6 +756,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                     name,
                     node: c,
                     inertial,
+                    visuals: Vec::new(),
                 },
                 offset,
             });

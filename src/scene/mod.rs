@@ -19,12 +19,14 @@ mod strict;
 mod tree;
 mod urdf;
 mod values;
+mod visuals;
 mod xml;
 
 pub use error::{one_line, SceneError};
 pub use overrides::{RunOverrides, Spelling};
 pub use run_settings::{method_parameter, parameter_keys, RunSettings};
 pub use values::SceneValue;
+pub(crate) use xml::parse as parse_xml;
 
 use crate::mechanism::Mechanism;
 use crate::simulation::{Simulation, SimulationError};

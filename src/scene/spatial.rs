@@ -69,6 +69,8 @@ pub(crate) struct AroundMeta {
     pub name: Option<String>,
     #[serde(default, deserialize_with = "strict::xyz_opt")]
     pub gravity: Option<[f64; 3]>,
+    #[serde(default)]
+    pub visual: Vec<super::visuals::VisualDef>,
 }
 
 /// `[initial]`: joint values and rates to start from, measured from the file's configuration
@@ -88,6 +90,9 @@ pub(crate) struct Meta {
     pub name: Option<String>,
     #[serde(deserialize_with = "strict::xyz")]
     pub gravity: [f64; 3],
+    /// The ground's shapes (world frame).
+    #[serde(default)]
+    pub visual: Vec<super::visuals::VisualDef>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -107,6 +112,8 @@ pub(crate) struct BodyDef {
     #[serde(default, deserialize_with = "strict::xyz_opt")]
     pub center_of_mass: Option<[f64; 3]>,
     pub inertia_about: Option<String>,
+    #[serde(default)]
+    pub visual: Vec<super::visuals::VisualDef>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -221,7 +228,7 @@ fn inertia(def: &BodyDef) -> Result<Matrix3<f64>, String> {
 }
 
 /// Euler parameters from an `orientation` table.
-fn orientation(def: &OrientationDef) -> Result<EulerParameters, String> {
+pub(crate) fn orientation(def: &OrientationDef) -> Result<EulerParameters, String> {
     let degrees = |v: &toml::Value| -> Option<Vec<f64>> {
         match v {
             toml::Value::Array(a) => a
@@ -527,8 +534,24 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             .map_err(|e| ctx.err(span, format!("[initial]: {e}")))?;
     }
     let shapes: Vec<Option<Solid>> = file.bodies.iter().map(|b| solid(b.get_ref())).collect();
+    let visuals = file
+        .bodies
+        .iter()
+        .map(|b| {
+            let d = b.get_ref();
+            let line = super::error::line_col(text, b.span().start).0;
+            let declared = format!("{origin} line {line}");
+            super::visuals::visuals(&d.visual, d.center_of_mass.unwrap_or_default(), &declared)
+                .map_err(|m| ctx.err(Some(b.span()), format!("body '{}': {m}", d.name)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let ground = super::visuals::visuals(&file.scene.visual, [0.0; 3], &format!("{origin} [scene]"))
+        .map_err(|m| ctx.err(None, format!("[scene] {m}")))?;
     let drawing = Drawing {
-        spatial: Some(SpatialDrawing::of(&model, &shapes)),
+        spatial: Some(SpatialDrawing {
+            ground,
+            ..SpatialDrawing::of(&model, &shapes, &visuals)
+        }),
         ..Drawing::default()
     };
     let mechanism: crate::mechanism::Mechanism = Arc::new(model).into();

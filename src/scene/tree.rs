@@ -43,11 +43,31 @@ pub(crate) struct Inertial {
     pub(crate) tensor: Matrix3<f64>,
 }
 
+/// A shape a link is drawn with.
+#[derive(Debug, Clone)]
+pub(crate) enum Shape {
+    Box([f64; 3]),
+    Sphere(f64),
+    /// Radius and length, along z.
+    Cylinder(f64, f64),
+    /// The file as the scene names it and its scale.
+    Mesh(String, [f64; 3]),
+}
+
+/// A link's `<visual>`: its frame in the link's, its shape, and where the file declares it.
+#[derive(Debug, Clone)]
+pub(crate) struct LinkVisual {
+    pub(crate) pose: Pose,
+    pub(crate) shape: Shape,
+    pub(crate) declared: String,
+}
+
 #[derive(Debug, Clone)]
 pub(crate) struct Link<'a, 'i> {
     pub(crate) name: String,
     pub(crate) node: Node<'a, 'i>,
     pub(crate) inertial: Option<Inertial>,
+    pub(crate) visuals: Vec<LinkVisual>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -226,6 +246,42 @@ impl Tree {
         combined(&parts).unwrap_or((0.0, V3::zeros(), Matrix3::zeros()))
     }
 
+    /// The visuals of body `b`'s links (`None`: the ground's), in the body's frame (`frame`,
+    /// world), as a scene's `visual` key writes them.
+    fn visuals(&self, links: &[Link<'_, '_>], b: Option<usize>, frame: &Pose) -> Option<KeyValue> {
+        let mut out = Vec::new();
+        for l in (0..links.len()).filter(|&l| self.body[l] == b) {
+            for v in &links[l].visuals {
+                let w = self.world[l].then(&v.pose);
+                let position = frame.r.transpose() * (w.p - frame.p);
+                let q = dalembert_spatial::euler_parameters::from_rotation(&(frame.r.transpose() * w.r));
+                let (key, value) = match &v.shape {
+                    Shape::Box(size) => ("box", KeyValue::from(*size)),
+                    Shape::Sphere(r) => ("sphere", KeyValue::from(*r)),
+                    Shape::Cylinder(r, l) => (
+                        "cylinder",
+                        KeyValue::table([("radius", KeyValue::from(*r)), ("length", KeyValue::from(*l))]),
+                    ),
+                    Shape::Mesh(file, _) => ("mesh", KeyValue::from(file.as_str())),
+                };
+                let placed = [
+                    (key, value),
+                    ("position", KeyValue::from(<[f64; 3]>::from(position))),
+                    ("orientation", KeyValue::table([("quaternion", KeyValue::from(q))])),
+                    ("declared", KeyValue::from(v.declared.as_str())),
+                ];
+                out.push(match &v.shape {
+                    Shape::Mesh(_, scale) => {
+                        let [a, b, c, d] = placed;
+                        KeyValue::table([a, b, c, d, ("scale", KeyValue::from(*scale))])
+                    }
+                    _ => KeyValue::table(placed),
+                });
+            }
+        }
+        (!out.is_empty()).then(|| KeyValue::from(out))
+    }
+
     pub(crate) fn elements(
         &self,
         src: &Source<'_>,
@@ -256,20 +312,26 @@ impl Tree {
             }
             let axes = self.world[l].r;
             let j = axes.transpose() * tensor * axes;
+            let body_frame = Pose { p: center, r: axes };
             // Closed form (Shepperd): an iterative fit would not end on a matrix a malformed file
             // made non-orthogonal.
             let p = dalembert_spatial::euler_parameters::from_rotation(&axes);
             let orientation = KeyValue::table([("quaternion", KeyValue::from(p))]);
-            model = model.body(
-                body(&link.name)
-                    .mass(mass)
-                    .set(
-                        "inertia",
-                        [j[(0, 0)], j[(1, 1)], j[(2, 2)], j[(0, 1)], j[(0, 2)], j[(1, 2)]],
-                    )
-                    .position(<[f64; 3]>::from(center))
-                    .set("orientation", orientation),
-            );
+            let mut element = body(&link.name)
+                .mass(mass)
+                .set(
+                    "inertia",
+                    [j[(0, 0)], j[(1, 1)], j[(2, 2)], j[(0, 1)], j[(0, 2)], j[(1, 2)]],
+                )
+                .position(<[f64; 3]>::from(center))
+                .set("orientation", orientation);
+            if let Some(visual) = self.visuals(links, Some(b), &body_frame) {
+                element = element.set("visual", visual);
+            }
+            model = model.body(element);
+        }
+        if let Some(visual) = self.visuals(links, None, &Pose::IDENTITY) {
+            model = model.scene("visual", visual);
         }
         for &k in &self.order {
             let j = &joints[k];

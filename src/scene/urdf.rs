@@ -15,11 +15,14 @@
 //!   `(0, 0, −9.81)`.
 //!
 //! What the reader cannot model yet is refused in one line naming the element and its line: a
-//! `mimic` coupling, a `planar` joint, joint friction. `<visual>` and `<collision>` are skipped
-//! (no shapes are drawn or collided yet), as are the elements that carry no dynamics
-//! (`material`, `gazebo`, `transmission`, `ros2_control`).
+//! `mimic` coupling, a `planar` joint. Joint friction is left out with a note. `<visual>`
+//! geometries (box, cylinder, sphere, mesh) are kept for the 3D viewer only; `<collision>` is
+//! skipped (nothing collides yet), as are the elements that carry no dynamics (`material`,
+//! `gazebo`, `transmission`, `ros2_control`).
 
-use super::tree::{quoted, scene_of, Inertial, Kind, Link, Pose, Read, Skipped, Tree, TreeJoint, V3};
+use super::tree::{
+    quoted, scene_of, Inertial, Kind, Link, LinkVisual, Pose, Read, Shape, Skipped, Tree, TreeJoint, V3,
+};
 use super::xml::{self, Source};
 use super::{Scene, SceneError};
 use nalgebra::{Matrix3, Rotation3};
@@ -67,6 +70,88 @@ fn inertial(src: &Source<'_>, link: Node<'_, '_>) -> Result<Option<Inertial>, Sc
     }))
 }
 
+/// A link's `<visual>` elements. A relative mesh path is made relative to the scene's folder by
+/// `prefix` (the robot file's folder from it); `package://` and absolute paths are kept, for the
+/// viewer to resolve or refuse (`animation::MeshSources`). A geometry this reader does not draw is
+/// counted in `skipped`.
+fn visuals(
+    src: &Source<'_>,
+    link: Node<'_, '_>,
+    prefix: &str,
+    skipped: &mut Skipped,
+) -> Result<Vec<LinkVisual>, SceneError> {
+    let mut out = Vec::new();
+    for node in link.children().filter(|c| c.has_tag_name("visual")) {
+        skipped.note(node, &["origin", "geometry"], &["material"]);
+        let Some(geometry) = src.child(node, "geometry")? else {
+            return Err(src.err(
+                node,
+                format!("{}: a <visual> needs a <geometry>", Source::describe(link)),
+            ));
+        };
+        skipped.note(geometry, &["box", "cylinder", "sphere", "mesh"], &[]);
+        let Some(g) = geometry
+            .children()
+            .find(|c| c.is_element() && ["box", "cylinder", "sphere", "mesh"].contains(&c.tag_name().name()))
+        else {
+            continue;
+        };
+        let positive = |key: &str| -> Result<f64, SceneError> {
+            let v = src.number(g, key, None)?;
+            if v > 0.0 {
+                Ok(v)
+            } else {
+                Err(src.err(
+                    g,
+                    format!(
+                        "{}: <{}> {key} {v} is not positive",
+                        Source::describe(link),
+                        g.tag_name().name()
+                    ),
+                ))
+            }
+        };
+        let shape = match g.tag_name().name() {
+            "box" => {
+                let size = src.vector(g, "size", [f64::NAN; 3])?;
+                if !size.iter().all(|&s| s > 0.0) {
+                    return Err(src.err(
+                        g,
+                        format!(
+                            "{}: <box> needs size=\"a b c\", three positive sides",
+                            Source::describe(link)
+                        ),
+                    ));
+                }
+                Shape::Box(size.into())
+            }
+            "sphere" => Shape::Sphere(positive("radius")?),
+            "cylinder" => Shape::Cylinder(positive("radius")?, positive("length")?),
+            _ => {
+                let file = src.required(g, "filename")?;
+                let scale = src.vector(g, "scale", [1.0; 3])?;
+                if scale.iter().any(|&s| s == 0.0) {
+                    return Err(src.err(g, format!("{}: <mesh> scale has a zero", Source::describe(link))));
+                }
+                let relative = !(file.contains("://") || std::path::Path::new(file).is_absolute());
+                let file = if relative && !prefix.is_empty() {
+                    format!("{prefix}/{file}")
+                } else {
+                    file.to_string()
+                };
+                Shape::Mesh(file, scale.into())
+            }
+        };
+        let line = super::error::line_col(src.text, node.range().start).0;
+        out.push(LinkVisual {
+            pose: origin(src, node)?,
+            shape,
+            declared: format!("{} line {line}", src.origin),
+        });
+    }
+    Ok(out)
+}
+
 fn joint_kind(src: &Source<'_>, node: Node<'_, '_>) -> Result<Kind, SceneError> {
     let kind = src.required(node, "type")?;
     Ok(match kind {
@@ -94,7 +179,7 @@ fn joint_kind(src: &Source<'_>, node: Node<'_, '_>) -> Result<Kind, SceneError> 
 
 /// The elements of the robot in `text`, and where each link and joint is in it (for errors the
 /// scene builder finds).
-fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'a>, SceneError> {
+fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>, prefix: &str) -> Result<Read<'a>, SceneError> {
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(src.err(
@@ -126,6 +211,7 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'
             name: link.to_string(),
             node,
             inertial: inertial(src, node)?,
+            visuals: visuals(src, node, prefix, &mut skipped)?,
         });
         places.insert(link.to_string(), node);
     }
@@ -240,13 +326,19 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>) -> Result<Read<'
 /// The scene a URDF file describes (see the module documentation); `origin` names the file in
 /// errors, which name the element and its line.
 pub(crate) fn scene(text: &str, origin: &str) -> Result<Scene, SceneError> {
-    with_scene(text, origin, None)
+    with_scene(text, origin, None, "")
 }
 
-fn with_scene(text: &str, origin: &str, around: Option<(toml::Table, &str, &str)>) -> Result<Scene, SceneError> {
+/// `prefix`: the robot file's folder from the scene's (empty when the robot file is the scene).
+fn with_scene(
+    text: &str,
+    origin: &str,
+    around: Option<(toml::Table, &str, &str)>,
+    prefix: &str,
+) -> Result<Scene, SceneError> {
     let doc = xml::parse(text, origin)?;
     let src = Source { text, origin };
-    let read = read(&src, &doc)?;
+    let read = read(&src, &doc, prefix)?;
     scene_of(&src, read, around)
 }
 
@@ -293,5 +385,9 @@ pub(crate) fn around(tables: toml::Table, text: &str, origin: &str) -> Result<Sc
         )));
     }
     let urdf = std::fs::read_to_string(&file).map_err(cannot)?;
-    with_scene(&urdf, &shown, Some((tables, text, origin)))
+    let prefix = path
+        .parent()
+        .map(|p| p.to_string_lossy().replace('\\', "/"))
+        .unwrap_or_default();
+    with_scene(&urdf, &shown, Some((tables, text, origin)), &prefix)
 }

@@ -1,7 +1,7 @@
 //! `dalembert animate`: a self-contained HTML animation of a scene's motion.
 
 use crate::simulate::{load, RunArgs};
-use dalembert::animation::{Frames, Trace, Viewer, DEFAULT_MAX_FRAMES};
+use dalembert::animation::{Frames, MeshSources, Trace, Viewer, DEFAULT_MAX_FRAMES};
 use std::path::PathBuf;
 
 /// Arguments of `animate`.
@@ -24,6 +24,14 @@ pub struct Args {
     /// HTML file to write (default: the scene's file name with `.html`, in the current directory).
     #[arg(long)]
     output: Option<PathBuf>,
+    /// Read the meshes a robot file names as `package://NAME/…` inside DIR; repeatable. Without
+    /// it, those links are drawn as their boxes of inertia.
+    #[arg(long, value_name = "NAME=DIR")]
+    package: Vec<String>,
+    /// Read meshes from absolute paths and through `..` (a model file you trust): by default only
+    /// the scene's folder and the named packages are read.
+    #[arg(long)]
+    any_mesh_path: bool,
 }
 
 pub fn run(a: Args) -> Result<(), String> {
@@ -43,6 +51,19 @@ pub fn run(a: Args) -> Result<(), String> {
     let mut inputs: Vec<&std::path::Path> = vec![&a.scene];
     inputs.extend(a.from.as_deref());
     crate::paths::refuse_overwriting(&output, &inputs)?;
+    let mut sources = MeshSources::of_scene(&scene.origin).any_path(a.any_mesh_path);
+    for p in &a.package {
+        let (name, dir) = p
+            .split_once('=')
+            .filter(|(n, d)| !n.is_empty() && !d.is_empty())
+            .ok_or_else(|| format!("--package '{p}': expected NAME=DIR"))?;
+        sources = sources.package(name, dir);
+    }
+    // Meshes are read before the run: a bad one stops here, not after a long simulation.
+    let meshes = match &scene.drawing.spatial {
+        Some(spatial) => Some(sources.load(spatial).map_err(|e| e.to_string())?),
+        None => None,
+    };
     let (frames, stopped) = match &a.from {
         Some(csv) => {
             let file = std::fs::File::open(csv).map_err(|e| format!("{}: {e}", csv.display()))?;
@@ -60,6 +81,9 @@ pub fn run(a: Args) -> Result<(), String> {
         }
     };
     let mut viewer = Viewer::new(&scene.name, &scene.drawing).max_frames(a.max_frames);
+    if let Some(meshes) = meshes {
+        viewer = viewer.meshes(meshes);
+    }
     for t in traces {
         viewer = viewer.trace(t);
     }
