@@ -101,24 +101,20 @@ impl MeshSources {
             .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
         if !inside && !self.any_path {
             return Err(
-                "the path leaves its folder (absolute, or with '..'): meshes are read inside the scene's folder or a named package only (allow any path with --any-mesh-path)"
+                "the path leaves its folder (absolute, or with '..'): meshes are read inside the scene's folder or a named package only (a model you trust may be given any mesh path)"
                     .into(),
             );
         }
         let file = root.join(path);
-        let real = file
-            .canonicalize()
-            .map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+        let real = file.canonicalize().map_err(|e| format!("cannot read it: {e}"))?;
         if !self.any_path {
             let base = root
                 .canonicalize()
-                .map_err(|e| format!("cannot read the folder {}: {e}", root.display()))?;
+                .map_err(|e| format!("cannot read its folder {}: {e}", root.display()))?;
             if !real.starts_with(&base) {
-                return Err(format!(
-                    "{} leads out of its folder {} (a symbolic link): allow any path with --any-mesh-path",
-                    file.display(),
-                    root.display()
-                ));
+                return Err(
+                    "a symbolic link leads out of its folder (a model you trust may be given any mesh path)".into(),
+                );
             }
         }
         Ok(Some(real))
@@ -207,4 +203,89 @@ pub fn read_mesh(path: &Path) -> Result<Mesh, String> {
     }
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
     reader(&bytes).map_err(|e| format!("not a valid .{extension} file: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A folder of its own under the system's temporary folder, emptied first.
+    fn folder(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("dalembert-mesh-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("scene/meshes")).unwrap();
+        std::fs::create_dir_all(dir.join("package/parts")).unwrap();
+        std::fs::write(dir.join("scene/meshes/a.stl"), ascii_triangle()).unwrap();
+        std::fs::write(dir.join("package/parts/b.stl"), ascii_triangle()).unwrap();
+        std::fs::write(dir.join("outside.stl"), ascii_triangle()).unwrap();
+        dir
+    }
+
+    fn ascii_triangle() -> &'static str {
+        "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n"
+    }
+
+    /// One rule each: a relative path inside the scene's folder and a named package's file are
+    /// read; an absolute path (`/etc/passwd`), a `..` escape and a symbolic link out of the folder
+    /// are refused unless any path is allowed; a package not named is left undrawn.
+    #[test]
+    fn meshes_resolve_only_inside_the_scene_folder_or_a_named_package() {
+        let dir = folder("resolve");
+        let sources = MeshSources::new(dir.join("scene")).package("robot", dir.join("package"));
+        assert!(sources
+            .resolve("meshes/a.stl")
+            .unwrap()
+            .unwrap()
+            .ends_with("scene/meshes/a.stl"));
+        assert!(sources
+            .resolve("package://robot/parts/b.stl")
+            .unwrap()
+            .unwrap()
+            .ends_with("package/parts/b.stl"));
+        assert_eq!(sources.resolve("package://other/parts/b.stl").unwrap(), None);
+        for bad in [
+            "/etc/passwd",
+            "file:///etc/passwd",
+            "../outside.stl",
+            "package://robot/../outside.stl",
+        ] {
+            let e = sources.resolve(bad).unwrap_err();
+            assert!(e.contains("leaves its folder"), "{bad}: {e}");
+        }
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(dir.join("outside.stl"), dir.join("scene/meshes/link.stl")).unwrap();
+            let e = sources.resolve("meshes/link.stl").unwrap_err();
+            assert!(e.contains("symbolic link"), "{e}");
+            assert!(sources.clone().any_path(true).resolve("meshes/link.stl").is_ok());
+        }
+        let trusted = sources.any_path(true);
+        assert!(trusted.resolve("../outside.stl").unwrap().is_some());
+        assert!(trusted
+            .resolve(dir.join("outside.stl").to_str().unwrap())
+            .unwrap()
+            .is_some());
+        assert!(trusted
+            .resolve("meshes/missing.stl")
+            .unwrap_err()
+            .contains("cannot read"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Only mesh formats are read, each checked by its content: a text file named `.stl` or
+    /// `.dae` is refused, as is any other extension.
+    #[test]
+    fn only_mesh_files_are_read_and_their_content_is_checked() {
+        let dir = folder("content");
+        let text = dir.join("scene/passwd");
+        std::fs::write(&text, "root:x:0:0:root:/root:/bin/bash\n").unwrap();
+        assert!(read_mesh(&text).unwrap_err().contains("not a mesh file"));
+        for name in ["fake.stl", "fake.obj", "fake.dae"] {
+            let fake = dir.join("scene").join(name);
+            std::fs::copy(&text, &fake).unwrap();
+            assert!(read_mesh(&fake).unwrap_err().contains("not a valid"), "{name}");
+        }
+        assert_eq!(read_mesh(&dir.join("scene/meshes/a.stl")).unwrap().triangles(), 1);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

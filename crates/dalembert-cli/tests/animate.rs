@@ -552,3 +552,134 @@ fn every_shipped_scene_animates() {
     }
     assert!(count >= 14, "found {count} scenes");
 }
+
+/// The pose rows of one body (`t`, centre, Euler parameters) from a result CSV.
+fn poses(csv: &Path, body: &str) -> Vec<(f64, [f64; 3], [f64; 4])> {
+    let mut rdr = csv::Reader::from_path(csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = |n: &str| header.iter().position(|h| h == format!("{body}.{n}")).unwrap();
+    let c = ["x", "y", "z", "e0", "e1", "e2", "e3"].map(col);
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            let v = |k: usize| r[c[k]].parse::<f64>().unwrap();
+            (r[0].parse().unwrap(), [v(0), v(1), v(2)], [v(3), v(4), v(5), v(6)])
+        })
+        .collect()
+}
+
+/// `R(e) a`: the rotation of Euler parameters `e` applied to `a`.
+fn rotate(e: [f64; 4], a: [f64; 3]) -> [f64; 3] {
+    let [e0, e1, e2, e3] = e;
+    let r = [
+        [
+            e0 * e0 + e1 * e1 - e2 * e2 - e3 * e3,
+            2.0 * (e1 * e2 - e0 * e3),
+            2.0 * (e1 * e3 + e0 * e2),
+        ],
+        [
+            2.0 * (e1 * e2 + e0 * e3),
+            e0 * e0 - e1 * e1 + e2 * e2 - e3 * e3,
+            2.0 * (e2 * e3 - e0 * e1),
+        ],
+        [
+            2.0 * (e1 * e3 - e0 * e2),
+            2.0 * (e2 * e3 + e0 * e1),
+            e0 * e0 - e1 * e1 - e2 * e2 + e3 * e3,
+        ],
+    ];
+    r.map(|row| row[0] * a[0] + row[1] * a[1] + row[2] * a[2])
+}
+
+/// Pixels within `r` of `(x, y)` in the first body's blue (#1f77b4) as lighting shades it: blue
+/// well above red, and not the white background or the grey grid.
+fn blue_near(png: &Png, (x, y): (f64, f64), r: i64) -> usize {
+    let (cx, cy) = (x.round() as i64, y.round() as i64);
+    let mut n = 0;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            let p = png.pixel((cx + dx) as usize, (cy + dy) as usize);
+            n += usize::from(i32::from(p[2]) > i32::from(p[0]) + 50);
+        }
+    }
+    n
+}
+
+/// Meshes in the 3D viewer: `tests/data/meshes/three-cubes.toml` draws a spherical pendulum with
+/// three cubes of side 0.2 m, one per format (OBJ in metres, COLLADA in centimetres with y up and
+/// a node transform, binary STL in millimetres scaled by its visual), each 0.6 m from the centre of
+/// mass along one body axis. At two times, each cube's centre (from the CSV's pose of the body,
+/// projected by the page's own camera; a cube is about 30 px wide here) is covered by the body's
+/// colour (at least 40 of the 49 pixels within 3 px), and the point opposite it (0.6 m the other
+/// way) is not (at most 3): a mesh in the wrong units, axes or place fails one or the other.
+#[test]
+fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
+    let Some(browser) = chromium() else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have Chromium (.ci/run installs Debian's package)"
+        );
+        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+        return;
+    };
+    let path = format!(
+        "{}/../../tests/data/meshes/three-cubes.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let (csv, page) = (tmp("three-cubes.csv"), tmp("three-cubes.html"));
+    let csv_arg = csv.to_str().unwrap();
+    let (ok, _, err) = dalembert(&["simulate", &path, "--every", "0.05", "--output", csv_arg]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&["animate", &path, "--from", csv_arg, "--output", page.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let rows = poses(&csv, "bob");
+    let budget = "--virtual-time-budget=5000";
+    let size = (800, 560);
+    let probe = browse(
+        &browser,
+        &format!("file://{}#t=0", page.display()),
+        size,
+        &["--dump-dom", budget],
+    );
+    let seen: usize = attribute(&probe, "<body", "data-viewport")
+        .unwrap()
+        .split('x')
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let dump = (size.0, 2 * size.1 - seen);
+    for t in [0.25, 0.75] {
+        let url = format!("file://{}#t={t}", page.display());
+        let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);
+        assert_eq!(attribute(&dom, "<body", "data-status").as_deref(), Some("ready"));
+        assert_eq!(attribute(&dom, "<body", "data-errors"), None, "script errors");
+        assert_eq!(attribute(&dom, "<body", "data-meshes").as_deref(), Some("3"));
+        let view = attribute(&dom, "<canvas", "data-view").unwrap();
+        let shot = tmp(&format!("three-cubes-{t}.png"));
+        browse(
+            &browser,
+            &url,
+            size,
+            &[&format!("--screenshot={}", shot.display()), budget],
+        );
+        let png = Png::read(&shot);
+        let (_, c, e) = rows.iter().find(|r| (r.0 - t).abs() < 1e-9).copied().unwrap();
+        for (k, format) in ["OBJ", "COLLADA", "STL"].iter().enumerate() {
+            let mut along = [0.0; 3];
+            along[k] = 0.6;
+            let d = rotate(e, along);
+            let at = |s: f64| project(&view, [c[0] + s * d[0], c[1] + s * d[1], c[2] + s * d[2]]);
+            let (here, opposite) = (blue_near(&png, at(1.0), 3), blue_near(&png, at(-1.0), 3));
+            assert!(
+                here >= 40,
+                "t = {t}: the {format} cube is not at {:?} ({here} of 49 pixels)",
+                at(1.0)
+            );
+            assert!(
+                opposite <= 3,
+                "t = {t}: the {format} cube's opposite point is drawn ({opposite} of 49)"
+            );
+        }
+    }
+}
