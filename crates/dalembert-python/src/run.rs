@@ -1,6 +1,6 @@
 //! `dalembert.Run`: the rows of a simulation or an inverse-dynamics run, as numpy arrays.
 
-use dalembert::animation::{Frames, Viewer};
+use dalembert::animation::{Frames, MeshSources, Viewer};
 use dalembert::integrators::Statistics;
 use dalembert::output::Table;
 use dalembert::Scene;
@@ -147,16 +147,37 @@ impl PyRun {
     }
 
     /// Writes a self-contained HTML animation of this run to `path` (as `dalembert animate`), at
-    /// most `max_frames` frames.
-    #[pyo3(signature = (path, max_frames=2400))]
-    fn animate(&self, path: std::path::PathBuf, max_frames: usize) -> PyResult<()> {
-        self.animate_to(&path, max_frames)
+    /// most `max_frames` frames. A spatial scene's visual meshes are read from its folder and from
+    /// `packages` (`{"NAME": folder}` for `package://NAME/…` paths); `any_mesh_path` allows
+    /// absolute paths and `..` (a model you trust).
+    #[pyo3(signature = (path, max_frames=2400, packages=None, any_mesh_path=false))]
+    fn animate(
+        &self,
+        path: std::path::PathBuf,
+        max_frames: usize,
+        packages: Option<std::collections::BTreeMap<String, std::path::PathBuf>>,
+        any_mesh_path: bool,
+    ) -> PyResult<()> {
+        self.animate_to(&path, max_frames, &mesh_sources(&self.scene, packages, any_mesh_path))
     }
+}
+
+/// Where the viewer reads `scene`'s meshes from (see `animate`).
+pub fn mesh_sources(
+    scene: &Scene,
+    packages: Option<std::collections::BTreeMap<String, std::path::PathBuf>>,
+    any_mesh_path: bool,
+) -> MeshSources {
+    let mut sources = MeshSources::of_scene(&scene.origin).any_path(any_mesh_path);
+    for (name, folder) in packages.unwrap_or_default() {
+        sources = sources.package(name, folder);
+    }
+    sources
 }
 
 impl PyRun {
     /// See `animate`.
-    pub fn animate_to(&self, path: &std::path::Path, max_frames: usize) -> PyResult<()> {
+    pub fn animate_to(&self, path: &std::path::Path, max_frames: usize, meshes: &MeshSources) -> PyResult<()> {
         if max_frames < 2 {
             return Err(PyValueError::new_err(format!(
                 "max_frames must be at least 2, got {max_frames}"
@@ -179,9 +200,11 @@ impl PyRun {
             }
             frames.push(row[0], &q);
         }
-        let html = Viewer::new(&self.scene.name, &self.scene.drawing)
-            .max_frames(max_frames)
-            .html(&frames);
+        let mut viewer = Viewer::new(&self.scene.name, &self.scene.drawing).max_frames(max_frames);
+        if let Some(spatial) = &self.scene.drawing.spatial {
+            viewer = viewer.meshes(meshes.load(spatial).map_err(|e| PyValueError::new_err(e.to_string()))?);
+        }
+        let html = viewer.html(&frames);
         std::fs::write(path, html).map_err(|e| PyOSError::new_err(format!("{}: {e}", path.display())))
     }
 }

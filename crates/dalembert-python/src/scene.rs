@@ -471,11 +471,26 @@ impl PyScene {
         trade_rows(py, &t)
     }
 
-    /// Writes a self-contained HTML animation of a simulation with the scene's settings.
-    #[pyo3(signature = (path, max_frames=2400))]
-    fn animate(&self, py: Python<'_>, path: std::path::PathBuf, max_frames: usize) -> PyResult<()> {
+    /// Writes a self-contained HTML animation of a simulation with the scene's settings (meshes as
+    /// `Run.animate` reads them).
+    #[pyo3(signature = (path, max_frames=2400, packages=None, any_mesh_path=false))]
+    fn animate(
+        &self,
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        max_frames: usize,
+        packages: Option<std::collections::BTreeMap<String, std::path::PathBuf>>,
+        any_mesh_path: bool,
+    ) -> PyResult<()> {
+        let sources = crate::run::mesh_sources(&self.inner, packages, any_mesh_path);
+        if let Some(spatial) = &self.inner.drawing.spatial {
+            // A bad mesh stops here, before the simulation.
+            sources
+                .load(spatial)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        }
         let run = self.simulate(py, None, None, None, None, None, None, None, None, false, None)?;
-        run.animate_to(&path, max_frames)
+        run.animate_to(&path, max_frames, &sources)
     }
 
     fn __repr__(&self) -> String {

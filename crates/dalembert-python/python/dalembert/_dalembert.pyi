@@ -35,7 +35,13 @@ class Run:
     def __len__(self) -> int: ...
     def to_pandas(self) -> Any: ...
     def plot(self, *columns: str, ax: Any = None) -> Any: ...
-    def animate(self, path: Union[str, PathLike[str]], max_frames: int = 2400) -> None: ...
+    def animate(
+        self,
+        path: Union[str, PathLike[str]],
+        max_frames: int = 2400,
+        packages: Optional[Dict[str, Union[str, PathLike[str]]]] = None,
+        any_mesh_path: bool = False,
+    ) -> None: ...
 
 class BodyMotion:
     """The motion of the body a code force acts on (global components)."""
@@ -139,7 +145,13 @@ class Scene:
         end: Optional[float] = None,
         every: Optional[float] = None,
     ) -> List[Dict[str, Any]]: ...
-    def animate(self, path: Union[str, PathLike[str]], max_frames: int = 2400) -> None: ...
+    def animate(
+        self,
+        path: Union[str, PathLike[str]],
+        max_frames: int = 2400,
+        packages: Optional[Dict[str, Union[str, PathLike[str]]]] = None,
+        any_mesh_path: bool = False,
+    ) -> None: ...
 
 def sweep_runs(
     scene: Scene,
