@@ -64,6 +64,9 @@ pub fn run(a: Args) -> Result<(), String> {
         Some(spatial) => Some(sources.load(spatial).map_err(|e| e.to_string())?),
         None => None,
     };
+    for n in meshes.iter().flat_map(|m| &m.notes) {
+        eprintln!("note: {n}");
+    }
     let (frames, stopped) = match &a.from {
         Some(csv) => {
             let file = std::fs::File::open(csv).map_err(|e| format!("{}: {e}", csv.display()))?;
