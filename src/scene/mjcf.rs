@@ -6,7 +6,9 @@
 //! element and its line, or, for what carries no dynamics here (assets, sites, lights,
 //! contacts), skipped with a note.
 
-use super::tree::{combined, quoted, scene_of, Inertial, Kind, Link, Pose, Read, Tree, TreeJoint, V3};
+use super::tree::{
+    combined, quoted, scene_of, Inertial, Kind, Link, LinkVisual, Pose, Read, Shape, Tree, TreeJoint, V3,
+};
 use super::xml::{self, Source};
 use super::{Scene, SceneError};
 use crate::builder::{force, joint, Function};
@@ -349,9 +351,9 @@ impl<'s, 'a> Reader<'s, 'a> {
         Ok(Inertial { frame, mass, tensor })
     }
 
-    /// A geom's mass, centre and inertia about it (body frame), as MuJoCo computes them from its
-    /// shape and density (or mass).
-    fn geom(&self, node: Node<'a, 'a>) -> Result<(f64, V3, Matrix3<f64>), SceneError> {
+    /// A geom's type, `size` numbers, frame (body frame; `fromto` gives a capsule's or cylinder's)
+    /// and half-length along its z.
+    fn geom_shape(&self, node: Node<'a, 'a>) -> Result<(&'a str, Vec<f64>, Pose, Option<f64>), SceneError> {
         let kind = self.value(node, "type").unwrap_or("sphere");
         let size: Vec<f64> = match self.value(node, "size") {
             Some(s) => s
@@ -363,9 +365,8 @@ impl<'s, 'a> Reader<'s, 'a> {
         if size.iter().any(|x| !x.is_finite() || *x < 0.0) {
             return Err(self.err(node, "<geom> size must be non-negative numbers"));
         }
-        let s = |k: usize| size.get(k).copied();
         let mut frame = self.frame(node)?;
-        let mut half = s(1);
+        let mut half = size.get(1).copied();
         if let Some([x1, y1, z1, x2, y2, z2]) = self.numbers::<6>(node, "fromto")? {
             if !matches!(kind, "capsule" | "cylinder") {
                 return Err(self.err(
@@ -384,6 +385,54 @@ impl<'s, 'a> Reader<'s, 'a> {
                 .matrix();
             half = Some(0.5 * axis.norm());
         }
+        Ok((kind, size, frame, half))
+    }
+
+    /// What a body's geoms look like (the link's frame is the body's moved by `offset`): spheres,
+    /// boxes and cylinders as they are, a capsule as its cylinder and two balls. Ellipsoids,
+    /// planes and meshes are not drawn (a body with none of the others is drawn as its box of
+    /// inertia).
+    fn geom_visuals(&self, body: Node<'a, 'a>, offset: V3) -> Vec<LinkVisual> {
+        let mut out = Vec::new();
+        for g in body.children().filter(|c| c.has_tag_name("geom")) {
+            // A geom outside the inertia subset still loads when an <inertial> is given: it is only
+            // left undrawn.
+            let Ok((kind, size, mut frame, half)) = self.geom_shape(g) else {
+                continue;
+            };
+            frame.p -= offset;
+            let s = |k: usize| size.get(k).copied().filter(|v| *v > 0.0);
+            let line = super::error::line_col(self.src.text, g.range().start).0;
+            let declared = format!("{} line {line}", self.src.origin);
+            let mut push = |pose: Pose, shape: Shape| {
+                out.push(LinkVisual {
+                    pose,
+                    shape,
+                    declared: declared.clone(),
+                })
+            };
+            match (kind, s(0), s(1), s(2), half.filter(|h| *h > 0.0)) {
+                ("sphere", Some(r), ..) => push(frame, Shape::Sphere(r)),
+                ("box", Some(a), Some(b), Some(c), _) => push(frame, Shape::Box([2.0 * a, 2.0 * b, 2.0 * c])),
+                ("cylinder", Some(r), _, _, Some(h)) => push(frame, Shape::Cylinder(r, 2.0 * h)),
+                ("capsule", Some(r), _, _, Some(h)) => {
+                    push(frame, Shape::Cylinder(r, 2.0 * h));
+                    for end in [-h, h] {
+                        let p = frame.p + frame.r * V3::new(0.0, 0.0, end);
+                        push(Pose { p, r: frame.r }, Shape::Sphere(r));
+                    }
+                }
+                _ => {}
+            }
+        }
+        out
+    }
+
+    /// A geom's mass, centre and inertia about it (body frame), as MuJoCo computes them from its
+    /// shape and density (or mass).
+    fn geom(&self, node: Node<'a, 'a>) -> Result<(f64, V3, Matrix3<f64>), SceneError> {
+        let (kind, size, frame, half) = self.geom_shape(node)?;
+        let s = |k: usize| size.get(k).copied();
         let need = |v: Option<f64>, what: &str| {
             v.ok_or_else(|| self.err(node, format!("<geom type=\"{kind}\"> needs its {what} in 'size'")))
         };
@@ -756,7 +805,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                     name,
                     node: c,
                     inertial,
-                    visuals: Vec::new(),
+                    visuals: self.geom_visuals(c, offset),
                 },
                 offset,
             });

@@ -383,7 +383,7 @@ fn count_near(png: &Png, (x, y): (f64, f64), r: i64, color: [u8; 3], tolerance: 
     n
 }
 
-/// Every spatial scene and both shipped robots in the 3D viewer: the page loads three.js from
+/// Every spatial scene, both shipped robots and the MJCF arm in the 3D viewer: the page loads three.js from
 /// itself and reports no script error; at each time the centre of mass of every body (from the
 /// CSV of the same run, projected by the page's own camera) carries its marker, a 4 px square of
 /// #111111 centred there: within 1 px of the point, at least 4 of its pixels (a drawing 5 px
@@ -413,6 +413,7 @@ fn the_3d_viewer_draws_every_spatial_scene_where_the_run_puts_it() {
     .collect();
     cases.push((scene("robots/ur5.urdf"), vec![0.6]));
     cases.push((scene("robots/kinova.urdf"), vec![0.6]));
+    cases.push((scene("mjcf/arm-3.xml"), vec![0.6]));
     cases.push((scene("robots/ur5-swing.toml"), vec![0.2, 0.7]));
     cases[0].1 = vec![0.25, 0.75];
     let mut dump_size = None;

@@ -6,6 +6,8 @@ integrates them at tolerances far below the bar. dalembert reads the file into a
 coordinates, a body per moving MuJoCo body, and runs it with each formulation and in joint
 coordinates (where the model allows); its `JOINT.q` columns are compared with MuJoCo's `qpos`."""
 
+import json
+
 import mujoco
 import numpy as np
 import pytest
@@ -97,3 +99,59 @@ def test_mjcf_motion_from_random_states_matches_mujoco(scenes, name):
                 got, expected = sim[f"{joint}.q"], values[joint]
                 gap = abs((got - expected + np.pi) % (2 * np.pi) - np.pi)
                 assert gap < 1e-9, f"{settings} {joint}: {got} vs MuJoCo {expected}"
+
+
+def rotation(e):
+    """The rotation matrix of Euler parameters `e0, e1, e2, e3`."""
+    e0, e1, e2, e3 = e
+    return np.array([
+        [e0 * e0 + e1 * e1 - e2 * e2 - e3 * e3, 2 * (e1 * e2 - e0 * e3), 2 * (e1 * e3 + e0 * e2)],
+        [2 * (e1 * e2 + e0 * e3), e0 * e0 - e1 * e1 + e2 * e2 - e3 * e3, 2 * (e2 * e3 - e0 * e1)],
+        [2 * (e1 * e3 - e0 * e2), 2 * (e2 * e3 + e0 * e1), e0 * e0 - e1 * e1 - e2 * e2 + e3 * e3],
+    ])
+
+
+@pytest.mark.parametrize("name", MODELS)
+def test_mjcf_geoms_are_drawn_where_mujoco_places_them(scenes, name, tmp_path):
+    """The 3D viewer draws a body's sphere, box, cylinder and capsule geoms (a capsule as its
+    cylinder and two balls). At the file's configuration, each one's centre (the page's visual, in
+    its body's frame, placed by the run's first row) is MuJoCo's `geom_xpos` within 1e-9 m, a box's
+    axes `geom_xmat` within 1e-9 (a cylinder's axis up to its sign; a sphere has none to check),
+    and its size MuJoCo's `geom_size`."""
+    path = scenes / "mjcf" / f"{name}.xml"
+    model = mujoco.MjModel.from_xml_path(str(path))
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    scene = dalembert.Scene.load(path)
+    run = scene.simulate(end=0.001)
+    page = tmp_path / "page.html"
+    run.animate(page)
+    html = page.read_text()
+    start = html.index(">", html.index('id="dalembert-data"')) + 1
+    drawing = json.loads(html[start : html.index("</script>", start)])["drawing"]["spatial"]
+    placed = []
+    for body in drawing["bodies"]:
+        c = np.array([run[f"{body['name']}.{k}"][0] for k in "xyz"])
+        R = rotation([run[f"{body['name']}.e{k}"][0] for k in range(4)])
+        for v in body["visuals"]:
+            placed.append((v["shape"], c + R @ v["position"], R @ rotation(v["rotation"])))
+    kinds = {int(mujoco.mjtGeom.mjGEOM_SPHERE): "sphere", int(mujoco.mjtGeom.mjGEOM_BOX): "box",
+             int(mujoco.mjtGeom.mjGEOM_CYLINDER): "cylinder", int(mujoco.mjtGeom.mjGEOM_CAPSULE): "cylinder"}
+    checked = 0
+    for g in range(model.ngeom):
+        if model.geom_bodyid[g] == 0:
+            continue  # the world's floor: not drawn
+        kind, size = kinds[int(model.geom_type[g])], model.geom_size[g]
+        near = [p for p in placed if p[0]["kind"] == kind and np.max(np.abs(p[1] - data.geom_xpos[g])) < 1e-9]
+        assert len(near) == 1, f"geom {g} ({kind}) at {data.geom_xpos[g]}: {len(near)} visuals there"
+        shape, _, axes = near[0]
+        expected_axes = data.geom_xmat[g].reshape(3, 3)
+        if kind == "box":
+            assert np.max(np.abs(axes - expected_axes)) < 1e-9, f"geom {g}: axes"
+        elif kind == "cylinder":  # its axis, either way (MuJoCo's fromto turns z from 'to' to 'from')
+            assert abs(abs(axes[:, 2] @ expected_axes[:, 2]) - 1.0) < 1e-9, f"geom {g}: axis"
+        expected = {"sphere": [size[0]], "box": list(2 * size), "cylinder": [size[0], 2 * size[1]]}[kind]
+        got = {"sphere": lambda s: [s["radius"]], "box": lambda s: s["size"], "cylinder": lambda s: [s["radius"], s["length"]]}[kind](shape)
+        assert np.allclose(got, expected, rtol=0, atol=1e-12), f"geom {g}: {got} vs {expected}"
+        checked += 1
+    assert checked == model.ngeom - 1
