@@ -23,7 +23,7 @@ pub const SPATIAL_JOINT_COLUMNS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"
 /// The joint-space columns of a revolute or prismatic joint, after all the bodies' columns: its
 /// angle (continuous over a run) or displacement, 0 in the file's configuration, and its rate
 /// ([`dalembert_spatial::joint_values`]).
-pub const SPATIAL_JOINT_VALUE_COLUMNS: [&str; 2] = ["q", "qd"];
+pub const SPATIAL_JOINT_VALUE_COLUMNS: [&str; 3] = ["q", "qd", "qdd"];
 
 impl ModelKind for Model {
     fn system(&self) -> &dyn MultibodySystem {
@@ -71,6 +71,7 @@ impl ModelKind for Model {
             ],
             drivers: Model::driver_names(&self).count(),
             joint_values: vec![(0.0, 0.0); self.joint_value_names().count()],
+            joint_accelerations: vec![0.0; self.joint_value_names().count()],
             previous: vec![0.0; self.joint_value_names().count()],
             model: self,
         })
@@ -93,6 +94,8 @@ struct SpatialColumns {
     drivers: usize,
     /// Scratch space of the joint values (`<joint>.q`, `<joint>.qd`).
     joint_values: Vec<(f64, f64)>,
+    /// And of their accelerations (`<joint>.qdd`).
+    joint_accelerations: Vec<f64>,
     /// Each joint value of the previous row (0 before the first): angles are unwrapped against
     /// it so that a joint's angle is continuous over a run.
     previous: Vec<f64>,
@@ -125,13 +128,16 @@ impl ColumnWriter for SpatialColumns {
             row.extend(f.v.iter().chain(f.w.iter()));
         }
         self.model.joint_values_into(s.q, s.qd, &mut self.joint_values);
+        self.model
+            .joint_accelerations_into(s.q, s.qd, s.qdd, &mut self.joint_accelerations);
         let kinds = self.model.joint_value_names().map(|(_, k)| k);
-        for ((value, rate), (last, kind)) in self.joint_values.iter_mut().zip(self.previous.iter_mut().zip(kinds)) {
+        let values = self.joint_values.iter_mut().zip(&self.joint_accelerations);
+        for (((value, rate), acceleration), (last, kind)) in values.zip(self.previous.iter_mut().zip(kinds)) {
             if kind == JointValueKind::Angle {
                 *value = unwrap_angle(*last, *value);
             }
             *last = *value;
-            row.extend([*value, *rate]);
+            row.extend([*value, *rate, *acceleration]);
         }
         self.model.reactions_into(s.t, s.q, s.lambda, &mut self.reactions);
         for r in &self.reactions {

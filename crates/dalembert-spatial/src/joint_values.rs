@@ -9,6 +9,8 @@
 //! prismatic: s = z_i·d                           ṡ = (ω_i × z_i)·d + z_i·(v_Pj − v_Pi)
 //! ```
 //!
+//! and their second derivatives from the accelerations ([`Model::joint_accelerations_into`]).
+//!
 //! Both are 0 in the initial configuration (the markers coincide there) and positive for a
 //! right-handed rotation or a slide of body `j` along `+z_i`: the conventions of URDF and MJCF
 //! (child relative to parent about or along the joint axis). `θ` lies in `(−π, π]`; a run's
@@ -73,6 +75,53 @@ impl Model {
                 let d = fj.r + sj - fi.r - si;
                 let rate = fi.w.cross(&zi).dot(&d) + zi.dot(&(fj.point_velocity(&sj) - fi.point_velocity(&si)));
                 (zi.dot(&d), rate)
+            };
+        }
+    }
+
+    /// Writes the second derivative of each joint value of [`Model::joint_value_names`] at
+    /// `(q, v)` with accelerations `a` (the system's `v̇`: `r̈` global, `ω̇'` body frame), in order,
+    /// into `out`. With `α = A ω̇'` the angular acceleration (global), `ż_i = ω_i × z_i`,
+    /// `z̈_i = α_i × z_i + ω_i × ż_i`, and a point's acceleration `r̈ + α × s + ω × (ω × s)`:
+    ///
+    /// ```text
+    /// revolute:  θ̈ = ż_i·(ω_j − ω_i) + z_i·(α_j − α_i)
+    /// prismatic: s̈ = z̈_i·d + 2 ż_i·ḋ + z_i·d̈
+    /// ```
+    ///
+    /// Allocates nothing.
+    pub fn joint_accelerations_into(&self, q: &[f64], v: &[f64], a: &[f64], out: &mut [f64]) {
+        let joints = self
+            .joints()
+            .iter()
+            .filter(|j| matches!(j.kind, Some(JointKind::Revolute) | Some(JointKind::Prismatic)));
+        let acceleration = |b: Option<usize>, rotation: &nalgebra::Matrix3<f64>| match b {
+            None => (Vector3::zeros(), Vector3::zeros()),
+            Some(b) => {
+                let o = NV * b;
+                let omega_dot = Vector3::new(a[o + 3], a[o + 4], a[o + 5]);
+                (Vector3::new(a[o], a[o + 1], a[o + 2]), rotation * omega_dot)
+            }
+        };
+        for (j, slot) in joints.zip(out.iter_mut()) {
+            let fi = self.frame(j.body_i, q, v);
+            let fj = self.frame(j.body_j, q, v);
+            let (ai, alpha_i) = acceleration(j.body_i, &fi.a);
+            let (aj, alpha_j) = acceleration(j.body_j, &fj.a);
+            let zi = fi.a * j.axes_i.column(2);
+            let zi_dot = fi.w.cross(&zi);
+            *slot = if j.kind == Some(JointKind::Revolute) {
+                zi_dot.dot(&(fj.w - fi.w)) + zi.dot(&(alpha_j - alpha_i))
+            } else {
+                let (si, sj) = (fi.a * j.point_i, fj.a * j.point_j);
+                let d = fj.r + sj - fi.r - si;
+                let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
+                let point = |r: Vector3<f64>, alpha: Vector3<f64>, f: &crate::frame::Frame, s: &Vector3<f64>| {
+                    r + alpha.cross(s) + f.centripetal(s)
+                };
+                let d_ddot = point(aj, alpha_j, &fj, &sj) - point(ai, alpha_i, &fi, &si);
+                let zi_ddot = alpha_i.cross(&zi) + fi.w.cross(&zi_dot);
+                zi_ddot.dot(&d) + 2.0 * zi_dot.dot(&d_dot) + zi.dot(&d_ddot)
             };
         }
     }
