@@ -17,6 +17,9 @@ use roxmltree::Node;
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
+/// A geom's type, `size` numbers, frame in its body and half-length along its z.
+type GeomShape<'a> = (&'a str, Vec<f64>, Pose, Option<f64>);
+
 /// The scene an MJCF file describes; `origin` names the file in errors.
 pub(crate) fn scene(text: &str, origin: &str) -> Result<Scene, SceneError> {
     let doc = xml::parse(text, origin)?;
@@ -352,8 +355,8 @@ impl<'s, 'a> Reader<'s, 'a> {
     }
 
     /// A geom's type, `size` numbers, frame (body frame; `fromto` gives a capsule's or cylinder's)
-    /// and half-length along its z.
-    fn geom_shape(&self, node: Node<'a, 'a>) -> Result<(&'a str, Vec<f64>, Pose, Option<f64>), SceneError> {
+    /// and half-length along its z ([`GeomShape`]).
+    fn geom_shape(&self, node: Node<'a, 'a>) -> Result<GeomShape<'a>, SceneError> {
         let kind = self.value(node, "type").unwrap_or("sphere");
         let size: Vec<f64> = match self.value(node, "size") {
             Some(s) => s
