@@ -89,6 +89,18 @@ def absolute_state(model, data, scene_bodies, local_centres, theta, rate):
     return positions, velocities
 
 
+def link_centres(model, data, scene):
+    """Each body's centre of mass in its link's frame, from dalembert's file configuration and
+    Pinocchio's placement of the links there."""
+    q0 = scene.simulator().state[0]
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    centres = {}
+    for k, body in enumerate(scene.bodies):
+        frame = data.oMf[model.getFrameId(body)]
+        centres[body] = frame.rotation.T @ (q0[7 * k : 7 * k + 3] - frame.translation)
+    return centres
+
+
 @pytest.mark.parametrize("robot", ROBOTS)
 def test_urdf_motion_from_random_states_matches_pinocchio(scenes, robot):
     """From 12 random states (angles in ±π, rates in ±2 rad/s), placed in dalembert from
@@ -101,14 +113,7 @@ def test_urdf_motion_from_random_states_matches_pinocchio(scenes, robot):
     data = model.createData()
     names = list(model.names)[1:]
     scene = dalembert.Scene.load(path)
-    # Each body's centre of mass in its link's frame, from dalembert's file configuration and
-    # Pinocchio's placement of the links there.
-    q0 = scene.simulator().state[0]
-    pin.framesForwardKinematics(model, data, pin.neutral(model))
-    centres = {}
-    for k, body in enumerate(scene.bodies):
-        frame = data.oMf[model.getFrameId(body)]
-        centres[body] = frame.rotation.T @ (q0[7 * k : 7 * k + 3] - frame.translation)
+    centres = link_centres(model, data, scene)
     rng = np.random.default_rng(20261126)
     for _ in range(12):
         theta = rng.uniform(-np.pi, np.pi, model.nv)
@@ -260,12 +265,7 @@ def test_urdf_accelerations_from_1000_random_states_match_pinocchio_aba(scenes, 
     data = model.createData()
     names = list(model.names)[1:]
     scene = dalembert.Scene.load(path)
-    q0 = scene.simulator().state[0]
-    pin.framesForwardKinematics(model, data, pin.neutral(model))
-    centres = {}
-    for k, body in enumerate(scene.bodies):
-        frame = data.oMf[model.getFrameId(body)]
-        centres[body] = frame.rotation.T @ (q0[7 * k : 7 * k + 3] - frame.translation)
+    centres = link_centres(model, data, scene)
     rng = np.random.default_rng(1000)
     states = [(rng.uniform(-np.pi, np.pi, model.nv), rng.uniform(-2.0, 2.0, model.nv)) for _ in range(1000)]
     expected = [pin.aba(model, data, configuration(model, theta), rate, np.zeros(model.nv)) for theta, rate in states]
