@@ -23,7 +23,10 @@ fn chromium() -> Option<PathBuf> {
 
 /// Runs headless Chromium on `page` at window size `size` with `extra` arguments; returns stdout.
 fn browse(browser: &Path, page: &str, size: (usize, usize), extra: &[&str]) -> String {
-    let profile = tmp(&format!("profile-{}", extra.len()));
+    // A profile of its own per browser: tests run at once, and Chromium locks its profile.
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let profile = tmp(&format!("profile-{run}"));
     let out = Command::new(browser)
         .args([
             "--headless",
