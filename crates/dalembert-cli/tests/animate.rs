@@ -22,6 +22,19 @@ fn chromium() -> Option<PathBuf> {
 }
 
 /// Runs headless Chromium on `page` at window size `size` with `extra` arguments; returns stdout.
+/// The browser, or `None` with a SKIPPED line outside CI (in CI a missing browser fails).
+fn chromium_or_skip() -> Option<PathBuf> {
+    let browser = chromium();
+    if browser.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have Chromium (.ci/run installs Debian's package)"
+        );
+        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+    }
+    browser
+}
+
 fn browse(browser: &Path, page: &str, size: (usize, usize), extra: &[&str]) -> String {
     // A profile of its own per browser: tests run at once, and Chromium locks its profile.
     static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
@@ -230,12 +243,7 @@ fn bad_traces_and_mismatched_csv_get_one_line_errors() {
 
 #[test]
 fn the_page_renders_the_simulated_positions_in_chromium() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have Chromium (.ci/run installs Debian's package)"
-        );
-        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+    let Some(browser) = chromium_or_skip() else {
         return;
     };
     let csv = tmp("render.csv");
@@ -393,12 +401,7 @@ fn count_near(png: &Png, (x, y): (f64, f64), r: i64, color: [u8; 3], tolerance: 
 /// off leaves none); between two times the picture changes where a body moved.
 #[test]
 fn the_3d_viewer_draws_every_spatial_scene_where_the_run_puts_it() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have Chromium (.ci/run installs Debian's package)"
-        );
-        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+    let Some(browser) = chromium_or_skip() else {
         return;
     };
     let budget = "--virtual-time-budget=5000"; // three.js is imported before the first drawing
@@ -618,12 +621,7 @@ fn blue_near(png: &Png, (x, y): (f64, f64), r: i64) -> usize {
 /// way) is not (at most 3): a mesh in the wrong units, axes or place fails one or the other.
 #[test]
 fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
-    let Some(browser) = chromium() else {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must have Chromium (.ci/run installs Debian's package)"
-        );
-        eprintln!("SKIPPED: no Chromium found (apt-get install chromium, or set DALEMBERT_CHROMIUM)");
+    let Some(browser) = chromium_or_skip() else {
         return;
     };
     let path = format!(

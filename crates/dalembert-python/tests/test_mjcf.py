@@ -57,6 +57,12 @@ def welded_to(model, k):
     return k
 
 
+def random_qpos(model, rng):
+    """Hinge angles in ±π, slides in ±0.1 m."""
+    hinge = mujoco.mjtJoint.mjJNT_HINGE
+    return np.array([rng.uniform(-np.pi, np.pi) if model.jnt_type[j] == hinge else rng.uniform(-0.1, 0.1) for j in range(model.njnt)])
+
+
 def placed(model, data, ids, qpos, qvel):
     """dalembert's absolute state of MuJoCo's `qpos`, `qvel` (after `mj_forward`, which this
     runs): each body's centre of mass `xipos`, frame `xquat`, velocities from `mj_objectVelocity`
@@ -93,7 +99,7 @@ def test_mjcf_motion_from_random_states_matches_mujoco(scenes, name):
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)]
     rng = np.random.default_rng(20261126)
     for _ in range(10):
-        qpos = np.array([rng.uniform(-np.pi, np.pi) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE else rng.uniform(-0.1, 0.1) for j in range(model.njnt)])
+        qpos = random_qpos(model, rng)
         qvel = rng.uniform(-2.0, 2.0, model.nv)
         q, v = placed(model, data, ids, qpos, qvel)
         values, _ = mujoco_run(path, 0.05, qpos, qvel)
@@ -178,7 +184,7 @@ def test_mjcf_accelerations_from_1000_random_states_match_mujoco(scenes, name):
     rng = np.random.default_rng(1000)
     cases = []
     for _ in range(1000):
-        qpos = np.array([rng.uniform(-np.pi, np.pi) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE else rng.uniform(-0.1, 0.1) for j in range(model.njnt)])
+        qpos = random_qpos(model, rng)
         q, v = placed(model, data, ids, qpos, rng.uniform(-2.0, 2.0, model.nv))
         cases.append((q, v, data.qacc.copy()))
     for formulation in ("augmented", "embedding", "amalgamated"):
