@@ -511,6 +511,16 @@ impl MultibodySystem for Model {
         }
     }
 
+    fn chart_rates(&self, delta: &[f64], v: &[f64], out: &mut [f64]) {
+        for i in 0..self.bodies.len() {
+            let (lin, w) = frame::velocity(i, v);
+            let (_, phi) = frame::velocity(i, delta);
+            let o = NV * i;
+            out[o..o + 3].copy_from_slice(lin.as_slice());
+            out[o + 3..o + 6].copy_from_slice(euler_parameters::inverse_right_jacobian(&phi, &w).as_slice());
+        }
+    }
+
     fn normalize(&self, q: &mut [f64]) {
         for c in q.chunks_exact_mut(NQ) {
             let p = euler_parameters::normalized(&[c[3], c[4], c[5], c[6]]);

@@ -61,6 +61,15 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         q.iter_mut().zip(v).for_each(|(x, d)| *x += h * d);
     }
 
+    /// The rates `δ̇` of chart coordinates `δ` about a fixed position `q₀`, `q = q₀ ⊕ δ`
+    /// ([`MultibodySystem::integrate_positions`] with `h = 1`), when the velocity is `v`: `δ̇ = v`
+    /// by default, right when `⊕` is `+`. A system that rotates by the exponential map must
+    /// override it (`δ̇ = J_r(δ)⁻¹ ω'` for a body-frame rotation vector). Linearization uses it
+    /// to write the position states' rates (`docs/statics.md`). Must not allocate.
+    fn chart_rates(&self, _delta: &[f64], v: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(v);
+    }
+
     /// Restores invariants of the position coordinates that the integration does not keep (e.g. unit
     /// Euler parameters). Default: nothing to do.
     fn normalize(&self, _q: &mut [f64]) {}
