@@ -51,6 +51,7 @@ pub fn interrupt_flag() -> &'static std::sync::Arc<std::sync::atomic::AtomicBool
 mod animate;
 mod check;
 mod inverse;
+mod linearize;
 mod method_args;
 mod paths;
 mod plot;
@@ -90,6 +91,8 @@ enum Command {
     Equilibrium(statics::Args),
     /// Natural frequencies, damping ratios and mode shapes about the static equilibrium.
     Modes(statics::Args),
+    /// The linear model (A, B, C, D) in minimal coordinates about the equilibrium or the initial state.
+    Linearize(linearize::Args),
 }
 
 /// A usage error on one line that names what is wrong: the missing arguments, the suggestion for
@@ -163,6 +166,7 @@ fn main() -> ExitCode {
         Command::Check(a) => check::run(a),
         Command::Equilibrium(a) => statics::equilibrium(a),
         Command::Modes(a) => statics::modes(a),
+        Command::Linearize(a) => linearize::linearize(a),
         Command::Inverse(a) => inverse::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Trade(a) => trade::run(a),

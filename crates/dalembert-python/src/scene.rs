@@ -285,6 +285,91 @@ impl PyScene {
         Ok(d)
     }
 
+    /// The motion linearized in minimal coordinates, `dx/dt = A x + B u`, `y = C x + D u`
+    /// (`docs/statics.md`, "Linearization"): a dict with `A`, `B`, `C`, `D` (2-D numpy arrays),
+    /// `states` (position states such as `rod.angle`, then velocity states such as `rod.omega`),
+    /// `inputs`, `outputs` (names), `drift` (the state's rate at the operating point: 0 at an
+    /// equilibrium), `outputs_at`, and the operating point `t`, `q`, `qd`. `inputs` are the
+    /// scene's named inputs, `outputs` any CSV columns, `states` the independent coordinates (by
+    /// default the scene's `independent`, or coordinate partitioning's choice); `at` is
+    /// `"equilibrium"`, `"initial"`, or a dict with `q`, `qd` (the model's coordinates) and
+    /// optionally `t` and `inputs` (a dict of input values). Raises ValueError naming what is
+    /// wrong (an unknown name, a singular position).
+    #[pyo3(signature = (inputs=None, outputs=None, at=None, states=None))]
+    fn linearize<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: Option<Vec<String>>,
+        outputs: Option<Vec<String>>,
+        at: Option<Bound<'py, PyAny>>,
+        states: Option<Vec<String>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let about = match at {
+            None => dalembert::About::Equilibrium,
+            Some(a) => match a.extract::<String>() {
+                Ok(s) if s == "equilibrium" => dalembert::About::Equilibrium,
+                Ok(s) if s == "initial" => dalembert::About::Initial,
+                Ok(s) => {
+                    return Err(PyValueError::new_err(format!(
+                        "linearize: at = '{s}': expected 'equilibrium', 'initial' or a dict with q and qd"
+                    )))
+                }
+                Err(_) => {
+                    let d = a.cast::<PyDict>().map_err(|_| {
+                        PyValueError::new_err("linearize: at must be 'equilibrium', 'initial' or a dict with q and qd")
+                    })?;
+                    let item = |k: &str| d.get_item(k);
+                    let need = |k: &str| -> PyResult<Vec<f64>> {
+                        item(k)?
+                            .ok_or_else(|| PyValueError::new_err(format!("linearize: at has no '{k}'")))?
+                            .extract()
+                    };
+                    let t = match item("t")? {
+                        Some(t) => t.extract()?,
+                        None => 0.0,
+                    };
+                    let values: Vec<(String, f64)> = match item("inputs")? {
+                        Some(i) => i
+                            .extract::<std::collections::HashMap<String, f64>>()?
+                            .into_iter()
+                            .collect(),
+                        None => Vec::new(),
+                    };
+                    dalembert::About::State {
+                        t,
+                        q: need("q")?,
+                        qd: need("qd")?,
+                        inputs: values,
+                    }
+                }
+            },
+        };
+        let options = dalembert::LinearizeOptions {
+            inputs: inputs.unwrap_or_default(),
+            outputs: outputs.unwrap_or_default(),
+            states: states.unwrap_or_default(),
+            about,
+        };
+        let scene = self.inner.clone();
+        let lin = py
+            .detach(move || scene.linearize(&options))
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let d = PyDict::new(py);
+        for (name, m) in [("A", &lin.a), ("B", &lin.b), ("C", &lin.c), ("D", &lin.d)] {
+            let array = numpy::ndarray::Array2::from_shape_fn(m.shape(), |(i, j)| m[(i, j)]);
+            d.set_item(name, numpy::PyArray2::from_owned_array(py, array))?;
+        }
+        d.set_item("states", &lin.states)?;
+        d.set_item("inputs", &lin.inputs)?;
+        d.set_item("outputs", &lin.outputs)?;
+        d.set_item("drift", numpy::PyArray1::from_vec(py, lin.drift.clone()))?;
+        d.set_item("outputs_at", numpy::PyArray1::from_vec(py, lin.outputs_at.clone()))?;
+        d.set_item("t", lin.t)?;
+        d.set_item("q", numpy::PyArray1::from_vec(py, lin.q.clone()))?;
+        d.set_item("qd", numpy::PyArray1::from_vec(py, lin.qd.clone()))?;
+        Ok(d)
+    }
+
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
     /// line's flags do); the methods' parameters (`rtol`, `atol`, `rho_inf`, `penalty`) are keywords too. Returns a Run. Raises IntegrationError (with `.time` and `.run`, the rows
     /// so far) when the run stops early; with `strict=True` also when a conservative model's

@@ -102,6 +102,13 @@ class Scene:
     def check(self) -> Dict[str, Any]: ...
     def equilibrium(self) -> Dict[str, Any]: ...
     def modes(self) -> Dict[str, Any]: ...
+    def linearize(
+        self,
+        inputs: Optional[Sequence[str]] = None,
+        outputs: Optional[Sequence[str]] = None,
+        at: Union[str, Dict[str, Any], None] = None,
+        states: Optional[Sequence[str]] = None,
+    ) -> Dict[str, Any]: ...
     def simulate(
         self,
         *,

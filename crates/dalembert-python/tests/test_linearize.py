@@ -1,0 +1,80 @@
+"""Linearization from Python against a textbook closed form: a cart-pole (point mass on a
+massless pole) upright, pushed by a named input: ẍ = (m g / M) θ + u / M,
+θ̈ = (M + m) g / (M l) θ + u / (M l); and requests naming what is wrong."""
+
+import numpy as np
+import pytest
+
+import dalembert
+
+G = 9.81
+M, m, L = 2.0, 0.5, 0.8
+
+CART_POLE = f"""
+[scene]
+gravity = [0.0, -9.81]
+[[bodies]]
+name = "cart"
+mass = {M}
+inertia = 0.1
+position = [0.0, 0.0]
+[[bodies]]
+name = "pole"
+mass = {m}
+inertia = 1e-12
+position = [0.0, {L}]
+[[joints]]
+name = "rail"
+type = "prismatic"
+bodies = ["ground", "cart"]
+at = [0.0, 0.0]
+axis = [1.0, 0.0]
+[[joints]]
+name = "hinge"
+type = "revolute"
+bodies = ["cart", "pole"]
+at = [0.0, 0.0]
+[[forces]]
+name = "push"
+type = "force"
+body = "cart"
+fx = {{ input = "u" }}
+"""
+
+
+def test_an_upright_cart_pole_has_its_textbook_linear_model():
+    # θ the pole's angle from upright (counter-clockwise: the mass moves to −x), x the cart's.
+    # From the Lagrangian, linearized upright: M ẍ = u + m g θ, l θ̈ = ẍ + g θ. The pole's
+    # inertia of 1e-12 and the differences' O(h⁴) leave 1e-9 relative.
+    scene = dalembert.Scene.from_toml(CART_POLE)
+    lin = scene.linearize(inputs=["u"], outputs=["pole.x", "rail.fy"], at="initial",
+                          states=["cart.x", "pole.angle"])
+    assert lin["states"] == ["cart.x", "pole.angle", "cart.vx", "pole.omega"]
+    a = np.array([[0, 0, 1, 0], [0, 0, 0, 1], [0, m * G / M, 0, 0], [0, (M + m) * G / (M * L), 0, 0]])
+    b = np.array([[0], [0], [1 / M], [1 / (M * L)]])
+    assert np.allclose(lin["A"], a, rtol=0, atol=1e-9 * np.abs(a).max())
+    assert np.allclose(lin["B"], b, rtol=0, atol=1e-9)
+    # Upright is an equilibrium: nothing moves there.
+    assert np.abs(lin["drift"]).max() < 1e-9
+    # pole.x = x − l sin θ: C's first row [1, −l, 0, 0]; it does not see u.
+    assert np.allclose(lin["C"][0], [1, -L, 0, 0], atol=1e-9)
+    assert abs(lin["D"][0, 0]) < 1e-9
+    # The same state given as a dict: the same model.
+    again = scene.linearize(inputs=["u"], at={"q": lin["q"], "qd": lin["qd"]},
+                            states=["cart.x", "pole.angle"])
+    assert np.allclose(again["A"], lin["A"], rtol=0, atol=1e-12)
+    # Unstable upright: a positive real eigenvalue √((M + m) g / (M l)).
+    grow = np.sqrt((M + m) * G / (M * L))
+    assert np.max(np.linalg.eigvals(lin["A"]).real) == pytest.approx(grow, rel=1e-9)
+
+
+def test_bad_requests_name_the_cause():
+    scene = dalembert.Scene.from_toml(CART_POLE)
+    with pytest.raises(ValueError, match="unknown input 'v'.*did you mean 'u'"):
+        scene.linearize(inputs=["v"], at="initial")
+    with pytest.raises(ValueError, match="unknown output column 'pole.z'"):
+        scene.linearize(outputs=["pole.z"], at="initial")
+    with pytest.raises(ValueError, match="at = 'upright'"):
+        scene.linearize(at="upright")
+    with pytest.raises(ValueError, match="at has no 'qd'"):
+        scene.linearize(at={"q": [0.0] * 6})
