@@ -112,6 +112,12 @@ pub enum LinearizationError {
     Model(String),
 }
 
+/// An operating point: time, positions, velocities and every input's value.
+type OperatingPoint = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The outcome of one evaluation of `f` and `g`.
+type Evaluated = Result<(), LinearizationError>;
+
 /// Relative step of the central differences (of each variable's scale).
 const STEP: f64 = 1e-3;
 /// The position solve converges below this share of the length scale.
@@ -256,7 +262,7 @@ impl Scene {
     }
 
     /// The operating point `(t, q, v, inputs)`, assembled to the constraints.
-    fn operating_point(&self, about: &About) -> Result<(f64, Vec<f64>, Vec<f64>, Vec<f64>), LinearizationError> {
+    fn operating_point(&self, about: &About) -> Result<OperatingPoint, LinearizationError> {
         let n_v = self.model.num_velocities();
         let mut u = vec![0.0; self.inputs.len()];
         let (t, mut q, mut qd) = match about {
@@ -592,7 +598,7 @@ impl<'a> Reduced<'a> {
     /// moved by `s`: central differences at `h` and `h/2`, extrapolated (`(4 D(h/2) − D(h)) / 3`).
     fn derivative(
         &mut self,
-        at: &mut dyn FnMut(&mut Self, f64, &mut [f64], &mut [f64]) -> Result<(), LinearizationError>,
+        at: &mut dyn FnMut(&mut Self, f64, &mut [f64], &mut [f64]) -> Evaluated,
         h: f64,
         (df, dy): (&mut [f64], &mut [f64]),
     ) -> Result<(), LinearizationError> {
