@@ -118,6 +118,9 @@ type OperatingPoint = (f64, Vec<f64>, Vec<f64>, Vec<f64>);
 /// The outcome of one evaluation of `f` and `g`.
 type Evaluated = Result<(), LinearizationError>;
 
+/// `f` and `g` with one variable moved by the given amount.
+type Probe<'p, 'a> = dyn FnMut(&mut Reduced<'a>, f64, &mut [f64], &mut [f64]) -> Evaluated + 'p;
+
 /// Relative step of the central differences (of each variable's scale).
 const STEP: f64 = 1e-3;
 /// The position solve converges below this share of the length scale.
@@ -598,7 +601,7 @@ impl<'a> Reduced<'a> {
     /// moved by `s`: central differences at `h` and `h/2`, extrapolated (`(4 D(h/2) − D(h)) / 3`).
     fn derivative(
         &mut self,
-        at: &mut dyn FnMut(&mut Self, f64, &mut [f64], &mut [f64]) -> Evaluated,
+        at: &mut Probe<'_, 'a>,
         h: f64,
         (df, dy): (&mut [f64], &mut [f64]),
     ) -> Result<(), LinearizationError> {
