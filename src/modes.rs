@@ -9,6 +9,7 @@
 //! order system, `ω_n = |s|`, `ζ = −Re s / |s|` (an overdamped pair of real eigenvalues
 //! `s₁ s₂`: `ω_n = √(s₁ s₂)`, `ζ = −(s₁ + s₂) / (2 ω_n)`), and the shapes stay the undamped ones.
 
+use crate::animation::Frames;
 use crate::equilibrium::{reduced_matrices, relative_stiffness, Equilibrium, EquilibriumError};
 use crate::Scene;
 use dalembert_system::ResidualTangent;
@@ -27,6 +28,9 @@ pub struct Modes {
     /// One shape per mode over [`Modes::columns`]: the change of the positions along the mode,
     /// scaled to a largest component of 1 (positive).
     pub shapes: Vec<Vec<f64>>,
+    /// The same shapes in the velocity coordinates (`B φ`, one per mode, the model's `n_v`
+    /// numbers), scaled alike: the direction [`Scene::mode_frames`] moves the positions along.
+    pub velocity_shapes: Vec<Vec<f64>>,
     /// The equilibrium the modes are about.
     pub equilibrium: Equilibrium,
 }
@@ -54,6 +58,7 @@ impl Scene {
                 damping_ratios: Vec::new(),
                 columns: equilibrium.positions.iter().map(|(c, _)| c.clone()).collect(),
                 shapes: Vec::new(),
+                velocity_shapes: Vec::new(),
                 equilibrium,
             });
         }
@@ -75,27 +80,92 @@ impl Scene {
         // Shapes: the positions' change T(q) B φ, scaled to a largest component of 1.
         let n_q = system.layout().n_q();
         let columns: Vec<String> = equilibrium.positions.iter().map(|(c, _)| c.clone()).collect();
-        let shapes = velocities
-            .iter()
-            .map(|v| {
-                let mut dq = vec![0.0; n_q];
-                system.position_rates(&equilibrium.q, v, &mut dq);
-                let (largest, at) =
-                    dq.iter().enumerate().fold(
-                        (0.0f64, 0),
-                        |(a, k), (j, x)| if x.abs() > a { (x.abs(), j) } else { (a, k) },
-                    );
-                let scale = if largest > 0.0 { dq[at].signum() / largest } else { 1.0 };
-                dq.iter().map(|x| x * scale).collect()
-            })
-            .collect();
+        let mut shapes = Vec::with_capacity(dof);
+        let mut velocity_shapes = Vec::with_capacity(dof);
+        for v in &velocities {
+            let mut dq = vec![0.0; n_q];
+            system.position_rates(&equilibrium.q, v, &mut dq);
+            let (largest, at) =
+                dq.iter().enumerate().fold(
+                    (0.0f64, 0),
+                    |(a, k), (j, x)| if x.abs() > a { (x.abs(), j) } else { (a, k) },
+                );
+            let scale = if largest > 0.0 { dq[at].signum() / largest } else { 1.0 };
+            shapes.push(dq.iter().map(|x| x * scale).collect());
+            velocity_shapes.push(v.iter().map(|x| x * scale).collect());
+        }
         Ok(Modes {
             frequencies,
             damping_ratios,
             columns,
             shapes,
+            velocity_shapes,
             equilibrium,
         })
+    }
+
+    /// Frames of mode `k` (0-based, as in [`Modes::frequencies`]) for the viewer: the positions
+    /// `q_eq ⊕ a sin(2π f t) B φ` assembled to the constraints (the least change), over
+    /// `cycles` periods at 48 frames each (a mode of 0 Hz over `cycles` seconds). The amplitude
+    /// `a` moves no centre of mass by more than a tenth of the model's size (its largest
+    /// translational coordinate at the equilibrium) and turns no body by more than 0.3 rad.
+    pub fn mode_frames(&self, modes: &Modes, k: usize, cycles: usize) -> Result<Frames, EquilibriumError> {
+        let Some(shape) = modes.velocity_shapes.get(k) else {
+            return Err(EquilibriumError::Model(format!(
+                "mode {} asked for: the scene has {} mode(s)",
+                k + 1,
+                modes.velocity_shapes.len()
+            )));
+        };
+        let system = self.model.as_system();
+        let q0 = &modes.equilibrium.q;
+        // The model's size: its largest translational coordinate at the equilibrium.
+        let mut size = 0.0f64;
+        for b in system.layout().bodies() {
+            for (k, label) in b.q_labels.iter().enumerate() {
+                if matches!(*label, "x" | "y" | "z") {
+                    size = size.max(q0[b.q_offset + k].abs());
+                }
+            }
+        }
+        let size = if size > 0.0 { size } else { 1.0 };
+        // Per velocity coordinate: a rotation (angle, angular velocity) or a translation.
+        let rotation: Vec<bool> = (system.layout().bodies().iter())
+            .flat_map(|b| b.v_labels.iter().map(|l| *l == "angle" || l.starts_with('w')))
+            .collect();
+        let largest = |keep: bool| {
+            shape
+                .iter()
+                .zip(&rotation)
+                .filter(|(_, &r)| r == keep)
+                .fold(0.0f64, |a, (x, _)| a.max(x.abs()))
+        };
+        let mut amplitude = f64::INFINITY;
+        if largest(false) > 0.0 {
+            amplitude = amplitude.min(0.1 * size / largest(false));
+        }
+        if largest(true) > 0.0 {
+            amplitude = amplitude.min(0.3 / largest(true));
+        }
+        if !amplitude.is_finite() {
+            amplitude = 0.0;
+        }
+        let f = modes.frequencies[k];
+        let period = if f > 0.0 { 1.0 / f } else { 1.0 };
+        let count = 48 * cycles.max(1);
+        let mut frames = Frames::for_drawing(&self.drawing);
+        let (sys, opts) = (system.constraints(), dalembert_system::KinematicOptions::default());
+        let mut q = q0.clone();
+        for i in 0..=count {
+            let t = period * i as f64 / 48.0;
+            q.copy_from_slice(q0);
+            system.integrate_positions(&mut q, shape, amplitude * (2.0 * PI * t / period).sin());
+            system.normalize(&mut q);
+            sys.solve_positions(0.0, &mut q, &opts)
+                .map_err(|e| EquilibriumError::Model(format!("mode {} cannot be drawn at t = {t}: {e}", k + 1)))?;
+            frames.push(t, &q);
+        }
+        Ok(frames)
     }
 }
 

@@ -349,3 +349,45 @@ fn a_parallelogram_with_a_redundant_crank_balances_and_swings_at_its_closed_form
         assert!((fy + G + 2.0 * G / 3.0).abs() < 1e-9, "{pin}.fy = {fy}");
     }
 }
+
+#[test]
+fn a_mode_is_drawn_as_its_shape_swinging_at_its_frequency_with_the_joints_kept() {
+    // The shipped pendulum's one mode: frames over 2 periods of the closed-form frequency
+    // (48 per period). The rod stays on its pivot (centre d from it, 1e-12: each frame is
+    // assembled); it is at the equilibrium at every half period and farthest from it at a
+    // quarter, turned by the amplitude's rule (no centre moved by more than a tenth of the
+    // model's size, no body turned by more than 0.3 rad: here the centre's 0.1 × d binds).
+    let scene = Scene::from_path("scenes/pendulum.toml").unwrap();
+    let modes = scene.modes().unwrap();
+    let frames = scene.mode_frames(&modes, 0, 2).unwrap();
+    let d = (0.25f64 * 0.25 + 0.433 * 0.433).sqrt();
+    let f = (G * d / (1.0 / 12.0 + d * d)).sqrt() / (2.0 * std::f64::consts::PI);
+    assert_eq!(frames.len(), 97);
+    assert!((frames.times[96] - 2.0 / f).abs() < 1e-12 * (2.0 / f));
+    let theta_eq = modes.equilibrium.q[2];
+    let pose = |k: usize| &frames.poses[3 * k..3 * k + 3];
+    for k in 0..frames.len() {
+        let p = pose(k);
+        assert!((p[0].hypot(p[1]) - d).abs() < 1e-12, "frame {k}: {p:?}");
+    }
+    for k in [0, 24, 48, 72, 96] {
+        assert!(
+            (pose(k)[2] - theta_eq).abs() < 1e-12,
+            "frame {k} at rest: {:?}",
+            pose(k)
+        );
+    }
+    let swing = (pose(12)[2] - theta_eq).abs();
+    // The linear step along the shape moves the centre by 0.1 × d (the model's largest
+    // translational coordinate) across, turning the rod by 0.1 rad; the assembly's least change
+    // then takes back a second-order part, at most (0.1)²/2 of it (5e-4 rad).
+    assert!((swing - 0.1).abs() < 5e-4, "swing {swing}");
+    assert!(
+        (pose(36)[2] - theta_eq + swing).abs() < 1e-12,
+        "three quarters: {:?}",
+        pose(36)
+    );
+    // Asking for a mode the scene does not have names the count.
+    let e = scene.mode_frames(&modes, 3, 1).unwrap_err().to_string();
+    assert!(e.contains("mode 4 asked for: the scene has 1 mode(s)"), "{e}");
+}

@@ -90,7 +90,7 @@ enum Command {
     /// The static equilibrium nearest the scene's position: positions, reactions, stability.
     Equilibrium(statics::Args),
     /// Natural frequencies, damping ratios and mode shapes about the static equilibrium.
-    Modes(statics::Args),
+    Modes(statics::ModesArgs),
     /// The linear model (A, B, C, D) in minimal coordinates about the equilibrium or the initial state.
     Linearize(linearize::Args),
 }

@@ -12,6 +12,22 @@ pub struct Args {
     scene: PathBuf,
 }
 
+/// Arguments of `modes`.
+#[derive(clap::Args)]
+pub struct ModesArgs {
+    #[command(flatten)]
+    scene: Args,
+    /// Write an HTML page animating mode K (1 = the lowest), as `animate` draws a run.
+    #[arg(long, value_name = "K")]
+    animate: Option<usize>,
+    /// Periods of the mode the page plays.
+    #[arg(long, default_value_t = 3)]
+    cycles: usize,
+    /// The page to write (default: the scene's file name with `-mode-K.html`).
+    #[arg(long)]
+    output: Option<PathBuf>,
+}
+
 fn load(a: &Args) -> Result<Scene, String> {
     crate::paths::load_scene(&a.scene)
 }
@@ -52,9 +68,10 @@ pub fn equilibrium(a: Args) -> Result<(), String> {
     Ok(())
 }
 
-/// `dalembert modes SCENE`.
-pub fn modes(a: Args) -> Result<(), String> {
-    let scene = load(&a)?;
+/// `dalembert modes SCENE [--animate K]`.
+pub fn modes(m: ModesArgs) -> Result<(), String> {
+    let a = &m.scene;
+    let scene = load(a)?;
     let modes = scene.modes().map_err(|e| e.to_string())?;
     print_equilibrium(&scene, &modes.equilibrium);
     outln!("\nmode  frequency (Hz)  damping ratio  shape (largest position changes)");
@@ -71,6 +88,31 @@ pub fn modes(a: Args) -> Result<(), String> {
             format!("{f:.6}"),
             format!("{z:.6}"),
             dalembert::equilibrium::describe(&modes.columns, shape)
+        );
+    }
+    if let Some(k) = m.animate {
+        if k == 0 || k > modes.frequencies.len() {
+            return Err(format!(
+                "--animate {k}: the scene has {} mode(s), numbered from 1",
+                modes.frequencies.len()
+            ));
+        }
+        let frames = scene.mode_frames(&modes, k - 1, m.cycles).map_err(|e| e.to_string())?;
+        let output = m.output.clone().unwrap_or_else(|| {
+            let stem = a
+                .scene
+                .file_stem()
+                .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+            PathBuf::from(format!("{stem}-mode-{k}.html"))
+        });
+        let title = format!("{}: mode {k} at {:.6} Hz", scene.name, modes.frequencies[k - 1]);
+        let page = dalembert::animation::Viewer::new(&title, &scene.drawing).html(&frames);
+        std::fs::write(&output, page).map_err(|e| format!("{}: {e}", output.display()))?;
+        outln!(
+            "\nwrote {} (mode {k}, {} frames over {} period(s))",
+            output.display(),
+            frames.len(),
+            m.cycles.max(1)
         );
     }
     Ok(())

@@ -578,6 +578,24 @@ impl PyScene {
         run.animate_to(&path, max_frames, &sources)
     }
 
+    /// Writes a self-contained HTML page animating vibration mode `mode` (1 = the lowest) about
+    /// the static equilibrium, over `cycles` periods (`docs/statics.md`, "Modes"). Raises
+    /// ValueError for a mode the scene does not have.
+    #[pyo3(signature = (path, mode=1, cycles=3))]
+    fn animate_mode(&self, py: Python<'_>, path: std::path::PathBuf, mode: usize, cycles: usize) -> PyResult<()> {
+        let scene = self.inner.clone();
+        let page = py
+            .detach(move || -> Result<String, String> {
+                let modes = scene.modes().map_err(|e| e.to_string())?;
+                let k = mode.checked_sub(1).ok_or("mode: modes are numbered from 1")?;
+                let frames = scene.mode_frames(&modes, k, cycles).map_err(|e| e.to_string())?;
+                let title = format!("{}: mode {mode} at {:.6} Hz", scene.name, modes.frequencies[k]);
+                Ok(dalembert::animation::Viewer::new(&title, &scene.drawing).html(&frames))
+            })
+            .map_err(PyValueError::new_err)?;
+        std::fs::write(&path, page).map_err(|e| PyValueError::new_err(format!("{}: {e}", path.display())))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "<dalembert.Scene '{}' from {}: {} bodies>",

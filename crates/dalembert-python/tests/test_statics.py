@@ -48,3 +48,18 @@ def test_a_free_body_has_no_equilibrium():
     )
     with pytest.raises(ValueError, match="there is none: a net force of 19.62 acts along stone.y"):
         scene.equilibrium()
+
+
+def test_a_mode_page_holds_the_mode_swinging(tmp_path):
+    # The page is titled with the mode and its closed-form frequency (the frames themselves are
+    # checked in tests/statics.rs); a mode the scene lacks is refused.
+    scene = dalembert.Scene.load(str(ROOT / "scenes" / "pendulum.toml"))
+    page = tmp_path / "mode.html"
+    scene.animate_mode(page, mode=1, cycles=1)
+    text = page.read_text()
+    assert "pendulum: mode 1 at" in text
+    d = math.hypot(0.25, 0.433)
+    f = math.sqrt(G * d / (1 / 12 + d * d)) / (2 * math.pi)
+    assert f"{f:.6f} Hz" in text
+    with pytest.raises(ValueError, match="mode 2 asked for: the scene has 1 mode"):
+        scene.animate_mode(tmp_path / "none.html", mode=2)
