@@ -391,3 +391,33 @@ fn a_mode_is_drawn_as_its_shape_swinging_at_its_frequency_with_the_joints_kept()
     let e = scene.mode_frames(&modes, 3, 1).unwrap_err().to_string();
     assert!(e.contains("mode 4 asked for: the scene has 1 mode(s)"), "{e}");
 }
+
+#[test]
+fn a_scene_written_at_its_equilibrium_starts_there_at_rest_and_stays() {
+    // The shipped double pendulum (planar) and heavy top (spatial, spinning, on a spherical
+    // joint) started far from rest: `resting_at` gives the scene with `[initial]` positions at the
+    // equilibrium and zero velocities. Read again it starts at the equilibrium (1e-12: the
+    // positions as written, assembled) with every velocity 0 (exact), its own equilibrium is
+    // found where it starts (at most one polishing Newton step), and its motion from there stays
+    // there: over 2 s nothing moves by more than 1e-9 (a stable equilibrium; the run's rounding).
+    for path in ["scenes/double-pendulum.toml", "scenes/heavy-top.toml"] {
+        let scene = Scene::from_path(path).unwrap();
+        let eq = scene.equilibrium().unwrap();
+        let resting = scene.resting_at(&eq).unwrap();
+        assert!(resting.source.contains("[initial.positions]"), "{path}");
+        for (a, b) in resting.q.iter().zip(&eq.q) {
+            assert!((a - b).abs() < 1e-12, "{path}: {:?} against {:?}", resting.q, eq.q);
+        }
+        assert!(resting.qd.iter().all(|&v| v == 0.0), "{path}: {:?}", resting.qd);
+        let again = resting.equilibrium().unwrap();
+        assert!(again.iterations <= 1, "{path}: {} iterations", again.iterations);
+        let mut sim = resting.simulator().unwrap();
+        let mut moved = 0.0f64;
+        for k in 1..=20 {
+            sim.advance_to(0.1 * k as f64).unwrap();
+            let (q, _) = sim.state();
+            moved = q.iter().zip(&eq.q).fold(moved, |m, (a, b)| m.max((a - b).abs()));
+        }
+        assert!(moved < 1e-9, "{path}: moved {moved}");
+    }
+}

@@ -333,8 +333,20 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         &mechanism.velocity_names(),
     )?;
     check_coordinates(&b.ctx, file.simulation.as_ref(), &mechanism, &settings)?;
+    let (mut q, mut qd, mut weights) = (b.q.clone(), qd, weights);
+    if let Some(initial) = &file.initial {
+        let span = Some(initial.span());
+        let def = initial.get_ref();
+        if !def.joints.is_empty() || !def.rates.is_empty() {
+            return Err(b.ctx.err(
+                span,
+                "[initial]: joints and rates are for spatial scenes; a planar scene gives positions and velocities (by output column)",
+            ));
+        }
+        super::initial::apply(&mechanism, def, &mut q, &mut qd, &mut weights).map_err(|m| b.ctx.err(span, m))?;
+    }
     let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
-    let state = (b.q.clone(), qd, weights);
+    let state = (q, qd, weights);
     assembled(&b.ctx, name, mechanism, state, settings, drawing)
 }
 

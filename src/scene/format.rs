@@ -18,6 +18,8 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub forces: Vec<Spanned<ForceDef>>,
     pub simulation: Option<Spanned<SimDef>>,
+    /// Positions and velocities to start from, by output column.
+    pub initial: Option<Spanned<super::initial::InitialDef>>,
 }
 
 #[derive(Debug, Deserialize)]

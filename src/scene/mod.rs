@@ -9,6 +9,7 @@ mod build;
 mod error;
 mod format;
 mod functions;
+mod initial;
 mod mjcf;
 mod names;
 mod overrides;

@@ -73,16 +73,7 @@ pub(crate) struct AroundMeta {
     pub visual: Vec<super::visuals::VisualDef>,
 }
 
-/// `[initial]`: joint values and rates to start from, measured from the file's configuration
-/// (`docs/scenes.md`, "Starting away from the file's configuration").
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct InitialDef {
-    #[serde(default)]
-    pub joints: std::collections::BTreeMap<String, f64>,
-    #[serde(default)]
-    pub rates: std::collections::BTreeMap<String, f64>,
-}
+pub(crate) use super::initial::InitialDef;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -562,6 +553,11 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         &mechanism.velocity_names(),
     )?;
     build::check_coordinates(&ctx, file.simulation.as_ref(), &mechanism, &settings)?;
+    let mut weights = weights;
+    if let Some(initial) = &file.initial {
+        super::initial::apply(&mechanism, initial.get_ref(), &mut q, &mut qd, &mut weights)
+            .map_err(|m| ctx.err(Some(initial.span()), m))?;
+    }
     let name = file.scene.name.unwrap_or_else(|| origin.to_string());
     build::assembled(&ctx, name, mechanism, (q, qd, weights), settings, drawing)
 }

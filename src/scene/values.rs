@@ -122,6 +122,35 @@ impl Scene {
 }
 
 impl Scene {
+    /// The scene started at rest at `equilibrium` ([`Scene::equilibrium`]): its text with an
+    /// `[initial]` table giving every position column's value there and every velocity 0 (any
+    /// `[initial]` the scene had is replaced), read again. Its `source` is what `dalembert
+    /// equilibrium --output` writes.
+    pub fn resting_at(&self, equilibrium: &crate::Equilibrium) -> Result<Scene, SceneError> {
+        let fail = |message: String| SceneError {
+            file: self.origin.clone(),
+            position: None,
+            message,
+        };
+        let mut file: Table = toml::from_str(&self.source).map_err(|e| fail(e.message().to_string()))?;
+        let rows = crate::output::Rows::new(&self.model);
+        let (_, v_columns) = rows.state_columns(&self.model);
+        let positions: Table = (equilibrium.positions.iter())
+            .map(|(name, v)| (name.clone(), toml::Value::Float(*v)))
+            .collect();
+        let velocities: Table = (v_columns.iter())
+            .map(|&k| (rows.names()[k].clone(), toml::Value::Float(0.0)))
+            .collect();
+        let mut initial = Table::new();
+        initial.insert("positions".into(), toml::Value::Table(positions));
+        initial.insert("velocities".into(), toml::Value::Table(velocities));
+        file.insert("initial".into(), toml::Value::Table(initial));
+        let text = toml::to_string(&file).map_err(|e| fail(e.to_string()))?;
+        Scene::from_toml(&text, &self.origin).map_err(|e| fail(format!("at rest at the equilibrium: {}", e.message)))
+    }
+}
+
+impl Scene {
     /// `Ok` when `path` names a place [`Scene::with_values`] can set: an existing table or a named
     /// element, and a key the format has there (checked by reading the scene with the key added,
     /// so the format's own list of keys decides). The error is one line naming the path and the

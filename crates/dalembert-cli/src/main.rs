@@ -88,7 +88,7 @@ enum Command {
     /// Write a self-contained HTML animation of a scene's motion (or of a saved run, --from).
     Animate(animate::Args),
     /// The static equilibrium nearest the scene's position: positions, reactions, stability.
-    Equilibrium(statics::Args),
+    Equilibrium(statics::EquilibriumArgs),
     /// Natural frequencies, damping ratios and mode shapes about the static equilibrium.
     Modes(statics::ModesArgs),
     /// The linear model (A, B, C, D) in minimal coordinates about the equilibrium or the initial state.

@@ -12,6 +12,17 @@ pub struct Args {
     scene: PathBuf,
 }
 
+/// Arguments of `equilibrium`.
+#[derive(clap::Args)]
+pub struct EquilibriumArgs {
+    #[command(flatten)]
+    scene: Args,
+    /// Write the scene started at rest at the equilibrium (its text with an `[initial]` table of
+    /// positions and zero velocities). Paths in the scene (a URDF it names) stay relative to it.
+    #[arg(long)]
+    output: Option<PathBuf>,
+}
+
 /// Arguments of `modes`.
 #[derive(clap::Args)]
 pub struct ModesArgs {
@@ -60,11 +71,16 @@ fn print_equilibrium(scene: &Scene, eq: &Equilibrium) {
     }
 }
 
-/// `dalembert equilibrium SCENE`.
-pub fn equilibrium(a: Args) -> Result<(), String> {
-    let scene = load(&a)?;
+/// `dalembert equilibrium SCENE [--output eq.toml]`.
+pub fn equilibrium(e: EquilibriumArgs) -> Result<(), String> {
+    let scene = load(&e.scene)?;
     let eq = scene.equilibrium().map_err(|e| e.to_string())?;
     print_equilibrium(&scene, &eq);
+    if let Some(path) = &e.output {
+        let resting = scene.resting_at(&eq).map_err(|e| e.to_string())?;
+        std::fs::write(path, &resting.source).map_err(|e| format!("{}: {e}", path.display()))?;
+        outln!("written      {} (the scene at rest there)", path.display());
+    }
     Ok(())
 }
 

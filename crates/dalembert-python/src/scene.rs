@@ -260,6 +260,22 @@ impl PyScene {
         equilibrium_dict(py, &eq)
     }
 
+    /// The scene started at rest at its static equilibrium: a new Scene whose text holds an
+    /// `[initial]` table of the equilibrium's positions and zero velocities (what `dalembert
+    /// equilibrium --output` writes). Raises ValueError as `equilibrium()` does.
+    fn at_equilibrium(&self, py: Python<'_>) -> PyResult<PyScene> {
+        let scene = self.inner.clone();
+        let resting = py
+            .detach(move || -> Result<dalembert::Scene, String> {
+                let eq = scene.equilibrium().map_err(|e| e.to_string())?;
+                scene.resting_at(&eq).map_err(|e| e.to_string())
+            })
+            .map_err(PyValueError::new_err)?;
+        Ok(PyScene {
+            inner: Arc::new(resting),
+        })
+    }
+
     /// Natural frequencies (Hz, ascending), damping ratios and mode shapes about the static
     /// equilibrium: a dict with `frequencies` and `damping_ratios` (numpy arrays), `shapes` (a
     /// numpy array, one row per mode over `columns`, the position columns), and `equilibrium`

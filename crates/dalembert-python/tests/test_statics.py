@@ -63,3 +63,17 @@ def test_a_mode_page_holds_the_mode_swinging(tmp_path):
     assert f"{f:.6f} Hz" in text
     with pytest.raises(ValueError, match="mode 2 asked for: the scene has 1 mode"):
         scene.animate_mode(tmp_path / "none.html", mode=2)
+
+
+def test_a_scene_at_its_equilibrium_starts_there_at_rest():
+    # The shipped double pendulum started horizontal: the scene at rest at its equilibrium starts
+    # at the positions equilibrium() gives (1e-12) and does not move over 1 s (1e-9).
+    scene = dalembert.Scene.load(str(ROOT / "scenes" / "double-pendulum.toml"))
+    eq = scene.equilibrium()
+    resting = scene.at_equilibrium()
+    assert "[initial.positions]" in resting.source
+    run = resting.simulate(end=1.0)
+    for column in ("upper.x", "upper.y", "upper.angle", "lower.x", "lower.y", "lower.angle"):
+        assert abs(run[column][0] - eq[column]) < 1e-12
+        assert np.abs(run[column] - eq[column]).max() < 1e-9
+    assert np.abs(run["lower.omega"]).max() < 1e-9
