@@ -553,7 +553,6 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         &mechanism.velocity_names(),
     )?;
     build::check_coordinates(&ctx, file.simulation.as_ref(), &mechanism, &settings)?;
-    let mut weights = weights;
     if let Some(initial) = &file.initial {
         super::initial::apply(&mechanism, initial.get_ref(), &mut q, &mut qd, &mut weights)
             .map_err(|m| ctx.err(Some(initial.span()), m))?;
