@@ -539,7 +539,7 @@ impl<'s, 'a> Reader<'s, 'a> {
         for (k, j) in joints.iter().enumerate() {
             parent_joint[j.child] = Some(k);
         }
-        let tree = Tree::of(self.src, root, &links, &joints, &parent_joint)?;
+        let tree = Tree::of(self.src, root, &links, &joints, &parent_joint, false)?;
         if tree.principal.is_empty() {
             return Err(self.err(world, "nothing moves: no body in <worldbody> has a joint"));
         }

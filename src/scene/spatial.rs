@@ -66,6 +66,9 @@ pub(crate) struct AroundFile {
 #[allow(dead_code)]
 pub(crate) struct AroundMeta {
     pub urdf: String,
+    /// The robot's root link moves freely (a floating base) instead of being fixed to the ground.
+    #[serde(default)]
+    pub floating_base: bool,
     pub name: Option<String>,
     #[serde(default, deserialize_with = "strict::xyz_opt")]
     pub gravity: Option<[f64; 3]>,

@@ -172,6 +172,7 @@ impl Tree {
         links: &[Link<'_, '_>],
         joints: &[TreeJoint],
         parent_joint: &[Option<usize>],
+        floating: bool,
     ) -> Result<Tree, SceneError> {
         let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
         let root = match roots.as_slice() {
@@ -203,6 +204,11 @@ impl Tree {
             principal: Vec::new(),
             order: Vec::new(),
         };
+        if floating {
+            // A floating base: the root link is a body of its own, with no joint to the ground.
+            tree.principal.push(root);
+            tree.body[root] = Some(0);
+        }
         let mut reached = vec![false; links.len()];
         reached[root] = true;
         let mut queue = std::collections::VecDeque::from([root]);
@@ -391,7 +397,7 @@ pub(crate) fn scene_of(
             match (key.as_str(), value) {
                 ("scene", toml::Value::Table(keys)) => {
                     if let Some(toml::Value::Table(scene)) = tables.get_mut("scene") {
-                        scene.extend(keys.into_iter().filter(|(k, _)| k != "urdf"));
+                        scene.extend(keys.into_iter().filter(|(k, _)| k != "urdf" && k != "floating_base"));
                     }
                 }
                 ("bodies" | "joints" | "drivers" | "forces", toml::Value::Array(more)) => match tables.get_mut(&key) {

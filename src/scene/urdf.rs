@@ -179,7 +179,12 @@ fn joint_kind(src: &Source<'_>, node: Node<'_, '_>) -> Result<Kind, SceneError> 
 
 /// The elements of the robot in `text`, and where each link and joint is in it (for errors the
 /// scene builder finds).
-fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>, prefix: &str) -> Result<Read<'a>, SceneError> {
+fn read<'a>(
+    src: &Source<'a>,
+    doc: &'a roxmltree::Document<'a>,
+    prefix: &str,
+    floating: bool,
+) -> Result<Read<'a>, SceneError> {
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(src.err(
@@ -306,7 +311,7 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>, prefix: &str) ->
             damping,
         });
     }
-    let tree = Tree::of(src, robot, &links, &joints, &parent_joint)?;
+    let tree = Tree::of(src, robot, &links, &joints, &parent_joint, floating)?;
     if tree.principal.is_empty() {
         return Err(src.err(
             robot,
@@ -326,19 +331,21 @@ fn read<'a>(src: &Source<'a>, doc: &'a roxmltree::Document<'a>, prefix: &str) ->
 /// The scene a URDF file describes (see the module documentation); `origin` names the file in
 /// errors, which name the element and its line.
 pub(crate) fn scene(text: &str, origin: &str) -> Result<Scene, SceneError> {
-    with_scene(text, origin, None, "")
+    with_scene(text, origin, None, "", false)
 }
 
-/// `prefix`: the robot file's folder from the scene's (empty when the robot file is the scene).
+/// `prefix`: the robot file's folder from the scene's (empty when the robot file is the scene);
+/// `floating`: the root link moves freely instead of being fixed to the ground.
 fn with_scene(
     text: &str,
     origin: &str,
     around: Option<(toml::Table, &str, &str)>,
     prefix: &str,
+    floating: bool,
 ) -> Result<Scene, SceneError> {
     let doc = xml::parse(text, origin)?;
     let src = Source { text, origin };
-    let read = read(&src, &doc, prefix)?;
+    let read = read(&src, &doc, prefix, floating)?;
     scene_of(&src, read, around)
 }
 
@@ -389,5 +396,9 @@ pub(crate) fn around(tables: toml::Table, text: &str, origin: &str) -> Result<Sc
         .parent()
         .map(|p| p.to_string_lossy().replace('\\', "/"))
         .unwrap_or_default();
-    with_scene(&urdf, &shown, Some((tables, text, origin)), &prefix)
+    let floating = matches!(
+        tables.get("scene").and_then(|s| s.get("floating_base")),
+        Some(toml::Value::Boolean(true))
+    );
+    with_scene(&urdf, &shown, Some((tables, text, origin)), &prefix, floating)
 }

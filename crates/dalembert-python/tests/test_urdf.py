@@ -280,3 +280,55 @@ def test_urdf_accelerations_from_1000_random_states_match_pinocchio_aba(scenes, 
             worst = max(worst, np.max(np.abs(got - a)) / np.max(np.abs(a)))
         assert worst < 1e-9, f"{robot} {settings}: {worst:.2e}"
         print(f"{robot} {settings}: worst relative difference {worst:.2e}")
+
+
+@pytest.mark.parametrize("robot", ROBOTS)
+@pytest.mark.parametrize("gravity", [0.0, -9.81])
+def test_a_floating_base_robot_accelerates_as_pinocchios_free_flyer(scenes, tmp_path, robot, gravity):
+    """`floating_base = true`: the root link moves freely, as Pinocchio's model built with a
+    free-flyer root joint. At 200 random states (the base anywhere, turned at random, moving at
+    up to 2 m/s and 2 rad/s; joints in ±π, ±2 rad/s), placed from Pinocchio's forward
+    kinematics, `JOINT.qdd` of each formulation is `pin.aba`'s within 1e-9 of the largest (both
+    exact to round-off), with and without gravity."""
+    urdf = tmp_path / f"{robot}.urdf"
+    urdf.write_text((scenes / "robots" / f"{robot}.urdf").read_text())
+    toml = tmp_path / "floating.toml"
+    toml.write_text(f'[scene]\nurdf = "{robot}.urdf"\nfloating_base = true\ngravity = [0.0, 0.0, {gravity}]\n')
+    scene = dalembert.Scene.load(toml)
+    model = pin.buildModelFromUrdf(str(urdf), pin.JointModelFreeFlyer())
+    model.gravity.linear = np.array([0.0, 0.0, gravity])
+    data = model.createData()
+    names = list(model.names)[2:]
+    centres = link_centres(model, data, scene)
+    rng = np.random.default_rng(7)
+    worst = {f: 0.0 for f in ("augmented", "embedding", "amalgamated")}
+    sims = {f: scene.simulator(formulation=f) for f in worst}
+    for _ in range(200):
+        quat = rng.normal(size=4)
+        quat /= np.linalg.norm(quat)
+        joints = []
+        for j in list(model.joints)[2:]:
+            angle = rng.uniform(-np.pi, np.pi)
+            joints.append([angle] if j.nq == 1 else [np.cos(angle), np.sin(angle)])
+        q = np.concatenate([rng.uniform(-1.0, 1.0, 3), quat, *joints])
+        v = np.concatenate([rng.uniform(-2.0, 2.0, 6), rng.uniform(-2.0, 2.0, model.nv - 6)])
+        a = pin.aba(model, data, q, v, np.zeros(model.nv))[6:]
+        pin.forwardKinematics(model, data, q, v)
+        pin.updateFramePlacements(model, data)
+        positions, velocities = [], []
+        for body in scene.bodies:
+            f = model.getFrameId(body)
+            R, p = data.oMf[f].rotation, data.oMf[f].translation
+            twist = pin.getFrameVelocity(model, data, f, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+            arm = R @ centres[body]
+            x, y, z, w = pin.Quaternion(R).coeffs()
+            positions += [*(p + arm), w, x, y, z]
+            velocities += [*(twist.linear + np.cross(twist.angular, arm)), *(R.T @ twist.angular)]
+        for f, sim in sims.items():
+            moved = sim.set_state(positions, velocities)
+            assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12, f"{f}: {moved}"
+            got = np.array([sim[f"{name}.qdd"] for name in names])
+            worst[f] = max(worst[f], np.max(np.abs(got - a)) / np.max(np.abs(a)))
+    for f, w in worst.items():
+        assert w < 1e-9, f"{robot} g = {gravity} {f}: {w:.2e}"
+        print(f"{robot} floating, g = {gravity}, {f}: worst relative difference {w:.2e}")

@@ -63,6 +63,32 @@ impl Model {
         }
         let n = self.bodies().len();
         let joints = self.joints();
+        if joints.len() < n {
+            // Bodies no chain of joints joins to the ground (a free body, a robot's floating
+            // base): the first of them named.
+            let mut grounded = vec![false; n];
+            let mut grew = true;
+            while grew {
+                grew = false;
+                for j in joints {
+                    for (a, b) in [(j.body_i, j.body_j), (j.body_j, j.body_i)] {
+                        if let Some(k) = b {
+                            if a.is_none_or(|i| grounded[i]) && !grounded[k] {
+                                grounded[k] = true;
+                                grew = true;
+                            }
+                        }
+                    }
+                }
+            }
+            let free = (0..n)
+                .find(|&k| !grounded[k])
+                .map_or(String::from("model"), |k| format!("body '{}'", self.bodies()[k].name));
+            return Err(refuse(
+                free,
+                "moves freely (no joint holds it: a free body or a floating base); joint coordinates take revolute and prismatic joints only, so run it in absolute coordinates",
+            ));
+        }
         if joints.len() != n {
             return Err(refuse(
                 "model".into(),
