@@ -163,6 +163,12 @@ impl Function {
         Function(t)
     }
 
+    /// This input times `gain` (`{ input = "NAME", gain = g }`).
+    pub fn gain(mut self, gain: f64) -> Self {
+        self.0.insert("gain".into(), Value::Float(gain));
+        self
+    }
+
     /// `value`, constant.
     pub fn constant(value: f64) -> Self {
         Function::of("constant", &[("value", value)])

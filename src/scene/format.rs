@@ -91,6 +91,8 @@ pub(crate) struct FunctionDef {
     pub from: Option<f64>,
     pub to: Option<f64>,
     pub absolute: Option<bool>,
+    /// An input's factor (`{ input = "u", gain = 2.0 }`).
+    pub gain: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]

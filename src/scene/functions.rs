@@ -56,9 +56,14 @@ pub(crate) fn time_function(
                 return Err(format!("input '{name}': '{key}' belongs to a function of time, not to an input"));
             }
             let offset = if def.absolute.unwrap_or(false) { 0.0 } else { start.unwrap_or(0.0) };
+            let gain = def.gain.unwrap_or(1.0);
+            if !gain.is_finite() {
+                return Err(format!("input '{name}': gain {gain} is not a finite value"));
+            }
             return Ok(TimeFunction::Input {
                 index: input_index(inputs, name),
                 offset,
+                gain,
             });
         }
         (None, None) => {
@@ -67,7 +72,12 @@ pub(crate) fn time_function(
                     .into(),
             )
         }
-        (Some(kind), None) => kind.as_str(),
+        (Some(kind), None) => {
+            if def.gain.is_some() {
+                return Err(format!("'gain' belongs to an input ({{ input = \"NAME\", gain = g }}), not to a function of time ({kind})"));
+            }
+            kind.as_str()
+        }
     };
     let need = |v: Option<f64>, key: &str| v.ok_or_else(|| format!("function of kind '{kind}' needs '{key}'"));
     let g = match kind {

@@ -617,27 +617,35 @@ impl<'s, 'a> Reader<'s, 'a> {
                     .iter()
                     .find(|j| j.file_name == target && j.kind != Kind::Fixed)
                     .ok_or_else(|| self.err(c, format!("<motor> joint=\"{target}\": no such joint")))?;
-                if j.kind != Kind::Revolute {
-                    return Err(self.err(
-                        c,
-                        format!(
-                            "<motor> on joint '{target}': motors on hinge joints are read (a slide's force is not yet)"
-                        ),
-                    ));
-                }
                 let gear = self.numbers::<1>(c, "gear")?.map_or(1.0, |[g]| g);
-                if gear != 1.0 {
-                    return Err(self.err(
-                        c,
-                        format!("<motor> gear=\"{gear}\": a gear other than 1 is not read yet"),
-                    ));
+                if !gear.is_finite() {
+                    return Err(self.err(c, format!("<motor> gear=\"{gear}\" is not a finite number")));
                 }
                 let input = self.value(c, "name").unwrap_or(target);
-                model = model.force(
-                    force(input, "torque")
-                        .set("joint", j.name.as_str())
-                        .set("value", Function::input(input)),
-                );
+                // The force is gear × the input: a torque about a hinge, a force along a slide.
+                let value = Function::input(input).gain(gear);
+                model = model.force(match j.kind {
+                    Kind::Revolute => force(input, "torque").set("joint", j.name.as_str()).set("value", value),
+                    Kind::Prismatic => {
+                        let frame = tree.world[j.child];
+                        let (point, axis) = (frame.p, frame.r * j.axis);
+                        let bodies = [body_name(j.parent), body_name(j.child)];
+                        // Along the axis, between a point of the parent 1 m behind the joint and
+                        // the joint's point on the child: a tension pulls them together, so the
+                        // push along the axis is the actuator's negative.
+                        force(input, "spring-damper")
+                            .set("bodies", bodies)
+                            .set("at", [<[f64; 3]>::from(point - axis), <[f64; 3]>::from(point)])
+                            .set("stiffness", 0.0)
+                            .set("actuator", Function::input(input).gain(-gear))
+                    }
+                    _ => {
+                        return Err(self.err(
+                            c,
+                            format!("<motor> on joint '{target}': motors on hinge and slide joints are read"),
+                        ))
+                    }
+                });
                 places.insert(input.to_string(), c);
             }
         }
@@ -712,6 +720,7 @@ impl<'s, 'a> Reader<'s, 'a> {
             }
             let mut kind = Kind::Fixed;
             let (mut offset, mut axis, mut damping, mut joint_name) = (V3::zeros(), V3::z(), 0.0, name.clone());
+            let (mut stiffness, mut spring_rest) = (0.0, 0.0);
             let mut file_name = name.clone();
             if let Some(&j) = js.first() {
                 if j.has_tag_name("freejoint") {
@@ -746,7 +755,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                             "actuatorfrclimited",
                         ],
                     )?;
-                    for key in ["stiffness", "armature", "frictionloss", "ref"] {
+                    for key in ["armature", "frictionloss", "ref"] {
                         let v = self.number(j, key, 0.0)?;
                         if v != 0.0 {
                             return Err(
@@ -777,6 +786,21 @@ impl<'s, 'a> Reader<'s, 'a> {
                             j,
                             format!("<joint> damping=\"{damping}\": non-negative, and on hinge and slide joints only"),
                         ));
+                    }
+                    // A spring on the joint: −stiffness (q − springref), MuJoCo's passive force
+                    // (springref in degrees on a hinge where the compiler's angles are).
+                    stiffness = self.number(j, "stiffness", 0.0)?;
+                    spring_rest = self.number(j, "springref", 0.0)?;
+                    if stiffness < 0.0 || (stiffness > 0.0 && kind == Kind::Spherical) {
+                        return Err(self.err(
+                            j,
+                            format!(
+                                "<joint> stiffness=\"{stiffness}\": non-negative, and on hinge and slide joints only"
+                            ),
+                        ));
+                    }
+                    if kind == Kind::Revolute {
+                        spring_rest = self.angle(spring_rest);
                     }
                     if let Some(n) = j.attribute("name") {
                         file_name = n.to_string();
@@ -821,6 +845,8 @@ impl<'s, 'a> Reader<'s, 'a> {
                 origin,
                 axis: axis.normalize(),
                 damping,
+                stiffness,
+                spring_rest,
             });
             if let Some(&j) = js.first() {
                 places.insert(joint_name, j);

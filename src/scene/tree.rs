@@ -91,6 +91,10 @@ pub(crate) struct TreeJoint {
     pub(crate) origin: Pose,
     pub(crate) axis: V3,
     pub(crate) damping: f64,
+    /// A spring on the joint coordinate (N·m/rad or N/m; MJCF's `stiffness`) …
+    pub(crate) stiffness: f64,
+    /// … relaxed at this joint value (rad or m from the file's configuration; `springref`).
+    pub(crate) spring_rest: f64,
 }
 
 /// `'a', 'b' and 'c'`.
@@ -355,20 +359,26 @@ impl Tree {
                 Kind::Spherical => placed,
                 _ => placed.axis(<[f64; 3]>::from(axis)),
             });
-            if j.damping > 0.0 {
+            if j.damping > 0.0 || j.stiffness > 0.0 {
+                // The joint's passive spring and damper (a URDF's `dynamics damping`, an MJCF
+                // joint's `damping`, `stiffness` and `springref`).
                 let name = format!("{}-damping", j.name);
                 let damper = match j.kind {
-                    Kind::Revolute => force(&name, "rotational-spring-damper").set("joint", j.name.as_str()),
+                    Kind::Revolute => force(&name, "rotational-spring-damper")
+                        .set("joint", j.name.as_str())
+                        .set("free_angle", j.spring_rest),
                     _ => {
                         // Along the axis, from a point of the parent 1 m behind the joint to the
-                        // joint's point on the child: the line stays the axis as the joint slides.
+                        // joint's point on the child: the line stays the axis as the joint slides,
+                        // 1 m long in the file's configuration.
                         let behind = frame.p - axis;
                         force(&name, "spring-damper")
                             .set("bodies", bodies)
                             .set("at", [<[f64; 3]>::from(behind), <[f64; 3]>::from(frame.p)])
+                            .set("free_length", 1.0 + j.spring_rest)
                     }
                 };
-                model = model.force(damper.set("stiffness", 0.0).set("damping", j.damping));
+                model = model.force(damper.set("stiffness", j.stiffness).set("damping", j.damping));
             }
         }
         Ok(model)

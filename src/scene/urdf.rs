@@ -309,6 +309,8 @@ fn read<'a>(
             origin: origin(src, node)?,
             axis: axis.normalize(),
             damping,
+            stiffness: 0.0,
+            spring_rest: 0.0,
         });
     }
     let tree = Tree::of(src, robot, &links, &joints, &parent_joint, floating)?;

@@ -45,15 +45,17 @@ pub enum TimeFunction {
     },
     /// A user closure returning `[f, f', f'']`; its derivatives are the user's responsibility.
     Custom(TimeClosure),
-    /// Named input `index` of the model plus `offset`: `f(t) = offset + u`, where `u` is the value
-    /// the run last set (held between sets, 0 before the first; [`crate::inputs`]). Its
-    /// derivatives are zero: a change of the value is a step, and an implicit method's tangent
-    /// holds it constant over a step.
+    /// Named input `index` of the model times `gain` plus `offset`: `f(t) = offset + gain u`,
+    /// where `u` is the value the run last set (held between sets, 0 before the first;
+    /// [`crate::inputs`]). Its derivatives are zero: a change of the value is a step, and an
+    /// implicit method's tangent holds it constant over a step.
     Input {
         /// The input's index in the model's list of inputs.
         index: usize,
         /// Added to the input's value (a driver's value in the file).
         offset: f64,
+        /// Multiplies the input's value (an MJCF motor's `gear`; 1 by default).
+        gain: f64,
     },
 }
 
@@ -75,7 +77,7 @@ impl fmt::Debug for TimeFunction {
                 write!(f, "SmoothStep({from} at {t0} → {to} at {t1})")
             }
             TimeFunction::Custom(_) => write!(f, "Custom(..)"),
-            TimeFunction::Input { index, offset } => write!(f, "Input({index}) + {offset}"),
+            TimeFunction::Input { index, offset, gain } => write!(f, "{gain} Input({index}) + {offset}"),
         }
     }
 }
@@ -134,7 +136,9 @@ impl TimeFunction {
                 [from + h * p, h * dp / d, h * ddp / (d * d)]
             }
             TimeFunction::Custom(f) => f(t),
-            TimeFunction::Input { index, offset } => [offset + crate::inputs::input_value(*index), 0.0, 0.0],
+            TimeFunction::Input { index, offset, gain } => {
+                [offset + gain * crate::inputs::input_value(*index), 0.0, 0.0]
+            }
         }
     }
 
@@ -170,9 +174,10 @@ impl TimeFunction {
                 from: from + c,
                 to: to + c,
             },
-            TimeFunction::Input { index, offset } => TimeFunction::Input {
+            TimeFunction::Input { index, offset, gain } => TimeFunction::Input {
                 index,
                 offset: offset + c,
+                gain,
             },
             TimeFunction::Custom(f) => TimeFunction::custom(move |t| {
                 let [v, d1, d2] = f(t);
@@ -192,7 +197,9 @@ impl TimeFunction {
         let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
         match self {
             TimeFunction::Constant(v) if !v.is_finite() => bad("constant value must be finite"),
-            TimeFunction::Input { offset, .. } if !offset.is_finite() => bad("an input's offset must be finite"),
+            TimeFunction::Input { offset, gain, .. } if !offset.is_finite() || !gain.is_finite() => {
+                bad("an input's offset and gain must be finite")
+            }
             TimeFunction::Linear { initial, rate } if !finite(&[*initial, *rate]) => {
                 bad("linear function parameters must be finite")
             }
