@@ -16,6 +16,10 @@ pub struct Frames {
     pub bodies: usize,
     /// Numbers per body in a pose: 3 (planar) or 7 (spatial).
     pub per_body: usize,
+    /// Joint reactions to draw as arrows, frame after frame (empty: none recorded): per joint of
+    /// a spatial drawing the force its second body exerts on its first, global components
+    /// ([`Frames::reaction_columns`]).
+    pub reactions: Vec<f64>,
 }
 
 impl Frames {
@@ -55,6 +59,23 @@ impl Frames {
         self.poses.extend_from_slice(q);
     }
 
+    /// Appends the joint reactions of the frame last pushed (the values of
+    /// [`Frames::reaction_columns`], in order).
+    pub fn push_reactions(&mut self, forces: &[f64]) {
+        self.reactions.extend_from_slice(forces);
+    }
+
+    /// The output columns of the reactions a spatial drawing's joints are drawn with: each
+    /// joint's `fx, fy, fz` (none for a planar drawing).
+    pub fn reaction_columns(drawing: &Drawing) -> Vec<String> {
+        drawing.spatial.as_ref().map_or(Vec::new(), |s| {
+            s.joints
+                .iter()
+                .flat_map(|j| ["fx", "fy", "fz"].map(|c| format!("{}.{c}", j.name)))
+                .collect()
+        })
+    }
+
     /// At most `max` frames (at least two), evenly spread over the run and always keeping the first
     /// and the last: a screen shows no more than its refresh rate, so a long, finely sampled run is
     /// thinned to what can be seen.
@@ -70,9 +91,11 @@ impl Frames {
             ..Frames::default()
         };
         let w = self.per_body * self.bodies;
+        let r = self.reactions.len() / n;
         for i in 0..max {
             let k = ((i as f64) * (n - 1) as f64 / (max - 1) as f64).round() as usize;
             out.push(self.times[k], &self.poses[k * w..(k + 1) * w]);
+            out.push_reactions(&self.reactions[k * r..(k + 1) * r]);
         }
         out
     }
@@ -92,8 +115,15 @@ impl Frames {
     /// file in errors: a missing column, a field that is not a finite number, times that do not
     /// increase.
     pub fn from_csv(reader: impl Read, drawing: &Drawing, origin: &str) -> Result<Frames, ResultCsvError> {
+        let mut text = Vec::new();
+        let mut reader = reader;
+        reader.read_to_end(&mut text).map_err(|e| ResultCsvError {
+            file: origin.to_string(),
+            line: None,
+            message: format!("cannot be read: {e}"),
+        })?;
         let names = Frames::columns(drawing);
-        let table = read_columns(reader, origin, &names).map_err(|mut e| {
+        let table = read_columns(text.as_slice(), origin, &names).map_err(|mut e| {
             if e.line == Some(1) && e.message.starts_with("no column") {
                 e.message = format!("does not match the scene: {}", e.message);
             }
@@ -106,11 +136,47 @@ impl Frames {
                 message: "has no rows to replay".into(),
             });
         }
+        // The joints' reactions where the file has them (a CSV of `simulate` does).
+        let forces = Frames::reaction_columns(drawing);
+        let reactions = match forces.is_empty() {
+            true => Vec::new(),
+            false => read_columns(text.as_slice(), origin, &forces).map_or(Vec::new(), |r| r.values),
+        };
         Ok(Frames {
             times: table.times,
             poses: table.values,
+            reactions,
             ..Frames::for_drawing(drawing)
         })
+    }
+
+    /// The frames of a run's rows (`names` the columns of `rows`, `t` first): the poses of
+    /// `drawing`'s bodies ([`Frames::columns`]) and, where the rows have them, the joints'
+    /// reactions. `None` names a missing pose column.
+    pub fn from_rows<'r>(
+        drawing: &Drawing,
+        names: &[String],
+        rows: impl Iterator<Item = &'r [f64]>,
+    ) -> Result<Frames, String> {
+        let index = |n: &String| names.iter().position(|c| c == n);
+        let poses = Frames::columns(drawing)
+            .iter()
+            .map(|n| index(n).ok_or_else(|| format!("no column '{n}' in the run")))
+            .collect::<Result<Vec<_>, _>>()?;
+        let forces: Option<Vec<usize>> = Frames::reaction_columns(drawing).iter().map(index).collect();
+        let mut frames = Frames::for_drawing(drawing);
+        let mut q = vec![0.0; poses.len()];
+        let mut f = Vec::new();
+        for row in rows {
+            q.iter_mut().zip(&poses).for_each(|(x, &k)| *x = row[k]);
+            frames.push(row[0], &q);
+            if let Some(forces) = &forces {
+                f.clear();
+                f.extend(forces.iter().map(|&k| row[k]));
+                frames.push_reactions(&f);
+            }
+        }
+        Ok(frames)
     }
 }
 #[cfg(test)]

@@ -114,6 +114,9 @@ struct Data<'a> {
     times: String,
     /// Poses, little-endian f32, base64 (single precision is far below a pixel).
     poses: String,
+    /// Joint reactions (`fx, fy, fz` per joint of a spatial drawing, per frame), little-endian
+    /// f32, base64; empty when the frames have none.
+    reactions: String,
 }
 
 impl<'a> Viewer<'a> {
@@ -169,6 +172,11 @@ impl<'a> Viewer<'a> {
         let frames = frames.decimated(self.max_frames);
         let times: Vec<u8> = frames.times.iter().flat_map(|t| t.to_le_bytes()).collect();
         let poses: Vec<u8> = frames.poses.iter().flat_map(|p| (*p as f32).to_le_bytes()).collect();
+        let reactions: Vec<u8> = frames
+            .reactions
+            .iter()
+            .flat_map(|p| (*p as f32).to_le_bytes())
+            .collect();
         let data = Data {
             title: self.title,
             drawing: self.drawing,
@@ -188,6 +196,7 @@ impl<'a> Viewer<'a> {
             frames: frames.len(),
             times: base64(&times),
             poses: base64(&poses),
+            reactions: base64(&reactions),
         };
         // Serializing plain data to a string cannot fail; `</` is escaped so that no name can end
         // the script element.

@@ -1,8 +1,10 @@
 // dalembert 3D viewer: plays the poses of a spatial run with three.js (inlined in the page).
 // Data: the JSON element #dalembert-data (drawing.spatial, traces, base64 times and poses: per
-// body x, y, z, e0, e1, e2, e3). Address options: #t=1.5 opens paused at t = 1.5 s.
+// body x, y, z, e0, e1, e2, e3; optionally reactions: per joint fx, fy, fz). Address options:
+// #t=1.5 opens paused at t = 1.5 s; &reactions shows the reaction arrows.
 // The page reports on <body>: data-status, data-time, data-errors, data-viewport,
-// data-first-draw-ms, data-meshes (the visual meshes drawn); on the canvas, data-view: the camera's view-projection matrix, the canvas'
+// data-first-draw-ms, data-meshes (the visual meshes drawn), data-reactions (the arrows) and
+// data-reaction-scale (newtons per metre of arrow); on the canvas, data-view: the camera's view-projection matrix, the canvas'
 // place in the window and the bodies' colours (the rendering test projects with them).
 "use strict";
 const errors = [];
@@ -222,6 +224,37 @@ for (const j of drawing.joints) {
     owner.add(arrow);
   }
 }
+// Reactions: per joint an arrow at its point on its first body, the force its second body exerts
+// on its first (as in the CSV); the largest force of the run is 0.3 of the scene's size.
+const reactions = data.reactions ? decode(data.reactions, Float32Array) : new Float32Array(0);
+const nj = drawing.joints.length;
+const R = 3 * nj;
+const REACTION = "#c0392b";
+let largestForce = 0;
+for (let k = 0; k + 2 < reactions.length; k += 3) {
+  largestForce = Math.max(largestForce, Math.hypot(reactions[k], reactions[k + 1], reactions[k + 2]));
+}
+const reactionArrows = [];
+const metresPerNewton = largestForce > 0 ? (0.3 * radius) / largestForce : 0;
+if (reactions.length === R * nf && nj > 0 && largestForce > 0) {
+  for (let j = 0; j < nj; j++) {
+    const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1, REACTION,
+      0.2 * 0.3 * radius, 0.08 * 0.3 * radius);
+    arrow.visible = false;
+    arrow.cone.material.depthTest = false;
+    arrow.line.material.depthTest = false;
+    arrow.renderOrder = 11;
+    scene.add(arrow);
+    reactionArrows.push(arrow);
+  }
+  document.getElementById("reactions-label").hidden = false;
+  document.getElementById("reaction-scale").textContent =
+    "(1 m = " + (1 / metresPerNewton).toPrecision(3) + " N)";
+  document.body.dataset.reactions = String(nj);
+  document.body.dataset.reactionScale = String(1 / metresPerNewton);
+}
+let showReactions = false;
+
 // Centres of mass: small dark squares of fixed size (4 px), drawn over everything.
 const markerGeometry = new THREE.BufferGeometry();
 const markerPositions = new Float32Array(3 * nb);
@@ -346,6 +379,28 @@ function setPose(t) {
   }
   markerGeometry.attributes.position.needsUpdate = true;
   for (const line of traces) line.geometry.setDrawRange(0, frame + 1);
+  for (let j = 0; j < reactionArrows.length; j++) {
+    const arrow = reactionArrows[j];
+    const oa = a * R + 3 * j, ob = b * R + 3 * j;
+    const f = new THREE.Vector3(
+      (1 - s) * reactions[oa] + s * reactions[ob],
+      (1 - s) * reactions[oa + 1] + s * reactions[ob + 1],
+      (1 - s) * reactions[oa + 2] + s * reactions[ob + 2]);
+    const length = f.length() * metresPerNewton;
+    const joint = drawing.joints[j];
+    const at = v3(joint.points[0]);
+    if (joint.bodies[0] !== null) {
+      const g = bodies[joint.bodies[0]];
+      g.updateMatrixWorld();
+      at.applyMatrix4(g.matrixWorld);
+    }
+    arrow.position.copy(at);
+    arrow.visible = showReactions && length > 1e-3 * radius;
+    if (length > 0) {
+      arrow.setDirection(f.normalize());
+      arrow.setLength(length, Math.min(0.2 * 0.3 * radius, 0.5 * length), Math.min(0.08 * 0.3 * radius, 0.2 * length));
+    }
+  }
 }
 
 function layout() {
@@ -411,6 +466,10 @@ document.getElementById("axes").addEventListener("change", (e) => {
   for (const o of axisObjects) o.visible = e.target.checked;
   render();
 });
+document.getElementById("reactions").addEventListener("change", (e) => {
+  showReactions = e.target.checked;
+  draw(current);
+});
 document.getElementById("centres").addEventListener("change", (e) => {
   markers.visible = e.target.checked;
   render();
@@ -427,6 +486,10 @@ window.addEventListener("resize", () => { layout(); draw(current); });
 // #t=1.5: that instant, paused.
 const hash = new URLSearchParams(location.hash.slice(1));
 const start = hash.has("t") ? parseFloat(hash.get("t")) : NaN;
+if (hash.has("reactions") && reactionArrows.length) {
+  showReactions = true;
+  document.getElementById("reactions").checked = true;
+}
 layout();
 fit();
 sun.position.copy(camera.position).addScaledVector(up, radius);

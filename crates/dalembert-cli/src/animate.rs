@@ -77,9 +77,29 @@ pub fn run(a: Args) -> Result<(), String> {
         }
         None => {
             let mut frames = Frames::for_drawing(&scene.drawing);
-            let result = scene
-                .simulation()
-                .run_cancellable(&mut |s| frames.push(s.t, s.q), crate::interrupt_flag());
+            // The joints' reactions drawn as arrows: their columns of each row.
+            let mut rows = dalembert::output::Rows::new(&scene.model);
+            let wanted = Frames::reaction_columns(&scene.drawing);
+            let mut forces: Vec<usize> = (wanted.iter())
+                .filter_map(|n| rows.names().iter().position(|c| c == n))
+                .collect();
+            if forces.len() != wanted.len() {
+                forces.clear();
+            }
+            let (mut row, mut f) = (Vec::new(), Vec::new());
+            let result = scene.simulation().run_cancellable(
+                &mut |s| {
+                    frames.push(s.t, s.q);
+                    if !forces.is_empty() {
+                        row.clear();
+                        rows.push(s, &mut row);
+                        f.clear();
+                        f.extend(forces.iter().map(|&k| row[k]));
+                        frames.push_reactions(&f);
+                    }
+                },
+                crate::interrupt_flag(),
+            );
             (frames, result.err().map(|e| e.to_string()))
         }
     };

@@ -685,3 +685,93 @@ fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
         }
     }
 }
+
+/// Reaction arrows (`#reactions` in the address, a check box on the page): a pendulum on a
+/// spherical joint, swinging. At each time the arrow at the pivot points along the force the bob
+/// exerts on the ground (the CSV's `pivot.fx, fy, fz`, at the page's own scale,
+/// `data-reaction-scale`): its head, drawn in #c0392b, lies 90 % of the way to the tip (at least
+/// 3 pixels of that colour within 3 px) and nothing of it lies on the opposite side. The page made
+/// from the run and the one replayed from the CSV carry the same arrows.
+#[test]
+fn the_3d_viewer_draws_each_joint_reaction_along_its_force() {
+    let Some(browser) = chromium_or_skip() else {
+        return;
+    };
+    let budget = "--virtual-time-budget=5000";
+    let size = (800, 560);
+    let path = tmp("swinging-bob.toml");
+    std::fs::write(
+        &path,
+        "[scene]\ngravity = [0.0, 0.0, -9.81]\n[[bodies]]\nname = \"bob\"\nmass = 3.0\nshape = { sphere = 0.1 }\nposition = [0.5, 0.2, -0.6]\n[[joints]]\nname = \"pivot\"\ntype = \"spherical\"\nbodies = [\"ground\", \"bob\"]\nat = [0.0, 0.0, 0.0]\n[simulation]\nend = 1.0\noutput_every = 0.01\n",
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let (csv, from_run, replayed) = (tmp("bob.csv"), tmp("bob-run.html"), tmp("bob-csv.html"));
+    let (ok, _, err) = dalembert(&["simulate", path, "--output", csv.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&["animate", path, "--output", from_run.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&[
+        "animate",
+        path,
+        "--from",
+        csv.to_str().unwrap(),
+        "--output",
+        replayed.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let data = |p: &Path| {
+        let page = std::fs::read_to_string(p).unwrap();
+        let at = page.find("\"reactions\":\"").unwrap() + 13;
+        page[at..at + page[at..].find('"').unwrap()].to_string()
+    };
+    assert_eq!(data(&from_run), data(&replayed), "the run's page and the replay's");
+    assert!(data(&from_run).len() > 100);
+    let mut rdr = csv::Reader::from_path(&csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let (ft, fx, fy, fz) = (col("t"), col("pivot.fx"), col("pivot.fy"), col("pivot.fz"));
+    let rows: Vec<Vec<f64>> = rdr
+        .records()
+        .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let probe = browse(
+        &browser,
+        &format!("file://{}#t=0&reactions", from_run.display()),
+        size,
+        &["--dump-dom", budget],
+    );
+    let seen = attribute(&probe, "<body", "data-viewport").unwrap();
+    let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
+    let dump = (size.0, 2 * size.1 - seen_height);
+    for t in [0.3, 0.6] {
+        let url = format!("file://{}#t={t}&reactions", from_run.display());
+        let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);
+        assert_eq!(attribute(&dom, "<body", "data-errors"), None, "script errors");
+        assert_eq!(attribute(&dom, "<body", "data-reactions").as_deref(), Some("1"));
+        let scale: f64 = attribute(&dom, "<body", "data-reaction-scale")
+            .unwrap()
+            .parse()
+            .unwrap();
+        let view = attribute(&dom, "<canvas", "data-view").unwrap();
+        let shot = tmp(&format!("bob-{t}.png"));
+        browse(
+            &browser,
+            &url,
+            size,
+            &[&format!("--screenshot={}", shot.display()), budget],
+        );
+        let png = Png::read(&shot);
+        let row = rows.iter().find(|r| (r[ft] - t).abs() < 1e-9).unwrap();
+        let f = [row[fx], row[fy], row[fz]];
+        let along = |k: f64| f.map(|c| k * c / scale);
+        let red = [0xc0, 0x39, 0x2b];
+        let head = count_near(&png, project(&view, along(0.9)), 3, red, 10);
+        let behind = count_near(&png, project(&view, along(-0.9)), 3, red, 10);
+        assert!(
+            head >= 3,
+            "t = {t}: no arrow head at 90 % of the force {f:?} ({head} pixels)"
+        );
+        assert_eq!(behind, 0, "t = {t}: the arrow points the other way");
+    }
+}

@@ -183,23 +183,13 @@ impl PyRun {
                 "max_frames must be at least 2, got {max_frames}"
             )));
         }
-        let mut frames = Frames::for_drawing(&self.scene.drawing);
-        let cols: Vec<usize> = Frames::columns(&self.scene.drawing)
-            .iter()
-            .map(|n| {
-                self.table
-                    .index(n)
-                    .ok_or_else(|| PyValueError::new_err(self.table.unknown_column(n)))
-            })
-            .collect::<PyResult<_>>()?;
-        let mut q = vec![0.0; cols.len()];
-        for i in 0..self.table.rows() {
-            let row = self.table.row(i);
-            for (qk, &c) in q.iter_mut().zip(&cols) {
-                *qk = row[c];
-            }
-            frames.push(row[0], &q);
-        }
+        let table = &self.table;
+        let frames = Frames::from_rows(
+            &self.scene.drawing,
+            &table.columns,
+            (0..table.rows()).map(|i| table.row(i)),
+        )
+        .map_err(PyValueError::new_err)?;
         let mut viewer = Viewer::new(&self.scene.name, &self.scene.drawing).max_frames(max_frames);
         if let Some(spatial) = &self.scene.drawing.spatial {
             viewer = viewer.meshes(meshes.load(spatial).map_err(|e| PyValueError::new_err(e.to_string()))?);
