@@ -155,7 +155,19 @@ impl Scene {
         let sys = system.constraints();
         let mut values = sys.values();
         with_inputs(&u, || sys.evaluate(t, &q, &qd, &mut values));
-        let partition = self.partition(sys, &values, &options.states, &position_names)?;
+        // Joint values as states (`shoulder.q`, …): a spatial tree moved by its joints.
+        let joint_states = self.joint_states(&options.states, &rows)?;
+        let named_states: &[String] = if joint_states.is_some() { &[] } else { &options.states };
+        let partition = self.partition(sys, &values, named_states, &position_names)?;
+        if let Some(js) = &joint_states {
+            if js.names.len() != partition.dof() {
+                return Err(request(format!(
+                    "{} joint values named where the model has {} degree(s) of freedom here (name every joint of a tree whose base is fixed)",
+                    js.names.len(),
+                    partition.dof()
+                )));
+            }
+        }
         let mut transform = VelocityTransform::new(&partition, sys);
         if !transform.refactor(&values) || transform.condition > CONDITION_LIMIT {
             let named: Vec<&str> = partition
@@ -186,8 +198,23 @@ impl Scene {
         let dof = reduced.partition.independent.len();
         let (nx, nu, ny) = (2 * dof, options.inputs.len(), options.outputs.len());
         let mut x0 = vec![0.0; nx];
-        for (j, &k) in reduced.partition.independent.iter().enumerate() {
-            x0[dof + j] = qd[k];
+        match &joint_states {
+            Some(js) => {
+                // The joints' values and rates at the operating point, from its output row.
+                let row = reduced.row_at(&q, &qd)?;
+                for (j, (&value, &rate)) in js.values.iter().zip(&js.rates).enumerate() {
+                    x0[j] = row[value];
+                    x0[dof + j] = row[rate];
+                }
+                let mut js = js.clone();
+                js.at = x0[..dof].to_vec();
+                reduced.joints = Some(js);
+            }
+            None => {
+                for (j, &k) in reduced.partition.independent.iter().enumerate() {
+                    x0[dof + j] = qd[k];
+                }
+            }
         }
         let u0: Vec<f64> = reduced.input_of.iter().map(|&k| u[k]).collect();
         let (mut drift, mut outputs_at) = (vec![0.0; nx], vec![0.0; ny]);
@@ -202,7 +229,9 @@ impl Scene {
         let (mut df, mut dy) = (vec![0.0; nx], vec![0.0; ny]);
         for k in 0..nx + nu {
             let (mut x, mut uu) = (x0.clone(), u0.clone());
-            let step = if k < dof {
+            let step = if k < dof && reduced.joints.is_some() {
+                STEP // rad, or m: a joint value
+            } else if k < dof {
                 let name = &position_names[reduced.partition.independent[k]];
                 STEP * if is_rotation(name) { 1.0 } else { size }
             } else if k < nx {
@@ -231,9 +260,14 @@ impl Scene {
             ycol.into_iter().zip(&dy).for_each(|(o, v)| *o = *v);
         }
         let independent = &reduced.partition.independent;
-        let states = (independent.iter().map(|&k| position_names[k].clone()))
-            .chain(independent.iter().map(|&k| velocity_names[k].clone()))
-            .collect();
+        let states = match &reduced.joints {
+            Some(js) => (js.names.iter().map(|n| format!("{n}.q")))
+                .chain(js.names.iter().map(|n| format!("{n}.qd")))
+                .collect(),
+            None => (independent.iter().map(|&k| position_names[k].clone()))
+                .chain(independent.iter().map(|&k| velocity_names[k].clone()))
+                .collect(),
+        };
         Ok(Linearization {
             a,
             b,
@@ -262,6 +296,32 @@ impl Scene {
                 unknown_name("input", name, &names)
             })
         })
+    }
+
+    /// Joint-value states: every name in `states` a `JOINT.q` column of a spatial model (then
+    /// the joints, with their value and rate columns in `rows`); `None` otherwise.
+    fn joint_states(&self, states: &[String], rows: &Rows) -> Result<Option<JointStates>, LinearizationError> {
+        let names = rows.names();
+        let column = |n: &str| names.iter().position(|c| c == n);
+        let joint_values: Vec<&str> = states.iter().filter_map(|s| s.strip_suffix(".q")).collect();
+        if states.is_empty() || self.model.spatial().is_none() || joint_values.len() != states.len() {
+            return Ok(None);
+        }
+        let mut js = JointStates::default();
+        for joint in joint_values {
+            let (Some(value), Some(rate), Some(acceleration)) = (
+                column(&format!("{joint}.q")),
+                column(&format!("{joint}.qd")),
+                column(&format!("{joint}.qdd")),
+            ) else {
+                return Ok(None);
+            };
+            js.names.push(joint.to_string());
+            js.values.push(value);
+            js.rates.push(rate);
+            js.accelerations.push(acceleration);
+        }
+        Ok(Some(js))
     }
 
     /// The operating point `(t, q, v, inputs)`, assembled to the constraints.
@@ -402,9 +462,22 @@ fn state_names(system: &dyn MultibodySystem) -> (Vec<String>, Vec<String>) {
     (positions, velocities)
 }
 
+/// States that are joint values and rates: the joints' names and their `.q` and `.qd` columns.
+#[derive(Debug, Clone, Default)]
+struct JointStates {
+    names: Vec<String>,
+    values: Vec<usize>,
+    rates: Vec<usize>,
+    accelerations: Vec<usize>,
+    /// The joints' values at the operating point (the moves are from there).
+    at: Vec<f64>,
+}
+
 /// The reduced dynamics `f(x, u)` and outputs `g(x, u)` at a fixed time and partition.
 struct Reduced<'a> {
     system: &'a dyn MultibodySystem,
+    /// The spatial model, for joint-value states.
+    spatial: Option<&'a dalembert_spatial::Model>,
     formulation: Box<dyn Formulation>,
     partition: Partition,
     transform: VelocityTransform,
@@ -428,6 +501,8 @@ struct Reduced<'a> {
     product: Vec<f64>,
     y: Vec<f64>,
     size: f64,
+    /// Joint values and rates as the state (a spatial tree), instead of the partition's.
+    joints: Option<JointStates>,
 }
 
 impl<'a> Reduced<'a> {
@@ -448,6 +523,7 @@ impl<'a> Reduced<'a> {
         let r = partition.rows.len();
         Reduced {
             system,
+            spatial: scene.model.spatial(),
             formulation,
             partition,
             transform,
@@ -470,11 +546,100 @@ impl<'a> Reduced<'a> {
             product: vec![0.0; m],
             y: vec![0.0; r],
             size: 1.0 + q0.iter().fold(0.0f64, |a, x| a.max(x.abs())),
+            joints: None,
         }
+    }
+
+    /// The output row at `(q, v)` (accelerations at the current inputs).
+    fn row_at(&mut self, q: &[f64], v: &[f64]) -> Result<Vec<f64>, LinearizationError> {
+        self.q.copy_from_slice(q);
+        self.v.copy_from_slice(v);
+        self.sample_row()?;
+        Ok(self.row.clone())
+    }
+
+    /// The output row at the state in `self.q`, `self.v` into `self.row`.
+    fn sample_row(&mut self) -> Result<(), LinearizationError> {
+        let t = self.t;
+        let Reduced {
+            formulation,
+            q,
+            v,
+            qdd,
+            lambda,
+            c,
+            cdot,
+            u,
+            ..
+        } = self;
+        let energy = with_inputs(u, || -> Result<f64, LinearizationError> {
+            formulation
+                .accelerations(t, q, v, None, qdd, lambda)
+                .map_err(|e| LinearizationError::Model(e.to_string()))?;
+            formulation.residuals(t, q, v, c, cdot);
+            Ok(formulation.energy(t, q, v).total())
+        })?;
+        let largest = |x: &[f64]| x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        self.row.clear();
+        self.rows.push(
+            &Sample {
+                t,
+                q: &self.q,
+                qd: &self.v,
+                qdd: &self.qdd,
+                lambda: &self.lambda,
+                constraint_violation: largest(&self.c),
+                velocity_violation: largest(&self.cdot),
+                energy,
+            },
+            &mut self.row,
+        );
+        Ok(())
+    }
+
+    /// `f(x, u)` and `g(x, u)` with joint values and rates as the state: the tree turned from the
+    /// operating point by each joint's change of value, its rates set from rest
+    /// ([`dalembert_spatial::Model::move_joints`], whose moves are relative), `f` read from the
+    /// joints' rate and acceleration columns.
+    fn eval_joints(&mut self, x: &[f64], f: &mut [f64], y: &mut [f64]) -> Result<(), LinearizationError> {
+        let Some(js) = self.joints.clone() else {
+            return Ok(());
+        };
+        let dof = js.names.len();
+        let model = self
+            .spatial
+            .ok_or_else(|| LinearizationError::Model("joint values need a spatial model".into()))?;
+        let moves: Vec<dalembert_spatial::joint_values::JointMove> = (js.names.iter().enumerate())
+            .map(|(j, n)| dalembert_spatial::joint_values::JointMove {
+                joint: n.clone(),
+                value: x[j] - js.at[j],
+                rate: x[dof + j],
+            })
+            .collect();
+        self.q.copy_from_slice(&self.q0);
+        self.v.fill(0.0);
+        model
+            .move_joints(&mut self.q, &mut self.v, &moves)
+            .map_err(|e| LinearizationError::Model(e.to_string()))?;
+        self.sample_row()?;
+        for (j, (&rate, &acceleration)) in js.rates.iter().zip(&js.accelerations).enumerate() {
+            f[j] = self.row[rate];
+            f[dof + j] = self.row[acceleration];
+        }
+        for (o, &k) in y.iter_mut().zip(&self.output_of) {
+            *o = self.row[k];
+        }
+        Ok(())
     }
 
     /// `f(x, u)` into `f` and `g(x, u)` into `y`.
     fn eval(&mut self, x: &[f64], u: &[f64], f: &mut [f64], y: &mut [f64]) -> Result<(), LinearizationError> {
+        if self.joints.is_some() {
+            for (j, &k) in self.input_of.iter().enumerate() {
+                self.u[k] = u[j];
+            }
+            return self.eval_joints(x, f, y);
+        }
         let Reduced {
             system,
             partition,
@@ -545,52 +710,13 @@ impl<'a> Reduced<'a> {
         for (k, &d) in partition.dependent.iter().enumerate() {
             self.v[d] = self.y[k];
         }
-        // Accelerations from the scene's formulation, and the chart's rates.
-        let Reduced {
-            formulation,
-            q,
-            v,
-            qdd,
-            lambda,
-            ..
-        } = self;
-        with_inputs(inputs, || formulation.accelerations(t, q, v, None, qdd, lambda))
-            .map_err(|e| LinearizationError::Model(e.to_string()))?;
+        // Accelerations from the scene's formulation (and the output row), and the chart's rates.
+        self.sample_row()?;
         system.chart_rates(&self.delta, &self.v, &mut self.rates);
         for (j, &k) in self.partition.independent.iter().enumerate() {
             f[j] = self.rates[k];
             f[dof + j] = self.qdd[k];
         }
-        if self.output_of.is_empty() {
-            return Ok(());
-        }
-        let Reduced {
-            formulation,
-            q,
-            v,
-            c,
-            cdot,
-            ..
-        } = self;
-        let energy = with_inputs(inputs, || {
-            formulation.residuals(t, q, v, c, cdot);
-            formulation.energy(t, q, v).total()
-        });
-        let largest = |x: &[f64]| x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        self.row.clear();
-        self.rows.push(
-            &Sample {
-                t,
-                q: &self.q,
-                qd: &self.v,
-                qdd: &self.qdd,
-                lambda: &self.lambda,
-                constraint_violation: largest(&self.c),
-                velocity_violation: largest(&self.cdot),
-                energy,
-            },
-            &mut self.row,
-        );
         for (o, &k) in y.iter_mut().zip(&self.output_of) {
             *o = self.row[k];
         }

@@ -139,8 +139,10 @@ pub struct JointMove {
 }
 
 impl Model {
-    /// Moves the state `(q, v)` so that each joint of `moves` reads its value and rate
-    /// ([`Model::joint_values_into`]), the other joints keeping theirs: the bodies on the side of
+    /// Moves the state `(q, v)` by each joint of `moves`: from the model's initial configuration
+    /// at rest, each then reads its value and rate ([`Model::joint_values_into`]); from another
+    /// state the value is a change (a turn or a slide by it) and the rate is added. The other
+    /// joints keep theirs: the bodies on the side of
     /// the joint away from the ground turn about its axis (revolute) or slide along it
     /// (prismatic), and that side's velocities gain the joint's rate. The moves apply in any
     /// order (each carries what lies beyond it rigidly). An error names a joint that is not a
