@@ -19,6 +19,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             eq.unstable_directions.len()
         );
     }
+    // The spatial chain of 64 started hanging (its first joint turned down by `[initial]`): the
+    // equilibrium and modes where a user would ask for them.
+    let hanging = dalembert_testkit::spatial::chain3d_toml(64, 1.0)
+        + "\n[initial]\njoints = { joint0 = 1.5707963267948966 }\n";
+    let scene = dalembert::Scene::from_toml(&hanging, "hanging spatial chain")?;
+    let start = Instant::now();
+    let modes = scene.modes()?;
+    println!(
+        "spatial chain of 64 hanging: equilibrium and modes in {:.1} ms ({} Newton iterations), lowest {:.6} Hz",
+        start.elapsed().as_secs_f64() * 1e3,
+        modes.equilibrium.iterations,
+        modes.frequencies[0]
+    );
     // A planar chain of 64 rods started hanging at rest: the equilibrium and modes of a model of
     // 192 coordinates.
     let scene = dalembert::Scene::from_toml(&hanging_chain(64), "hanging chain")?;
