@@ -21,8 +21,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     // The spatial chain of 64 started hanging (its first joint turned down by `[initial]`): the
     // equilibrium and modes where a user would ask for them.
-    let hanging = dalembert_testkit::spatial::chain3d_toml(64, 1.0)
-        + "\n[initial]\njoints = { joint0 = 1.5707963267948966 }\n";
+    let hanging =
+        dalembert_testkit::spatial::chain3d_toml(64, 1.0) + "\n[initial]\njoints = { joint0 = 1.5707963267948966 }\n";
     let scene = dalembert::Scene::from_toml(&hanging, "hanging spatial chain")?;
     let start = Instant::now();
     let modes = scene.modes()?;

@@ -92,10 +92,13 @@ pub struct Equilibrium {
     pub stable: bool,
     /// Newton iterations taken.
     pub iterations: usize,
+    /// The reduced matrices there (for the modes: computed once).
+    pub(crate) reduced: Reduced,
 }
 
 /// The reduced matrices of a scene at a state of rest: `B` (`n_v × dof`, admissible velocities
 /// `v = B v_i`), `K_r = Bᵀ K B`, `D_r = Bᵀ D B`, `M_r = Bᵀ M B`, with `K = ∂r/∂q`, `D = ∂r/∂v`.
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Reduced {
     pub b: DMatrix<f64>,
     pub k: DMatrix<f64>,
@@ -352,6 +355,7 @@ impl Scene {
             unstable_directions,
             stable,
             iterations,
+            reduced,
         })
     }
 

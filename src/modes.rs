@@ -10,9 +10,8 @@
 //! `s₁ s₂`: `ω_n = √(s₁ s₂)`, `ζ = −(s₁ + s₂) / (2 ω_n)`), and the shapes stay the undamped ones.
 
 use crate::animation::Frames;
-use crate::equilibrium::{reduced_matrices, relative_stiffness, Equilibrium, EquilibriumError};
+use crate::equilibrium::{relative_stiffness, Equilibrium, EquilibriumError};
 use crate::Scene;
-use dalembert_system::ResidualTangent;
 use nalgebra::DMatrix;
 use std::f64::consts::PI;
 
@@ -48,8 +47,8 @@ impl Scene {
             )));
         }
         let system = self.model.as_system();
-        let mut tangent = ResidualTangent::new(system);
-        let r = reduced_matrices(system, 0.0, &equilibrium.q, &equilibrium.lambda, &mut tangent)?;
+        // The reduced matrices the equilibrium was judged with (the same state and multipliers).
+        let r = equilibrium.reduced.clone();
         let dof = r.m.nrows();
         if dof == 0 {
             // Nothing moves: a fully driven or fully constrained model has no modes.
