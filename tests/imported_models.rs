@@ -127,3 +127,43 @@ fn a_floating_base_robot_keeps_its_momenta_and_is_refused_in_joint_coordinates()
         "joint coordinates: {message}"
     );
 }
+
+/// An MJCF slide with a spring (`stiffness`, `springref`) hanging 3 m below where the file puts
+/// it: the spring acts along the slide for any travel (its line reaches from 1 000 m behind the
+/// joint), so the body comes to rest at `springref − m g / k` (closed form, 1e-9 m; a line from
+/// 1 m behind would have turned the spring around after 1 m of travel), and the linear model there
+/// has `A₂₁ = −k/m` and, for the motor of gear 3, `B₂ = gear/m` (1e-9).
+#[test]
+fn a_sprung_mjcf_slide_rests_where_its_spring_balances_gravity_far_from_the_file() {
+    let (m, k, springref, gear) = (2.0, 5.0, 0.5, 3.0);
+    let text = format!(
+        r#"<mujoco>
+  <option gravity="0 0 -9.81"/>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="s" type="slide" axis="0 0 1" stiffness="{k}" springref="{springref}" damping="1"/>
+      <geom type="sphere" size="0.1" mass="{m}"/>
+    </body>
+  </worldbody>
+  <actuator><motor name="lift" joint="s" gear="{gear}"/></actuator>
+</mujoco>"#
+    );
+    let path = std::env::temp_dir().join(format!("sprung-slide-{}.xml", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    let scene = Scene::from_path(&path).unwrap();
+    let eq = scene.equilibrium().unwrap();
+    let z = eq.positions.iter().find(|(n, _)| n == "a.z").unwrap().1;
+    let expected = 1.0 + springref - m * 9.81 / k;
+    assert!(expected < -2.0, "the rest is far below the file's position");
+    assert!((z - expected).abs() < 1e-9, "z = {z}, expected {expected}");
+    let lin = scene
+        .linearize(&dalembert::LinearizeOptions {
+            inputs: vec!["lift".into()],
+            states: vec!["a.z".into()],
+            ..Default::default()
+        })
+        .unwrap();
+    assert!((lin.b[(1, 0)] - gear / m).abs() < 1e-9, "B = {}", lin.b);
+    assert!((lin.a[(1, 0)] + k / m).abs() < 1e-9, "A = {}", lin.a);
+    std::fs::remove_file(&path).ok();
+}

@@ -630,12 +630,18 @@ impl<'s, 'a> Reader<'s, 'a> {
                         let frame = tree.world[j.child];
                         let (point, axis) = (frame.p, frame.r * j.axis);
                         let bodies = [body_name(j.parent), body_name(j.child)];
-                        // Along the axis, between a point of the parent 1 m behind the joint and
-                        // the joint's point on the child: a tension pulls them together, so the
-                        // push along the axis is the actuator's negative.
+                        // Along the axis, between a point of the parent LEVER behind the joint
+                        // and the joint's point on the child: a tension pulls them together, so
+                        // the push along the axis is the actuator's negative.
                         force(input, "spring-damper")
                             .set("bodies", bodies)
-                            .set("at", [<[f64; 3]>::from(point - axis), <[f64; 3]>::from(point)])
+                            .set(
+                                "at",
+                                [
+                                    <[f64; 3]>::from(point - super::tree::LEVER * axis),
+                                    <[f64; 3]>::from(point),
+                                ],
+                            )
                             .set("stiffness", 0.0)
                             .set("actuator", Function::input(input).gain(-gear))
                     }
