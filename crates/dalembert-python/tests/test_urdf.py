@@ -75,7 +75,13 @@ def absolute_state(model, data, scene_bodies, local_centres, theta, rate):
     body-frame angular velocity per body) at joint angles `theta` and rates `rate`, from
     Pinocchio's forward kinematics: each body's axes are its link's frame, its centre of mass at
     `local_centres[body]` in that frame."""
-    pin.forwardKinematics(model, data, configuration(model, theta), rate)
+    return placed_bodies(model, data, scene_bodies, local_centres, configuration(model, theta), rate)
+
+
+def placed_bodies(model, data, scene_bodies, local_centres, q, v):
+    """dalembert's absolute state at Pinocchio's configuration `q` and velocity `v` (any root
+    joint), from its forward kinematics (see `absolute_state`)."""
+    pin.forwardKinematics(model, data, q, v)
     pin.updateFramePlacements(model, data)
     positions, velocities = [], []
     for body in scene_bodies:
@@ -313,17 +319,7 @@ def test_a_floating_base_robot_accelerates_as_pinocchios_free_flyer(scenes, tmp_
         q = np.concatenate([rng.uniform(-1.0, 1.0, 3), quat, *joints])
         v = np.concatenate([rng.uniform(-2.0, 2.0, 6), rng.uniform(-2.0, 2.0, model.nv - 6)])
         a = pin.aba(model, data, q, v, np.zeros(model.nv))[6:]
-        pin.forwardKinematics(model, data, q, v)
-        pin.updateFramePlacements(model, data)
-        positions, velocities = [], []
-        for body in scene.bodies:
-            f = model.getFrameId(body)
-            R, p = data.oMf[f].rotation, data.oMf[f].translation
-            twist = pin.getFrameVelocity(model, data, f, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-            arm = R @ centres[body]
-            x, y, z, w = pin.Quaternion(R).coeffs()
-            positions += [*(p + arm), w, x, y, z]
-            velocities += [*(twist.linear + np.cross(twist.angular, arm)), *(R.T @ twist.angular)]
+        positions, velocities = placed_bodies(model, data, scene.bodies, centres, q, v)
         for f, sim in sims.items():
             moved = sim.set_state(positions, velocities)
             assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12, f"{f}: {moved}"
