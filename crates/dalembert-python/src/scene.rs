@@ -370,20 +370,7 @@ impl PyScene {
         let lin = py
             .detach(move || scene.linearize(&options))
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        let d = PyDict::new(py);
-        for (name, m) in [("A", &lin.a), ("B", &lin.b), ("C", &lin.c), ("D", &lin.d)] {
-            let array = numpy::ndarray::Array2::from_shape_fn(m.shape(), |(i, j)| m[(i, j)]);
-            d.set_item(name, numpy::PyArray2::from_owned_array(py, array))?;
-        }
-        d.set_item("states", &lin.states)?;
-        d.set_item("inputs", &lin.inputs)?;
-        d.set_item("outputs", &lin.outputs)?;
-        d.set_item("drift", numpy::PyArray1::from_vec(py, lin.drift.clone()))?;
-        d.set_item("outputs_at", numpy::PyArray1::from_vec(py, lin.outputs_at.clone()))?;
-        d.set_item("t", lin.t)?;
-        d.set_item("q", numpy::PyArray1::from_vec(py, lin.q.clone()))?;
-        d.set_item("qd", numpy::PyArray1::from_vec(py, lin.qd.clone()))?;
-        Ok(d)
+        linearization_dict(py, &lin)
     }
 
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
@@ -737,5 +724,24 @@ fn equilibrium_dict<'py>(py: Python<'py>, eq: &dalembert::Equilibrium) -> PyResu
     d.set_item("unstable_directions", &eq.unstable_directions)?;
     d.set_item("stiffness", &eq.stiffness)?;
     d.set_item("iterations", eq.iterations)?;
+    Ok(d)
+}
+
+/// A linear model as the dict `scene.linearize()` returns (`A`, `B`, `C`, `D`, names, drift,
+/// outputs at the operating point, and the operating point).
+pub(crate) fn linearization_dict<'py>(py: Python<'py>, lin: &dalembert::Linearization) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (name, m) in [("A", &lin.a), ("B", &lin.b), ("C", &lin.c), ("D", &lin.d)] {
+        let array = numpy::ndarray::Array2::from_shape_fn(m.shape(), |(i, j)| m[(i, j)]);
+        d.set_item(name, numpy::PyArray2::from_owned_array(py, array))?;
+    }
+    d.set_item("states", &lin.states)?;
+    d.set_item("inputs", &lin.inputs)?;
+    d.set_item("outputs", &lin.outputs)?;
+    d.set_item("drift", numpy::PyArray1::from_vec(py, lin.drift.clone()))?;
+    d.set_item("outputs_at", numpy::PyArray1::from_vec(py, lin.outputs_at.clone()))?;
+    d.set_item("t", lin.t)?;
+    d.set_item("q", numpy::PyArray1::from_vec(py, lin.q.clone()))?;
+    d.set_item("qd", numpy::PyArray1::from_vec(py, lin.qd.clone()))?;
     Ok(d)
 }

@@ -290,6 +290,53 @@ impl PySimulator {
         Ok(d)
     }
 
+    /// The motion linearized about the simulator's current time, state and input values, as
+    /// `Scene.linearize` gives it (same arguments but `at`; `docs/statics.md`, "Linearization").
+    /// Forces set from Python functions are not part of the model and are refused.
+    #[pyo3(signature = (inputs=None, outputs=None, states=None))]
+    fn linearize<'py>(
+        &self,
+        py: Python<'py>,
+        inputs: Option<Vec<String>>,
+        outputs: Option<Vec<String>>,
+        states: Option<Vec<String>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        if self.python_forces {
+            return Err(PyValueError::new_err(
+                "linearize: the simulator's forces from Python functions are not part of the scene's model; linearize a simulator without them",
+            ));
+        }
+        let about = {
+            let sim = self.sim();
+            let (q, qd) = sim.state();
+            let values = (sim.inputs().iter())
+                .map(|n| {
+                    Ok((
+                        n.clone(),
+                        sim.input(n).map_err(|e| PyValueError::new_err(e.to_string()))?,
+                    ))
+                })
+                .collect::<PyResult<Vec<_>>>()?;
+            dalembert::About::State {
+                t: sim.time(),
+                q: q.to_vec(),
+                qd: qd.to_vec(),
+                inputs: values,
+            }
+        };
+        let options = dalembert::LinearizeOptions {
+            inputs: inputs.unwrap_or_default(),
+            outputs: outputs.unwrap_or_default(),
+            states: states.unwrap_or_default(),
+            about,
+        };
+        let scene = self.scene.clone();
+        let lin = py
+            .detach(move || scene.linearize(&options))
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        crate::scene::linearization_dict(py, &lin)
+    }
+
     /// The current state `(q, v)` as numpy arrays, in the model's coordinates (planar: x, y,
     /// angle per body; spatial: x, y, z and Euler parameters per body, then velocities).
     #[getter]

@@ -78,3 +78,29 @@ def test_bad_requests_name_the_cause():
         scene.linearize(at="upright")
     with pytest.raises(ValueError, match="at has no 'qd'"):
         scene.linearize(at={"q": [0.0] * 6})
+
+
+def test_a_simulator_linearizes_where_it_is():
+    # The shipped pendulum stepped to 0.4 s, swinging: linearized in its angle at the simulator's
+    # state, A = [0 1; −ω² cos(θ − θ_h) 0] and the drift [θ̇, −ω² sin(θ − θ_h)] (ω² = m g d/J_O,
+    # θ_h the hanging angle), 1e-8 relative; a cart-pole with its input set keeps that input.
+    from conftest import ROOT
+
+    scene = dalembert.Scene.load(str(ROOT / "scenes" / "pendulum.toml"))
+    d = np.hypot(0.25, 0.433)
+    w2 = G * d / (1 / 12 + d * d)
+    hanging = scene.equilibrium()["rod.angle"]
+    sim = scene.simulator()
+    sim.advance_to(0.4)
+    theta, omega = sim["rod.angle"], sim["rod.omega"]
+    lin = sim.linearize(states=["rod.angle"])
+    assert lin["t"] == pytest.approx(0.4, abs=1e-12)
+    assert lin["A"][1, 0] == pytest.approx(-w2 * np.cos(theta - hanging), rel=1e-8)
+    assert lin["drift"][0] == pytest.approx(omega, rel=1e-10)
+    assert lin["drift"][1] == pytest.approx(-w2 * np.sin(theta - hanging), rel=1e-8)
+    cart = dalembert.Scene.from_toml(CART_POLE).simulator()
+    cart.set_input("u", 3.0)
+    pushed = cart.linearize(states=["cart.x", "pole.angle"])
+    # Upright at rest, pushed by u = 3: the drift is B u (the model is linear in u).
+    assert pushed["drift"][2] == pytest.approx(3.0 / M, rel=1e-9)
+    assert pushed["drift"][3] == pytest.approx(3.0 / (M * L), rel=1e-9)

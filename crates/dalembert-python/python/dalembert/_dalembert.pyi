@@ -1,7 +1,7 @@
 """Type stubs of the native module (kept in step with crates/dalembert-python/src)."""
 
 from os import PathLike
-from typing import Any, Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -73,6 +73,12 @@ class Simulator:
     @property
     def state(self) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]: ...
     def set_state(self, q: List[float], v: List[float]) -> Dict[str, float]: ...
+    def linearize(
+        self,
+        inputs: Optional[Sequence[str]] = None,
+        outputs: Optional[Sequence[str]] = None,
+        states: Optional[Sequence[str]] = None,
+    ) -> Dict[str, Any]: ...
     def reset(self) -> None: ...
     @property
     def statistics(self) -> Dict[str, Union[int, float]]: ...
