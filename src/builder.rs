@@ -169,6 +169,13 @@ impl Function {
         self
     }
 
+    /// This input held within `[lo, hi]` (`{ input = "NAME", range = [lo, hi] }`).
+    pub fn range(mut self, lo: f64, hi: f64) -> Self {
+        self.0
+            .insert("range".into(), Value::Array(vec![Value::Float(lo), Value::Float(hi)]));
+        self
+    }
+
     /// `value`, constant.
     pub fn constant(value: f64) -> Self {
         Function::of("constant", &[("value", value)])

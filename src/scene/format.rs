@@ -93,6 +93,8 @@ pub(crate) struct FunctionDef {
     pub absolute: Option<bool>,
     /// An input's factor (`{ input = "u", gain = 2.0 }`).
     pub gain: Option<f64>,
+    /// The interval an input's value is held in (`{ input = "u", range = [-1.0, 1.0] }`).
+    pub range: Option<[f64; 2]>,
 }
 
 #[derive(Debug, Deserialize)]

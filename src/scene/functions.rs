@@ -60,10 +60,18 @@ pub(crate) fn time_function(
             if !gain.is_finite() {
                 return Err(format!("input '{name}': gain {gain} is not a finite value"));
             }
+            let range = def.range.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+            if range[0].is_nan() || range[1].is_nan() || range[0] > range[1] {
+                return Err(format!(
+                    "input '{name}': range [{}, {}] is not an interval (lo ≤ hi)",
+                    range[0], range[1]
+                ));
+            }
             return Ok(TimeFunction::Input {
                 index: input_index(inputs, name),
                 offset,
                 gain,
+                range,
             });
         }
         (None, None) => {
@@ -73,8 +81,11 @@ pub(crate) fn time_function(
             )
         }
         (Some(kind), None) => {
-            if def.gain.is_some() {
-                return Err(format!("'gain' belongs to an input ({{ input = \"NAME\", gain = g }}), not to a function of time ({kind})"));
+            if let Some(key) = [("gain", def.gain.is_some()), ("range", def.range.is_some())]
+                .iter()
+                .find_map(|(k, set)| set.then_some(*k))
+            {
+                return Err(format!("'{key}' belongs to an input ({{ input = \"NAME\", {key} = … }}), not to a function of time ({kind})"));
             }
             kind.as_str()
         }

@@ -607,9 +607,52 @@ impl<'s, 'a> Reader<'s, 'a> {
                 }
                 self.attributes(
                     c,
-                    &["name", "joint", "gear", "class"],
-                    &["ctrlrange", "ctrllimited", "forcerange", "forcelimited"],
+                    &[
+                        "name",
+                        "joint",
+                        "gear",
+                        "class",
+                        "ctrlrange",
+                        "ctrllimited",
+                        "forcerange",
+                        "forcelimited",
+                    ],
+                    &[],
                 )?;
+                // MuJoCo clamps the control to `ctrlrange` and the motor's force (the control:
+                // its gain is 1) to `forcerange`, each where limited ("auto": where the range is
+                // given), before the gear.
+                let mut range = [f64::NEG_INFINITY, f64::INFINITY];
+                for (key, limited) in [("ctrlrange", "ctrllimited"), ("forcerange", "forcelimited")] {
+                    let given = self.numbers::<2>(c, key)?;
+                    let on = match self.value(c, limited).unwrap_or("auto") {
+                        "true" => true,
+                        "false" => false,
+                        "auto" => given.is_some(),
+                        other => {
+                            return Err(self.err(
+                                c,
+                                format!("<motor> {limited}=\"{other}\": expected true, false or auto"),
+                            ))
+                        }
+                    };
+                    match (on, given) {
+                        (true, None) => return Err(self.err(c, format!("<motor> {limited}=\"true\" needs {key}"))),
+                        (true, Some([lo, hi])) => {
+                            if !(lo <= hi) {
+                                return Err(self.err(
+                                    c,
+                                    format!("<motor> {key}=\"{lo} {hi}\": the first bound is above the second"),
+                                ));
+                            }
+                            range = [range[0].max(lo), range[1].min(hi)];
+                        }
+                        _ => {}
+                    }
+                }
+                if range[0] > range[1] {
+                    return Err(self.err(c, "<motor>: ctrlrange and forcerange do not overlap"));
+                }
                 let target = self
                     .value(c, "joint")
                     .ok_or_else(|| self.err(c, "<motor> needs 'joint'"))?;
@@ -623,7 +666,14 @@ impl<'s, 'a> Reader<'s, 'a> {
                 }
                 let input = self.value(c, "name").unwrap_or(target);
                 // The force is gear × the input: a torque about a hinge, a force along a slide.
-                let value = Function::input(input).gain(gear);
+                let limited = |f: Function| {
+                    if range[0].is_finite() || range[1].is_finite() {
+                        f.range(range[0], range[1])
+                    } else {
+                        f
+                    }
+                };
+                let value = limited(Function::input(input).gain(gear));
                 model = model.force(match j.kind {
                     Kind::Revolute => force(input, "torque").set("joint", j.name.as_str()).set("value", value),
                     Kind::Prismatic => {
@@ -643,7 +693,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                                 ],
                             )
                             .set("stiffness", 0.0)
-                            .set("actuator", Function::input(input).gain(-gear))
+                            .set("actuator", limited(Function::input(input).gain(-gear)))
                     }
                     _ => {
                         return Err(self.err(

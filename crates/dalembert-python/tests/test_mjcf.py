@@ -212,7 +212,8 @@ def test_mjcf_accelerations_from_1000_random_states_match_mujoco(scenes, name):
 
 @pytest.mark.parametrize("name", MODELS)
 def test_mjcf_motors_accelerate_as_mujocos_at_random_states_and_controls(scenes, name):
-    """Motors are named inputs times their gear (a torque about a hinge, a force along a slide):
+    """Motors are named inputs times their gear (a torque about a hinge, a force along a slide),
+    the control held in `ctrlrange` and the force in `forcerange` (arm-3's are ±2 and [−1.5, 1]):
     at 200 random states with random controls in ±3 (MuJoCo's `ctrl`, dalembert's inputs),
     `JOINT.qdd` of every formulation is MuJoCo's `qacc` within 1e-9 of the largest. With the
     inputs at 0 instead the accelerations differ by far more than that: the motors act."""

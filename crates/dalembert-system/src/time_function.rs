@@ -56,6 +56,9 @@ pub enum TimeFunction {
         offset: f64,
         /// Multiplies the input's value (an MJCF motor's `gear`; 1 by default).
         gain: f64,
+        /// The input's value is held within `[lo, hi]` before the gain (an MJCF motor's
+        /// `ctrlrange` and `forcerange`; unbounded by default).
+        range: [f64; 2],
     },
 }
 
@@ -77,7 +80,12 @@ impl fmt::Debug for TimeFunction {
                 write!(f, "SmoothStep({from} at {t0} → {to} at {t1})")
             }
             TimeFunction::Custom(_) => write!(f, "Custom(..)"),
-            TimeFunction::Input { index, offset, gain } => write!(f, "{gain} Input({index}) + {offset}"),
+            TimeFunction::Input {
+                index,
+                offset,
+                gain,
+                range: [lo, hi],
+            } => write!(f, "{gain} clamp(Input({index}), {lo}, {hi}) + {offset}"),
         }
     }
 }
@@ -136,9 +144,16 @@ impl TimeFunction {
                 [from + h * p, h * dp / d, h * ddp / (d * d)]
             }
             TimeFunction::Custom(f) => f(t),
-            TimeFunction::Input { index, offset, gain } => {
-                [offset + gain * crate::inputs::input_value(*index), 0.0, 0.0]
-            }
+            TimeFunction::Input {
+                index,
+                offset,
+                gain,
+                range: [lo, hi],
+            } => [
+                offset + gain * crate::inputs::input_value(*index).clamp(*lo, *hi),
+                0.0,
+                0.0,
+            ],
         }
     }
 
@@ -174,10 +189,16 @@ impl TimeFunction {
                 from: from + c,
                 to: to + c,
             },
-            TimeFunction::Input { index, offset, gain } => TimeFunction::Input {
+            TimeFunction::Input {
+                index,
+                offset,
+                gain,
+                range,
+            } => TimeFunction::Input {
                 index,
                 offset: offset + c,
                 gain,
+                range,
             },
             TimeFunction::Custom(f) => TimeFunction::custom(move |t| {
                 let [v, d1, d2] = f(t);
@@ -199,6 +220,9 @@ impl TimeFunction {
             TimeFunction::Constant(v) if !v.is_finite() => bad("constant value must be finite"),
             TimeFunction::Input { offset, gain, .. } if !offset.is_finite() || !gain.is_finite() => {
                 bad("an input's offset and gain must be finite")
+            }
+            TimeFunction::Input { range: [lo, hi], .. } if lo.is_nan() || hi.is_nan() || lo > hi => {
+                bad("an input's range must be [lo, hi] with lo ≤ hi")
             }
             TimeFunction::Linear { initial, rate } if !finite(&[*initial, *rate]) => {
                 bad("linear function parameters must be finite")
