@@ -639,7 +639,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                     match (on, given) {
                         (true, None) => return Err(self.err(c, format!("<motor> {limited}=\"true\" needs {key}"))),
                         (true, Some([lo, hi])) => {
-                            if !(lo <= hi) {
+                            if lo.is_nan() || hi.is_nan() || lo > hi {
                                 return Err(self.err(
                                     c,
                                     format!("<motor> {key}=\"{lo} {hi}\": the first bound is above the second"),
