@@ -67,6 +67,16 @@ fn browse(browser: &Path, page: &str, size: (usize, usize), extra: &[&str]) -> S
     String::from_utf8_lossy(&out.stdout).into()
 }
 
+/// The window size that gives a page dumped with `--dump-dom` the viewport a screenshot at `size`
+/// has (a dumping window shows less of its height): probes `page` once with `extra` arguments.
+fn dump_window(browser: &Path, page: &str, size: (usize, usize), extra: &[&str]) -> (usize, usize) {
+    let args: Vec<&str> = ["--dump-dom"].into_iter().chain(extra.iter().copied()).collect();
+    let probe = browse(browser, page, size, &args);
+    let seen = attribute(&probe, "<body", "data-viewport").unwrap();
+    let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
+    (size.0, 2 * size.1 - seen_height)
+}
+
 /// The value of attribute `name` on the element whose tag starts with `tag` in a dumped DOM.
 fn attribute(dom: &str, tag: &str, name: &str) -> Option<String> {
     let start = dom.find(tag)?;
@@ -274,15 +284,7 @@ fn the_page_renders_the_simulated_positions_in_chromium() {
     // A screenshot's viewport is the window size; `--dump-dom` keeps room for browser chrome, so
     // its window is enlarged by the difference (checked below through the page's own report).
     let size = (900, 600);
-    let probe = browse(
-        &browser,
-        &format!("file://{}#t=0", page.display()),
-        size,
-        &["--dump-dom"],
-    );
-    let seen = attribute(&probe, "<body", "data-viewport").unwrap();
-    let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
-    let dump_size = (size.0, 2 * size.1 - seen_height);
+    let dump_size = dump_window(&browser, &format!("file://{}#t=0", page.display()), size, &[]);
     let mut shots = Vec::new();
     for t in [0.5, 1.5] {
         let url = format!("file://{}#t={t}", page.display());
@@ -450,17 +452,8 @@ fn the_3d_viewer_draws_every_spatial_scene_where_the_run_puts_it() {
         let rows = centres(&csv, &bodies);
         let at = |t: f64| rows.iter().find(|r| (r.0 - t).abs() < 1e-9).unwrap().1.clone();
         // The window that gives a dumped page the screenshot's viewport (see the planar test).
-        let dump = *dump_size.get_or_insert_with(|| {
-            let probe = browse(
-                &browser,
-                &format!("file://{}#t=0", page.display()),
-                size,
-                &["--dump-dom", budget],
-            );
-            let seen = attribute(&probe, "<body", "data-viewport").unwrap();
-            let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
-            (size.0, 2 * size.1 - seen_height)
-        });
+        let dump = *dump_size
+            .get_or_insert_with(|| dump_window(&browser, &format!("file://{}#t=0", page.display()), size, &[budget]));
         let mut shots = Vec::new();
         for &t in times {
             let url = format!("file://{}#t={t}", page.display());
@@ -735,15 +728,12 @@ fn the_3d_viewer_draws_each_joint_reaction_along_its_force() {
         .records()
         .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
         .collect();
-    let probe = browse(
+    let dump = dump_window(
         &browser,
         &format!("file://{}#t=0&reactions", from_run.display()),
         size,
-        &["--dump-dom", budget],
+        &[budget],
     );
-    let seen = attribute(&probe, "<body", "data-viewport").unwrap();
-    let seen_height: usize = seen.split('x').nth(1).unwrap().parse().unwrap();
-    let dump = (size.0, 2 * size.1 - seen_height);
     for t in [0.3, 0.6] {
         let url = format!("file://{}#t={t}&reactions", from_run.display());
         let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);

@@ -360,17 +360,7 @@ impl PyScene {
                 }
             },
         };
-        let options = dalembert::LinearizeOptions {
-            inputs: inputs.unwrap_or_default(),
-            outputs: outputs.unwrap_or_default(),
-            states: states.unwrap_or_default(),
-            about,
-        };
-        let scene = self.inner.clone();
-        let lin = py
-            .detach(move || scene.linearize(&options))
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        linearization_dict(py, &lin)
+        linearized(py, self.inner.clone(), (inputs, outputs, states), about)
     }
 
     /// Simulates the scene; keyword arguments override its `[simulation]` settings (as the command
@@ -725,6 +715,28 @@ fn equilibrium_dict<'py>(py: Python<'py>, eq: &dalembert::Equilibrium) -> PyResu
     d.set_item("stiffness", &eq.stiffness)?;
     d.set_item("iterations", eq.iterations)?;
     Ok(d)
+}
+
+/// The names of a linearization's inputs, outputs and states (each `None`: none, or the default).
+pub(crate) type Names = (Option<Vec<String>>, Option<Vec<String>>, Option<Vec<String>>);
+
+/// `scene` linearized about `about` (the GIL released), as the dict `scene.linearize()` returns.
+pub(crate) fn linearized<'py>(
+    py: Python<'py>,
+    scene: Arc<dalembert::Scene>,
+    (inputs, outputs, states): Names,
+    about: dalembert::About,
+) -> PyResult<Bound<'py, PyDict>> {
+    let options = dalembert::LinearizeOptions {
+        inputs: inputs.unwrap_or_default(),
+        outputs: outputs.unwrap_or_default(),
+        states: states.unwrap_or_default(),
+        about,
+    };
+    let lin = py
+        .detach(move || scene.linearize(&options))
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    linearization_dict(py, &lin)
 }
 
 /// A linear model as the dict `scene.linearize()` returns (`A`, `B`, `C`, `D`, names, drift,

@@ -324,17 +324,7 @@ impl PySimulator {
                 inputs: values,
             }
         };
-        let options = dalembert::LinearizeOptions {
-            inputs: inputs.unwrap_or_default(),
-            outputs: outputs.unwrap_or_default(),
-            states: states.unwrap_or_default(),
-            about,
-        };
-        let scene = self.scene.clone();
-        let lin = py
-            .detach(move || scene.linearize(&options))
-            .map_err(|e| PyValueError::new_err(e.to_string()))?;
-        crate::scene::linearization_dict(py, &lin)
+        crate::scene::linearized(py, self.scene.clone(), (inputs, outputs, states), about)
     }
 
     /// The current state `(q, v)` as numpy arrays, in the model's coordinates (planar: x, y,
