@@ -30,6 +30,7 @@ pub mod modes;
 pub mod output;
 pub mod relaxation;
 pub mod scene;
+pub mod sensitivity;
 pub mod simulation;
 pub mod simulator;
 pub mod sweep;
@@ -52,6 +53,7 @@ pub use mechanism::Mechanism;
 pub use modes::Modes;
 pub use output::CsvOutput;
 pub use scene::{Scene, SceneError, SceneValue};
+pub use sensitivity::{SensitivityError, SensitivityRecording, SensitivityRequest};
 pub use simulation::{
     energy_warning, Coordinates, FormulationKind, Simulation, SimulationError, ENERGY_WARNING_FRACTION, FORMULATIONS,
 };

@@ -19,7 +19,7 @@ mod spatial_forces;
 mod strict;
 mod tree;
 mod urdf;
-mod values;
+pub(crate) mod values;
 mod visuals;
 mod xml;
 

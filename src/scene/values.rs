@@ -190,6 +190,13 @@ impl Scene {
     }
 }
 
+/// The value at `path` in the scene file `source` (`None` when the file does not write it).
+pub(crate) fn value_at(source: &str, path: &str) -> Result<Option<SceneValue>, String> {
+    let mut file: Table = toml::from_str(source).map_err(|e| e.message().to_string())?;
+    let (slot, added) = locate(&mut file, path).map_err(|m| format!("cannot read '{path}': {m}"))?;
+    Ok(if added { None } else { from_toml(slot) })
+}
+
 /// The slot for `path` in a scene file's table, created when the key is new (then `true`).
 fn locate<'a>(file: &'a mut Table, path: &str) -> Result<(&'a mut Value, bool), String> {
     let (head, rest) = path

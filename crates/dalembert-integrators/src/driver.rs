@@ -12,8 +12,10 @@ mod bridge;
 mod guard;
 mod integration;
 mod monitors;
+mod tangents;
 
 pub use integration::Integration;
+pub use tangents::Perturbed;
 
 /// One output sample handed to the observer.
 #[derive(Debug, Clone, Copy)]
@@ -95,7 +97,44 @@ pub fn integrate_cancellable(
     observer: &mut dyn FnMut(&Sample<'_>),
     cancel: &AtomicBool,
 ) -> Result<Statistics, IntegrationFailure> {
-    let mut run = match Integration::new(f, t0, t_end, q0, qd0, opts) {
+    let mut observe = |s: &Sample<'_>, _: Option<PerturbedSide>| observer(s);
+    integrate_sensitivities(f, t0, t_end, q0, qd0, opts, Vec::new(), &mut observe, cancel)
+}
+
+/// Which perturbed model a sample of [`integrate_sensitivities`] is of.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerturbedSide {
+    /// The parameter's index in the list given.
+    pub parameter: usize,
+    /// True for `p + δ`, false for `p − δ`.
+    pub plus: bool,
+    /// The change `δ`: a column's derivative is `(value₊ − value₋) / 2δ`.
+    pub delta: f64,
+}
+
+/// [`integrate_cancellable`] carrying the sensitivities of the run to the parameters `perturbed`
+/// change (`docs/sensitivities.md`): at every output time `observer` gets the run's sample (with
+/// `None`), then for each parameter the samples of its `p + δ` and `p − δ` models there.
+#[allow(clippy::too_many_arguments)]
+pub fn integrate_sensitivities(
+    f: &mut dyn Formulation,
+    t0: f64,
+    t_end: f64,
+    q0: &[f64],
+    qd0: &[f64],
+    opts: &IntegratorOptions,
+    perturbed: Vec<Perturbed>,
+    observer: &mut dyn FnMut(&Sample<'_>, Option<PerturbedSide>),
+    cancel: &AtomicBool,
+) -> Result<Statistics, IntegrationFailure> {
+    let started = Integration::new(f, t0, t_end, q0, qd0, opts).and_then(|run| {
+        if perturbed.is_empty() {
+            Ok(run)
+        } else {
+            run.with_sensitivities(perturbed)
+        }
+    });
+    let mut run = match started {
         Ok(run) => run,
         Err(error) => {
             return Err(IntegrationFailure {
@@ -108,9 +147,17 @@ pub fn integrate_cancellable(
     let mut observe = |run: &mut Integration, f: &mut dyn Formulation| -> Result<(), IntegrationError> {
         let sample = run.sample(f)?;
         let started = Instant::now();
-        observer(&sample);
-        crate::vector_state::clear_upper_state();
+        observer(&sample, None);
         observer_time += started.elapsed();
+        for parameter in 0..run.sensitivities() {
+            for plus in [true, false] {
+                let (sample, delta) = run.perturbed_sample(parameter, plus)?;
+                let started = Instant::now();
+                observer(&sample, Some(PerturbedSide { parameter, plus, delta }));
+                observer_time += started.elapsed();
+            }
+        }
+        crate::vector_state::clear_upper_state();
         Ok(())
     };
     let mut result = observe(&mut run, f);

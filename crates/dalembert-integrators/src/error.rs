@@ -73,6 +73,17 @@ pub enum IntegrationError {
     /// Invalid options.
     #[error("invalid integrator options: {0}")]
     Options(String),
+    /// A step of the run could not be taken again on a model with a parameter changed, so the
+    /// run's sensitivity to it cannot follow (`docs/sensitivities.md`).
+    #[error("t = {t}: the sensitivity to '{parameter}' stops here: {what}", t = dalembert_system::Shortest(*.time))]
+    Sensitivity {
+        /// Time at the start of the step.
+        time: f64,
+        /// The parameter.
+        parameter: String,
+        /// What failed.
+        what: String,
+    },
     /// The caller asked the run to stop (the cancellation flag of [`crate::integrate_cancellable`],
     /// e.g. set on Ctrl-C); every sample up to `time` has been observed.
     #[error("t = {t}: interrupted", t = dalembert_system::Shortest(*.time))]
@@ -91,6 +102,7 @@ impl IntegrationError {
             | IntegrationError::Diverged { time, .. }
             | IntegrationError::SingularPass { time, .. }
             | IntegrationError::BranchSwitch { time, .. }
+            | IntegrationError::Sensitivity { time, .. }
             | IntegrationError::Interrupted { time } => Some(*time),
             IntegrationError::Options(_) => None,
         }

@@ -14,6 +14,7 @@
 use super::bridge::Bridge;
 use super::guard::SingularPassGuard;
 use super::monitors::Monitors;
+use super::tangents::{Perturbed, Tangents};
 use super::{check_options, inf_norm, normalize, project, singular_or, split, Sample, Schedule};
 use crate::branch::BranchMonitor;
 use crate::methods::first_order::derivative;
@@ -92,6 +93,8 @@ pub struct Integration {
     rate: Vec<f64>,
     /// Time spent in the run's own work.
     busy: Duration,
+    /// The sensitivities carried along ([`Integration::with_sensitivities`]; none by default).
+    tangents: Tangents,
 }
 
 fn tolerance(t: f64) -> f64 {
@@ -205,7 +208,67 @@ impl Integration {
             rate_prev: vec![0.0; len],
             rate: vec![0.0; len],
             busy: wall.elapsed(),
+            tangents: Tangents::default(),
         })
+    }
+
+    /// The run carrying the sensitivities of its state to the parameters that `perturbed` change
+    /// (`docs/sensitivities.md`): each accepted step is taken again from `y ± δ S` on the models
+    /// with `p ± δ`, and [`Integration::perturbed_sample`] gives each side at an output time.
+    /// Only at the run's start, and for a run sampled at its output times (not moved by
+    /// [`Integration::commit`] or [`Integration::set_state`]).
+    pub fn with_sensitivities(mut self, perturbed: Vec<Perturbed>) -> Result<Self, IntegrationError> {
+        if !self.shown_is_run || self.mon.stats.steps > 0 {
+            return Err(IntegrationError::Options(
+                "sensitivities are set up at the start of a run, before its first step".into(),
+            ));
+        }
+        self.tangents = Tangents::new(
+            perturbed,
+            self.t,
+            &self.y,
+            self.mon.n,
+            &self.opts,
+            self.stabilization,
+            self.mon.baumgarte,
+        )?;
+        Ok(self)
+    }
+
+    /// The number of parameters whose sensitivities the run carries.
+    pub fn sensitivities(&self) -> usize {
+        self.tangents.len()
+    }
+
+    /// `∂y/∂p` (`y = [q; v]`) of sensitivity `j` at the run's own state (after its last step).
+    pub fn sensitivity(&self, j: usize) -> &[f64] {
+        self.tangents.tangent(j)
+    }
+
+    /// Sensitivity `j`'s model with `p + δ` (`plus`) or `p − δ` at the time shown, as an output
+    /// sample, and `δ`: a column's derivative is `(value₊ − value₋) / 2δ`.
+    pub fn perturbed_sample(&mut self, j: usize, plus: bool) -> Result<(Sample<'_>, f64), IntegrationError> {
+        let started = Instant::now();
+        let t = self.shown_t;
+        let n = self.mon.n;
+        let (f, y, delta) = self.tangents.side(j, plus);
+        let (q, qd) = y.split_at(n);
+        let mon = &mut self.mon;
+        f.accelerations(t, q, qd, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
+        f.residuals(t, q, qd, &mut mon.c, &mut mon.cdot);
+        let energy = f.energy(t, q, qd).total();
+        self.busy += started.elapsed();
+        let sample = Sample {
+            t,
+            q,
+            qd,
+            qdd: &mon.qdd,
+            lambda: &mon.lambda,
+            constraint_violation: inf_norm(&mon.c),
+            velocity_violation: inf_norm(&mon.cdot),
+            energy,
+        };
+        Ok((sample, delta))
     }
 
     /// The time of the state shown.
@@ -308,11 +371,18 @@ impl Integration {
         };
         self.shown_t = t;
         if let Some((ts, h)) = dense.filter(|&(ts, _)| t >= ts) {
-            self.stepper
-                .interpolate(((t - ts) / h).clamp(0.0, 1.0), &mut self.shown);
+            let theta = ((t - ts) / h).clamp(0.0, 1.0);
+            self.stepper.interpolate(theta, &mut self.shown);
+            self.tangents.show(theta, t, n_q, self.stabilization)?;
         } else if (self.t - t).abs() <= tolerance(t) || self.t_prev.is_nan() {
             self.shown_is_run = true;
+            self.tangents.show_run();
             return Ok(());
+        } else if !self.tangents.is_empty() {
+            return Err(IntegrationError::Options(format!(
+                "a run with sensitivities is shown at its steps only, not at t = {}",
+                dalembert_system::Shortest(t)
+            )));
         } else {
             // The cubic Hermite interpolant of the step's end states and rates.
             derivative(
@@ -484,6 +554,7 @@ impl Integration {
             method,
             t,
             y,
+            tangents,
             ..
         } = self
         else {
@@ -497,6 +568,7 @@ impl Integration {
                 g.done = 0;
             }
             let ts = g.base + g.done as f64 * g.hh;
+            tangents.mark(y);
             let outcome = stepper.step(f, ts, g.hh, y)?;
             if !outcome.accepted {
                 g.successes = 0;
@@ -518,6 +590,8 @@ impl Integration {
             };
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
+            // The loop does not tell a fixed-step method that its state was projected.
+            tangents.follow(ts, g.hh, t_after, mon.n, *stabilization, false)?;
             *t = t_after;
             mon.monitor(f, t_after, y, g.hh, cancel)?;
             g.successes += 1;
@@ -544,6 +618,7 @@ impl Integration {
             method,
             t,
             y,
+            tangents,
             ..
         } = self
         else {
@@ -554,6 +629,7 @@ impl Integration {
             // A bridge in progress: its next half step, a step of the run.
             if let Some(forced) = a.forced.as_mut() {
                 let half = 0.5 * forced.step;
+                tangents.mark(y);
                 if !stepper.step_unchecked(f, *t, half, y)? {
                     y.copy_from_slice(a.bridge.saved());
                     *t = forced.start;
@@ -570,6 +646,7 @@ impl Integration {
                 // (2.1e-2 of the kinetic energy on the driven four-bar, on the branch).
                 project(f, te, y, n_q, stab)?;
                 stepper.state_changed();
+                tangents.follow(*t, half, te, n_q, stab, true)?;
                 *t = te;
                 forced.left -= 1;
                 if forced.left == 0 {
@@ -612,15 +689,18 @@ impl Integration {
             if last {
                 a.h = t_end - *t;
             }
+            tangents.mark(y);
             let outcome = stepper.step(f, *t, a.h, y)?;
             let collapse = a.guard.check(f, *t, y, n_q, outcome.next_step, method).err();
             if outcome.accepted {
                 let t_new = if last { t_end } else { *t + a.h };
                 a.dense = Some((*t, a.h));
                 normalize(f, y, n_q);
-                if mon.project_step(f, t_new, y, stab)? {
+                let projected = mon.project_step(f, t_new, y, stab)?;
+                if projected {
                     stepper.state_changed();
                 }
+                tangents.follow(*t, a.h, t_new, n_q, stab, projected)?;
                 let h = a.h;
                 *t = t_new;
                 a.guard.accepted(h);

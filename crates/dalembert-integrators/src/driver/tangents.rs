@@ -1,0 +1,234 @@
+//! Sensitivities of a run to parameters, carried along with it: [`Perturbed`] models given by the
+//! caller, and the tangents the run keeps ([`Tangents`]).
+//!
+//! For a parameter `p` the run keeps `S = ∂y/∂p` (`y = [q; v]`) and advances it with each of the
+//! run's own accepted steps: from the run's state at the start of the step, the step is taken again
+//! from `y ± δ S` on the model with `p ± δ`, by the same method with the same size (a fixed step,
+//! or an adaptive one taken whatever its error estimate says), normalized and projected as the
+//! run's state is, and `S ← (y₊ − y₋) / 2δ`. This is the derivative of the method's own step map
+//! (internal differentiation: the sensitivity equations discretized exactly as the state is, with
+//! the run's step sizes and decisions), by central differences recentred on the run at every step,
+//! so that the perturbed states never drift from it (`docs/sensitivities.md`). Output samples of
+//! either side come from its own dense output (adaptive methods) or its state at the step's end.
+
+use super::{normalize, project};
+use crate::stepper::{Setup, StepControl, Stepper};
+use crate::{IntegrationError, IntegratorOptions, Stabilization};
+use dalembert_system::{Baumgarte, Formulation};
+
+/// One parameter's perturbed models, given to [`super::Integration::with_sensitivities`].
+pub struct Perturbed {
+    /// The parameter's name (in errors).
+    pub name: String,
+    /// The formulation on the model with `p + δ`.
+    pub plus: Box<dyn Formulation>,
+    /// The formulation on the model with `p − δ`.
+    pub minus: Box<dyn Formulation>,
+    /// The consistent initial state `[q; v]` of the `p + δ` model (its scene's state, assembled).
+    pub y_plus: Vec<f64>,
+    /// The same for `p − δ`.
+    pub y_minus: Vec<f64>,
+    /// The change `δ` of the parameter (positive, in its units).
+    pub delta: f64,
+}
+
+impl std::fmt::Debug for Perturbed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Perturbed({}, δ = {})", self.name, self.delta)
+    }
+}
+
+/// One side (`p + δ` or `p − δ`) of a tangent: its formulation, its own copy of the method, and
+/// its state after the last step (or at the time shown).
+struct Side {
+    f: Box<dyn Formulation>,
+    stepper: Box<dyn Stepper>,
+    y: Vec<f64>,
+    shown: Vec<f64>,
+}
+
+/// A tangent `S = ∂y/∂p` and its two sides.
+struct Tangent {
+    name: String,
+    delta: f64,
+    s: Vec<f64>,
+    sides: [Side; 2],
+}
+
+/// The tangents a run keeps (none for a plain run). Allocated with the run; nothing while
+/// stepping beyond what the methods and formulations of the sides do.
+#[derive(Default)]
+pub(super) struct Tangents {
+    tangents: Vec<Tangent>,
+    /// The run's state at the start of the step in progress.
+    start: Vec<f64>,
+    adaptive: bool,
+    /// True when the sides' `shown` states are at the time shown (dense output); otherwise their
+    /// `y` are.
+    shown_between: bool,
+}
+
+impl Tangents {
+    /// The tangents of `perturbed`, started from the run's initial state `y0` at `t0`: each side's
+    /// state projected as the run's was, and `S₀ = (y₊ − y₋) / 2δ`.
+    pub fn new(
+        perturbed: Vec<Perturbed>,
+        t0: f64,
+        y0: &[f64],
+        n_q: usize,
+        opts: &IntegratorOptions,
+        stabilization: Stabilization,
+        baumgarte: Option<Baumgarte>,
+    ) -> Result<Self, IntegrationError> {
+        let entry = opts.method.entry();
+        let mut tangents = Vec::with_capacity(perturbed.len());
+        for p in perturbed {
+            if p.y_plus.len() != y0.len() || p.y_minus.len() != y0.len() {
+                return Err(IntegrationError::Options(format!(
+                    "the models changed in '{}' have {} and {} state coordinates, the run has {}",
+                    p.name,
+                    p.y_plus.len(),
+                    p.y_minus.len(),
+                    y0.len()
+                )));
+            }
+            if !(p.delta.is_finite() && p.delta > 0.0) {
+                return Err(IntegrationError::Options(format!(
+                    "the change of '{}' must be positive and finite, got {}",
+                    p.name, p.delta
+                )));
+            }
+            let side = |mut f: Box<dyn Formulation>, mut y: Vec<f64>| -> Result<Side, IntegrationError> {
+                project(f.as_mut(), t0, &mut y, n_q, stabilization)?;
+                let stepper = (entry.build)(
+                    &opts.method,
+                    Setup {
+                        formulation: f.as_mut(),
+                        t0,
+                        y0: &y,
+                        n_q,
+                        baumgarte,
+                    },
+                )?;
+                Ok(Side {
+                    f,
+                    stepper,
+                    shown: y.clone(),
+                    y,
+                })
+            };
+            let plus = side(p.plus, p.y_plus)?;
+            let minus = side(p.minus, p.y_minus)?;
+            let s = (plus.y.iter().zip(&minus.y))
+                .map(|(a, b)| (a - b) / (2.0 * p.delta))
+                .collect();
+            tangents.push(Tangent {
+                name: p.name,
+                delta: p.delta,
+                s,
+                sides: [plus, minus],
+            });
+        }
+        Ok(Tangents {
+            tangents,
+            start: vec![0.0; y0.len()],
+            adaptive: entry.control == StepControl::Adaptive,
+            shown_between: false,
+        })
+    }
+
+    /// True when the run has no tangent.
+    pub fn is_empty(&self) -> bool {
+        self.tangents.is_empty()
+    }
+
+    /// Keeps the run's state `y` at the start of a step.
+    pub fn mark(&mut self, y: &[f64]) {
+        if !self.is_empty() {
+            self.start.copy_from_slice(y);
+        }
+        self.shown_between = false;
+    }
+
+    /// Follows the run's accepted step of size `h` from `t` (begun at the state [`Tangents::mark`]
+    /// kept) to `t_after`, where `projected` says whether the run's state was projected there.
+    pub fn follow(
+        &mut self,
+        t: f64,
+        h: f64,
+        t_after: f64,
+        n_q: usize,
+        stabilization: Stabilization,
+        projected: bool,
+    ) -> Result<(), IntegrationError> {
+        let (start, adaptive) = (&self.start, self.adaptive);
+        for tangent in &mut self.tangents {
+            let Tangent { name, delta, s, sides } = tangent;
+            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+                for i in 0..start.len() {
+                    side.y[i] = start[i] + sign * *delta * s[i];
+                }
+                let taken = if adaptive {
+                    side.stepper.step_unchecked(side.f.as_mut(), t, h, &mut side.y)?
+                } else {
+                    side.stepper.step(side.f.as_mut(), t, h, &mut side.y)?.accepted
+                };
+                if !taken {
+                    return Err(IntegrationError::Sensitivity {
+                        time: t,
+                        parameter: name.clone(),
+                        what: format!("the step of {h:e} s the run took was not taken on the model changed by {}{delta:e}", if sign > 0.0 { "+" } else { "-" }),
+                    });
+                }
+                normalize(side.f.as_ref(), &mut side.y, n_q);
+                project(side.f.as_mut(), t_after, &mut side.y, n_q, stabilization)?;
+                if projected {
+                    side.stepper.state_changed();
+                }
+            }
+            let [plus, minus] = &*sides;
+            for i in 0..s.len() {
+                s[i] = (plus.y[i] - minus.y[i]) / (2.0 * *delta);
+            }
+        }
+        Ok(())
+    }
+
+    /// Shows each side at fraction `theta` of the last step (dense output of an adaptive method),
+    /// normalized and projected at `t` as the run's state shown is.
+    pub fn show(&mut self, theta: f64, t: f64, n_q: usize, stabilization: Stabilization) -> Result<(), IntegrationError> {
+        for tangent in &mut self.tangents {
+            for side in &mut tangent.sides {
+                side.stepper.interpolate(theta, &mut side.shown);
+                normalize(side.f.as_ref(), &mut side.shown, n_q);
+                project(side.f.as_mut(), t, &mut side.shown, n_q, stabilization)?;
+            }
+        }
+        self.shown_between = !self.is_empty();
+        Ok(())
+    }
+
+    /// The run is shown at its own state: so are the sides.
+    pub fn show_run(&mut self) {
+        self.shown_between = false;
+    }
+
+    /// The number of tangents.
+    pub fn len(&self) -> usize {
+        self.tangents.len()
+    }
+
+    /// Tangent `j`'s side (`plus`: `p + δ`) at the time shown: its formulation and state `[q; v]`.
+    pub fn side(&mut self, j: usize, plus: bool) -> (&mut dyn Formulation, &[f64], f64) {
+        let between = self.shown_between;
+        let tangent = &mut self.tangents[j];
+        let side = &mut tangent.sides[usize::from(!plus)];
+        let y = if between { &side.shown } else { &side.y };
+        (side.f.as_mut(), y, tangent.delta)
+    }
+
+    /// The sensitivity `∂y/∂p` of tangent `j` at the run's own state (after the last step).
+    pub fn tangent(&self, j: usize) -> &[f64] {
+        &self.tangents[j].s
+    }
+}
