@@ -171,16 +171,22 @@ impl Scene {
         let sim = self.simulation();
         let mut rec = Recorder::new(&self.model);
         let outcome = sim.run_cancellable(&mut |s| rec.record(s), cancel);
-        let warning = match &outcome {
-            Ok(st) if self.model.as_system().is_conservative() => {
-                crate::energy_warning(st.max_energy_change, st.energy_scale, false)
-            }
-            _ => None,
-        };
+        let warning = self.energy_warning_of(&outcome);
         Recording {
             table: rec.into_table(),
             outcome,
             warning,
+        }
+    }
+
+    /// The energy warning of a finished run of this scene: a conservative model whose `T + V`
+    /// changed by more than [`crate::ENERGY_WARNING_FRACTION`] of its energy scale.
+    pub(crate) fn energy_warning_of(&self, outcome: &Result<Statistics, SimulationError>) -> Option<String> {
+        match outcome {
+            Ok(st) if self.model.as_system().is_conservative() => {
+                crate::energy_warning(st.max_energy_change, st.energy_scale, false)
+            }
+            _ => None,
         }
     }
 

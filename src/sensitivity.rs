@@ -30,8 +30,10 @@ use dalembert_integrators::{integrate_sensitivities, Perturbed, PerturbedSide, S
 use std::sync::atomic::AtomicBool;
 use thiserror::Error;
 
-/// The default relative change of a parameter: `δ = 1e-6 |p|` (`1e-6` in the parameter's units
-/// when `p = 0`); `docs/sensitivities.md` gives the measured error against it.
+/// The default relative change of a parameter: `δ = 1e-4 |p|` (`1e-4` in the parameter's units
+/// when `p = 0`). The central differences' truncation is about `δ²` relative (1e-8); a smaller
+/// change lets the round-off of every step, `1e-16 |y| / (δ |S|)`, accumulate over the run
+/// instead (measured in `docs/sensitivities.md`).
 pub const RELATIVE_CHANGE: f64 = 1e-4;
 
 /// What sensitivities to compute.
@@ -126,6 +128,8 @@ pub struct SensitivityRecording {
     pub sensitivities: Table,
     /// Statistics of the finished run, or why it stopped (every row before is kept).
     pub outcome: Result<Statistics, SimulationError>,
+    /// The energy warning of a conservative model whose `T + V` drifted (as [`Scene::record`]).
+    pub warning: Option<String>,
 }
 
 impl SensitivityRecording {
@@ -161,7 +165,9 @@ impl Scene {
         match crate::scene::values::value_at(&self.source, path).map_err(&fail)? {
             Some(SceneValue::Number(x)) => Ok(x),
             Some(SceneValue::Integer(i)) => Ok(i as f64),
-            Some(v) => Err(fail(format!("'{path}' is {v}, not a number: a sensitivity needs a number"))),
+            Some(v) => Err(fail(format!(
+                "'{path}' is {v}, not a number: a sensitivity needs a number"
+            ))),
             None => Err(fail(format!(
                 "'{path}' is not written in the scene: write its value there to take a sensitivity to it"
             ))),
@@ -173,7 +179,10 @@ impl Scene {
     pub fn sensitivity_setup(&self, request: &SensitivityRequest) -> Result<SensitivitySetup, SensitivityError> {
         let bad = |m: String| Err(SensitivityError::Request(m));
         if self.settings.coordinates == Coordinates::Joint {
-            return bad("sensitivities follow a run in the model's own coordinates: run it with coordinates = \"absolute\"".into());
+            return bad(
+                "sensitivities follow a run in the model's own coordinates: run it with coordinates = \"absolute\""
+                    .into(),
+            );
         }
         if !(request.relative_change.is_finite() && request.relative_change > 0.0 && request.relative_change < 0.1) {
             return bad(format!(
@@ -206,10 +215,16 @@ impl Scene {
             if request.parameters[..k].contains(path) {
                 return bad(format!("'{path}' is named twice"));
             }
+            if path.starts_with("simulation.") {
+                return bad(format!("'{path}' is a run setting, not a value of the model: a sensitivity is taken to a model's value (a mass, a stiffness, a length)"));
+            }
             let p = self.number_at(path)?;
             let delta = request.relative_change * if p == 0.0 { 1.0 } else { p.abs() };
             let changed = |sign: f64| -> Result<_, SensitivityError> {
-                let scene = self.with_values(&[(path.as_str(), SceneValue::Number(p + sign * delta))])?;
+                let mut scene = self.with_values(&[(path.as_str(), SceneValue::Number(p + sign * delta))])?;
+                // The run's settings as given (overridden on the command line or in Python), not
+                // as the file writes them.
+                scene.settings = self.settings.clone();
                 let fail = |error: SimulationError| SensitivityError::Changed {
                     parameter: path.clone(),
                     error,
@@ -260,10 +275,7 @@ impl Scene {
         observer: &mut dyn FnMut(&Sample<'_>, &[f64]),
         cancel: &AtomicBool,
     ) -> Result<Statistics, SimulationError> {
-        let SensitivitySetup {
-            perturbed,
-            mut columns,
-        } = setup;
+        let SensitivitySetup { perturbed, mut columns } = setup;
         let sim = self.simulation();
         let mut f = sim.formulation()?;
         // The run's own sample is kept until the derivatives of its time are complete (the
@@ -285,7 +297,12 @@ impl Scene {
                 None => {
                     last.clear();
                     last.extend_from_slice(&[s.t, s.constraint_violation, s.velocity_violation, s.energy]);
-                    for (to, from) in [(&mut q, s.q), (&mut qd, s.qd), (&mut qdd, s.qdd), (&mut lambda, s.lambda)] {
+                    for (to, from) in [
+                        (&mut q, s.q),
+                        (&mut qd, s.qd),
+                        (&mut qdd, s.qdd),
+                        (&mut lambda, s.lambda),
+                    ] {
                         to.clear();
                         to.extend_from_slice(from);
                     }
@@ -337,6 +354,7 @@ impl Scene {
         Ok(SensitivityRecording {
             table: rec.into_table(),
             sensitivities,
+            warning: self.energy_warning_of(&outcome),
             outcome,
         })
     }

@@ -450,3 +450,49 @@ fn the_simulator_loop_in_joint_coordinates_allocates_nothing() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// A run carrying sensitivities allocates nothing per step either: each parameter's two models
+/// take the run's steps again with their own method and formulation, built at setup. Every
+/// formulation × method on the shipped slider-crank with two parameters: a run twice as long
+/// costs no more allocations.
+#[test]
+fn a_run_with_sensitivities_allocates_nothing_per_step() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let base = dalembert::Scene::from_path("scenes/slider-crank.toml").unwrap();
+    let request = dalembert::SensitivityRequest::new(
+        &["bodies.slider.mass", "bodies.crank.mass"],
+        &["slider.x", "crank.omega"],
+    );
+    let mut failures = Vec::new();
+    for formulation in dalembert::FormulationKind::ALL {
+        for entry in METHODS {
+            if entry.applies == Applies::AugmentedIndex3 && formulation != dalembert::FormulationKind::Augmented {
+                continue;
+            }
+            let mut scene = base.clone();
+            scene.settings.formulation = formulation;
+            scene.settings.method = Method::of(entry);
+            scene.settings.step = 1e-3;
+            let count = |end: f64| {
+                let mut scene = scene.clone();
+                scene.settings.end = end;
+                let setup = scene.sensitivity_setup(&request).unwrap();
+                let before = ALLOCATIONS.load(Ordering::Relaxed);
+                scene
+                    .run_sensitivities(setup, &mut |_, _| {}, &std::sync::atomic::AtomicBool::new(false))
+                    .unwrap();
+                ALLOCATIONS.load(Ordering::Relaxed) - before
+            };
+            let (short, long) = (count(0.2), count(0.4));
+            if long > short {
+                failures.push(format!(
+                    "{}, {}: {short} allocations for 0.2 s, {long} for 0.4 s",
+                    formulation.name(),
+                    entry.name
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -61,8 +61,23 @@ fn a_spring_damper_mass_has_the_sensitivities_of_its_closed_form() {
         ("augmented", "rk4", 1e-3, &[], 1e-7),
         ("embedding", "rk4", 1e-3, &[], 1e-7),
         ("amalgamated", "rk4", 1e-3, &[], 1e-7),
-        ("augmented", "dopri5", 1e-3, &[("simulation.rtol", SceneValue::Number(1e-10)), ("simulation.atol", SceneValue::Number(1e-12))], 1e-7),
-        ("augmented", "generalized-alpha", 1e-4, &[("simulation.rho_inf", SceneValue::Number(1.0))], 1e-5),
+        (
+            "augmented",
+            "dopri5",
+            1e-3,
+            &[
+                ("simulation.rtol", SceneValue::Number(1e-10)),
+                ("simulation.atol", SceneValue::Number(1e-12)),
+            ],
+            1e-7,
+        ),
+        (
+            "augmented",
+            "generalized-alpha",
+            1e-4,
+            &[("simulation.rho_inf", SceneValue::Number(1.0))],
+            1e-5,
+        ),
         ("augmented", "ali3-p", 1e-4, &[], 1e-5),
     ];
     for (formulation, integrator, step, extra, tol) in runs {
@@ -83,7 +98,10 @@ fn a_spring_damper_mass_has_the_sensitivities_of_its_closed_form() {
         assert_eq!(t.len(), 101);
         let y = run.table.column("slider.y").unwrap();
         let exact: Vec<f64> = t.iter().map(|&t| slider_y(t, m, k, c)).collect();
-        assert!(relative_error(&y, &exact) < tol, "{formulation} {integrator}: the motion");
+        assert!(
+            relative_error(&y, &exact) < tol,
+            "{formulation} {integrator}: the motion"
+        );
         let exact = |which: usize| -> Vec<f64> {
             t.iter()
                 .map(|&t| match which {
@@ -96,7 +114,10 @@ fn a_spring_damper_mass_has_the_sensitivities_of_its_closed_form() {
         for (j, p) in request.parameters.iter().enumerate() {
             let got = run.sensitivity("slider.y", p).unwrap();
             let err = relative_error(&got, &exact(j));
-            assert!(err < tol, "{formulation} {integrator}: d(slider.y)/d({p}) off by {err:.2e}");
+            assert!(
+                err < tol,
+                "{formulation} {integrator}: d(slider.y)/d({p}) off by {err:.2e}"
+            );
         }
     }
 }
@@ -116,7 +137,10 @@ fn a_pendulum_moves_as_its_mass_says_and_carries_it_in_its_pin() {
                 ("simulation.formulation", formulation.name().into()),
             ])
             .unwrap();
-        let request = SensitivityRequest::new(&["bodies.rod.mass"], &["rod.angle", "rod.omega", "pivot.fx", "pivot.fy"]);
+        let request = SensitivityRequest::new(
+            &["bodies.rod.mass"],
+            &["rod.angle", "rod.omega", "pivot.fx", "pivot.fy"],
+        );
         let run = scene.sensitivities(&request, &AtomicBool::new(false)).unwrap();
         run.outcome.as_ref().unwrap();
         for c in ["rod.angle", "rod.omega"] {
@@ -150,7 +174,9 @@ fn homogeneity(scene: &Scene, motion: &[&str], reactions: &[&str]) -> (f64, f64)
     let masses: Vec<f64> = paths.iter().map(|p| scene.number_at(p).unwrap()).collect();
     let of: Vec<&str> = motion.iter().chain(reactions).copied().collect();
     let params: Vec<&str> = paths.iter().map(String::as_str).collect();
-    let run = scene.sensitivities(&SensitivityRequest::new(&params, &of), &AtomicBool::new(false)).unwrap();
+    let run = scene
+        .sensitivities(&SensitivityRequest::new(&params, &of), &AtomicBool::new(false))
+        .unwrap();
     run.outcome.as_ref().unwrap();
     let worst = |c: &str, reaction: bool| -> f64 {
         let own = run.table.column(c).unwrap();
@@ -158,7 +184,10 @@ fn homogeneity(scene: &Scene, motion: &[&str], reactions: &[&str]) -> (f64, f64)
             .map(|(p, m)| run.sensitivity(c, p).unwrap().iter().map(|d| m * d).collect())
             .collect();
         let scale = terms.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
-        assert!(scale > 1e-3, "{c}: the terms are {scale:.1e}: the test would test nothing");
+        assert!(
+            scale > 1e-3,
+            "{c}: the terms are {scale:.1e}: the test would test nothing"
+        );
         (0..own.len())
             .map(|i| {
                 let sum: f64 = terms.iter().map(|t| t[i]).sum();
@@ -187,8 +216,16 @@ fn a_four_bar_scaled_in_mass_moves_the_same_in_every_formulation() {
                 ("simulation.formulation", formulation.name().into()),
             ])
             .unwrap();
-        let (m, r) = homogeneity(&scene, &["coupler.angle", "rocker.omega", "coupler.x"], &["A.fx", "C.fy"]);
-        assert!(m < 1e-6 && r < 1e-6, "{}: motion {m:.2e}, reactions {r:.2e}", formulation.name());
+        let (m, r) = homogeneity(
+            &scene,
+            &["coupler.angle", "rocker.omega", "coupler.x"],
+            &["A.fx", "C.fy"],
+        );
+        assert!(
+            m < 1e-6 && r < 1e-6,
+            "{}: motion {m:.2e}, reactions {r:.2e}",
+            formulation.name()
+        );
         let request = SensitivityRequest::new(&["bodies.coupler.mass"], &["rocker.angle"]);
         let run = scene.sensitivities(&request, &AtomicBool::new(false)).unwrap();
         let d = run.sensitivity("rocker.angle", "bodies.coupler.mass").unwrap();

@@ -67,19 +67,25 @@ pub fn fixed(x: f64, width: usize, decimals: usize) -> String {
 
 impl<W: Write> CsvOutput<W> {
     /// Writes the header for `model` and returns the writer.
-    pub fn new(model: &Mechanism, mut out: W) -> io::Result<Self> {
+    pub fn new(model: &Mechanism, out: W) -> io::Result<Self> {
+        Self::with_columns(model, &[], out)
+    }
+
+    /// Writes the header for `model` followed by the `extra` columns (a run's sensitivities,
+    /// given to [`CsvOutput::write_with`]) and returns the writer.
+    pub fn with_columns(model: &Mechanism, extra: &[String], mut out: W) -> io::Result<Self> {
         let rows_of = Rows::new(model);
         {
             let mut header = csv::WriterBuilder::new()
                 .terminator(csv::Terminator::Any(b'\n'))
                 .from_writer(&mut out);
-            header.write_record(rows_of.names())?;
+            header.write_record(rows_of.names().iter().chain(extra))?;
             header.flush()?;
         }
         out.flush()?;
         Ok(CsvOutput {
             out,
-            numbers: Vec::with_capacity(rows_of.names().len()),
+            numbers: Vec::with_capacity(rows_of.names().len() + extra.len()),
             rows_of,
             error: None,
             rows: 0,
@@ -101,11 +107,17 @@ impl<W: Write> CsvOutput<W> {
 
     /// Writes one sample. I/O errors are kept and reported by [`CsvOutput::finish`].
     pub fn write(&mut self, s: &Sample<'_>) {
+        self.write_with(s, &[]);
+    }
+
+    /// Writes one sample and the values of the extra columns ([`CsvOutput::with_columns`]).
+    pub fn write_with(&mut self, s: &Sample<'_>, extra: &[f64]) {
         if self.error.is_some() {
             return;
         }
         self.numbers.clear();
         self.rows_of.push(s, &mut self.numbers);
+        self.numbers.extend_from_slice(extra);
         let written = self.write_row().and_then(|()| {
             self.rows += 1;
             self.last_time = Some(s.t);

@@ -6,7 +6,7 @@ use dalembert::integrators::Sample;
 use dalembert::integrators::StepControl;
 use dalembert::output::fixed;
 use dalembert::scene::{RunOverrides, Spelling};
-use dalembert::{CsvOutput, Scene};
+use dalembert::{CsvOutput, Scene, SensitivityRequest};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -25,6 +25,17 @@ pub struct Args {
     /// 1 % of its energy scale.
     #[arg(long)]
     strict: bool,
+    /// Sensitivities to these scene values (comma-separated paths, e.g.
+    /// forces.spring.stiffness,bodies.upper.mass): the CSV gets columns d(COLUMN)/d(PATH), carried
+    /// along with the run by the same method and steps (docs/sensitivities.md)
+    #[arg(long, value_delimiter = ',')]
+    sensitivities: Vec<String>,
+    /// The columns whose sensitivities are written (comma-separated; default: every column but t)
+    #[arg(long = "sensitivity-of", value_delimiter = ',', requires = "sensitivities")]
+    sensitivity_of: Vec<String>,
+    /// Each parameter is changed by ± this share of its value (default 1e-4)
+    #[arg(long, allow_hyphen_values = true, requires = "sensitivities")]
+    relative_change: Option<f64>,
 }
 
 /// Flags that override a scene's `[simulation]` table (`simulate`, `animate`). Numbers may be
@@ -168,10 +179,35 @@ pub fn run(a: Args) -> Result<(), String> {
             }
         );
     }
+    // Sensitivities are set up (every parameter's scene built and assembled) before the CSV is
+    // opened, so that a refused request leaves no file.
+    let setup = match a.sensitivities.is_empty() {
+        true => None,
+        false => {
+            let mut request = SensitivityRequest::new(&[], &[]);
+            request.parameters = a.sensitivities.clone();
+            request.of = a.sensitivity_of.clone();
+            if let Some(r) = a.relative_change {
+                request.relative_change = r;
+            }
+            let setup = scene.sensitivity_setup(&request).map_err(|e| e.to_string())?;
+            outln!(
+                "sensitivity  to {} ({} columns d(…)/d(…), each parameter changed by ±{} of its value)",
+                a.sensitivities.join(", "),
+                setup.columns.names().len(),
+                request.relative_change
+            );
+            Some(setup)
+        }
+    };
+    let extra: Vec<String> = setup.as_ref().map_or(Vec::new(), |s| s.columns.names().to_vec());
     let mut csv = match &a.output {
         Some(p) => {
             let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
-            Some(CsvOutput::new(&mechanism, std::io::BufWriter::new(f)).map_err(|e| format!("{}: {e}", p.display()))?)
+            Some(
+                CsvOutput::with_columns(&mechanism, &extra, std::io::BufWriter::new(f))
+                    .map_err(|e| format!("{}: {e}", p.display()))?,
+            )
         }
         None => None,
     };
@@ -187,10 +223,10 @@ pub fn run(a: Args) -> Result<(), String> {
     // A model that is not conservative: E − W, the energy less the work of its non-conservative
     // forces and drivers, is what the exact motion keeps (docs/energy.md).
     let mut balance = (!model.is_conservative()).then(|| EnergyBalance::new(model));
-    let mut observer = |smp: &Sample<'_>| {
+    let mut observer = |smp: &Sample<'_>, sensitivities: &[f64]| {
         let e_minus_w = balance.as_mut().map(|b| b.push(model, smp));
         if let Some(c) = csv.as_mut() {
-            c.write(smp);
+            c.write_with(smp, sensitivities);
         }
         if k.is_multiple_of(every_row) || (smp.t - end).abs() < 1e-12 {
             let angles = summary.iter().take(6).map(|&(_, k)| smp.q[k]).collect();
@@ -211,7 +247,10 @@ pub fn run(a: Args) -> Result<(), String> {
             let _ = std::io::stderr().flush();
         }
     };
-    let result = sim.run_cancellable(&mut observer, crate::interrupt_flag());
+    let result = match setup {
+        None => sim.run_cancellable(&mut |smp| observer(smp, &[]), crate::interrupt_flag()),
+        Some(setup) => scene.run_sensitivities(setup, &mut observer, crate::interrupt_flag()),
+    };
     if tty && start.elapsed().as_secs_f64() > 1.0 {
         eprintln!();
     }

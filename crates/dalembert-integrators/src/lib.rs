@@ -39,7 +39,9 @@ mod stepper;
 mod vector_state;
 
 pub use branch::{BRANCH_SWITCH_ENERGY, BRANCH_SWITCH_JUMP, BRANCH_SWITCH_SHARE};
-pub use driver::{integrate, integrate_cancellable, integrate_sensitivities, Integration, Perturbed, PerturbedSide, Sample};
+pub use driver::{
+    integrate, integrate_cancellable, integrate_sensitivities, Integration, Perturbed, PerturbedSide, Sample,
+};
 pub use error::{IntegrationError, IntegrationFailure};
 pub use methods::ali3p::ALI3P_AUTOMATIC_RATIO;
 pub use options::IntegratorOptions;

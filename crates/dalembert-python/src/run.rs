@@ -21,6 +21,8 @@ pub struct PyRun {
     pub statistics: Option<Statistics>,
     pub warning: Option<String>,
     pub scene: Arc<Scene>,
+    /// `t` and the columns `d(column)/d(parameter)` of a run with sensitivities.
+    pub sensitivities: Option<Table>,
 }
 
 pub fn statistics_dict<'py>(py: Python<'py>, s: &Statistics) -> PyResult<Bound<'py, PyDict>> {
@@ -88,6 +90,29 @@ impl PyRun {
             Some(v) => Ok(PyArray1::from_vec(py, v)),
             None => Err(PyKeyError::new_err(self.table.unknown_column(name))),
         }
+    }
+
+    /// `∂column/∂parameter` over the output times (numpy array), for a run simulated with
+    /// `sensitivities=[parameter, ...]`. Raises KeyError naming what was computed otherwise.
+    fn sensitivity<'py>(&self, py: Python<'py>, column: &str, parameter: &str) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let Some(table) = &self.sensitivities else {
+            return Err(PyKeyError::new_err(
+                "this run has no sensitivities: simulate with sensitivities=[\"bodies.NAME.mass\", ...]",
+            ));
+        };
+        let name = dalembert::sensitivity::column_name(column, parameter);
+        match table.column(&name) {
+            Some(v) => Ok(PyArray1::from_vec(py, v)),
+            None => Err(PyKeyError::new_err(table.unknown_column(&name))),
+        }
+    }
+
+    /// The names `d(column)/d(parameter)` of the sensitivities computed (empty without).
+    #[getter]
+    fn sensitivity_columns(&self) -> Vec<String> {
+        self.sensitivities
+            .as_ref()
+            .map_or(Vec::new(), |t| t.columns[1..].to_vec())
     }
 
     fn __contains__(&self, name: &str) -> bool {

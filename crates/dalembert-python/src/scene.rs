@@ -370,7 +370,13 @@ impl PyScene {
     /// tree in joint coordinates (same outputs). The GIL is released during the run, and Ctrl-C
     /// stops it within one step (within one output interval in joint coordinates;
     /// KeyboardInterrupt, rows so far in `.run`).
-    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, redundant=None, coordinates=None, strict=false, **parameters))]
+    ///
+    /// `sensitivities=["forces.spring.stiffness", "bodies.upper.mass"]` carries the derivatives of
+    /// the outputs to these scene values along with the run (the same method and steps;
+    /// `docs/sensitivities.md`): `run.sensitivity("lower.x", "bodies.upper.mass")` is then a numpy
+    /// array over the output times. `sensitivity_of` restricts the columns differentiated (default
+    /// every column), `relative_change` sets the change of each parameter (default 1e-4 of it).
+    #[pyo3(signature = (*, end=None, formulation=None, integrator=None, step=None, every=None, stabilization=None, redundant=None, coordinates=None, strict=false, sensitivities=None, sensitivity_of=None, relative_change=None, **parameters))]
     fn simulate(
         &self,
         py: Python<'_>,
@@ -383,6 +389,9 @@ impl PyScene {
         redundant: Option<String>,
         coordinates: Option<String>,
         strict: bool,
+        sensitivities: Option<Vec<String>>,
+        sensitivity_of: Option<Vec<String>>,
+        relative_change: Option<f64>,
         parameters: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<PyRun> {
         let o = RunOverrides {
@@ -398,10 +407,39 @@ impl PyScene {
         };
         let scene = self.overridden(py, o)?;
         let scene = Arc::new(scene);
+        let request = match sensitivities {
+            None if sensitivity_of.is_some() || relative_change.is_some() => return Err(PyValueError::new_err(
+                "sensitivity_of and relative_change need sensitivities=[...] (the scene values to differentiate by)",
+            )),
+            None => None,
+            Some(parameters) => {
+                let mut request = dalembert::SensitivityRequest::new(&[], &[]);
+                request.parameters = parameters;
+                request.of = sensitivity_of.unwrap_or_default();
+                if let Some(r) = relative_change {
+                    request.relative_change = r;
+                }
+                Some(request)
+            }
+        };
         let (rec, raised) = {
             let scene = scene.clone();
-            interrupt::run(py, move |cancel| scene.record(cancel))
+            interrupt::run(py, move |cancel| match request {
+                None => Ok((scene.record(cancel), None)),
+                Some(request) => scene.sensitivities(&request, cancel).map(|r| {
+                    let rec = dalembert::Recording {
+                        table: r.table,
+                        outcome: r.outcome,
+                        warning: r.warning,
+                    };
+                    (rec, Some(r.sensitivities))
+                }),
+            })
         };
+        let (rec, sensitivities) = rec.map_err(|e| match e {
+            dalembert::SensitivityError::Scene(e) => scene_error(e),
+            e => PyValueError::new_err(dalembert::scene::one_line(&e.to_string()).into_owned()),
+        })?;
         let time = rec.table.column("t").and_then(|t| t.last().copied());
         match rec.outcome {
             Ok(stats) => {
@@ -410,6 +448,7 @@ impl PyScene {
                     statistics: Some(stats),
                     warning: rec.warning.clone(),
                     scene,
+                    sensitivities,
                 };
                 if let Some(e) = raised {
                     return Err(interrupted(py, e, run)?);
@@ -429,6 +468,7 @@ impl PyScene {
                     statistics: None,
                     warning: None,
                     scene,
+                    sensitivities,
                 };
                 // The time the run stopped at (the failure's own; the last row's when it has none).
                 let time = e.time().or(time);
@@ -500,6 +540,7 @@ impl PyScene {
             statistics: None,
             warning: None,
             scene: self.inner.clone(),
+            sensitivities: None,
         };
         match res {
             Ok(()) => Ok(run),
@@ -567,7 +608,9 @@ impl PyScene {
                 .load(spatial)
                 .map_err(|e| PyValueError::new_err(e.to_string()))?;
         }
-        let run = self.simulate(py, None, None, None, None, None, None, None, None, false, None)?;
+        let run = self.simulate(
+            py, None, None, None, None, None, None, None, None, false, None, None, None, None,
+        )?;
         run.animate_to(&path, max_frames, &sources)
     }
 

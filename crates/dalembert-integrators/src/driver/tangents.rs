@@ -177,7 +177,10 @@ impl Tangents {
                     return Err(IntegrationError::Sensitivity {
                         time: t,
                         parameter: name.clone(),
-                        what: format!("the step of {h:e} s the run took was not taken on the model changed by {}{delta:e}", if sign > 0.0 { "+" } else { "-" }),
+                        what: format!(
+                            "the step of {h:e} s the run took was not taken on the model changed by {}{delta:e}",
+                            if sign > 0.0 { "+" } else { "-" }
+                        ),
                     });
                 }
                 normalize(side.f.as_ref(), &mut side.y, n_q);
@@ -196,7 +199,13 @@ impl Tangents {
 
     /// Shows each side at fraction `theta` of the last step (dense output of an adaptive method),
     /// normalized and projected at `t` as the run's state shown is.
-    pub fn show(&mut self, theta: f64, t: f64, n_q: usize, stabilization: Stabilization) -> Result<(), IntegrationError> {
+    pub fn show(
+        &mut self,
+        theta: f64,
+        t: f64,
+        n_q: usize,
+        stabilization: Stabilization,
+    ) -> Result<(), IntegrationError> {
         for tangent in &mut self.tangents {
             for side in &mut tangent.sides {
                 side.stepper.interpolate(theta, &mut side.shown);
