@@ -47,6 +47,9 @@ fn relative_error(got: &[f64], want: &[f64]) -> f64 {
     got.iter().zip(want).fold(0.0f64, |a, (g, w)| a.max((g - w).abs())) / scale
 }
 
+/// A run's formulation, method, step, other settings and the tolerance of its sensitivities.
+type Setting<'a> = (&'a str, &'a str, f64, &'a [(&'a str, SceneValue)], f64);
+
 #[test]
 fn a_spring_damper_mass_has_the_sensitivities_of_its_closed_form() {
     // m = 2 kg, k = 400 N/m, c = 4 N·s/m: ω = 14.1 rad/s, ζ = 0.07, 2.2 periods in 1 s.
@@ -57,7 +60,7 @@ fn a_spring_damper_mass_has_the_sensitivities_of_its_closed_form() {
     // order, ρ∞ = 1: no damping) and ALI3-P (trapezoidal) at 0.1 ms have a phase error of about
     // (ωh)² ωt / 12 ≈ 2e-6 in the motion and its derivatives: 1e-5.
     let (m, k, c) = (2.0, 400.0, 4.0);
-    let runs: [(&str, &str, f64, &[(&str, SceneValue)], f64); 6] = [
+    let runs: [Setting; 6] = [
         ("augmented", "rk4", 1e-3, &[], 1e-7),
         ("embedding", "rk4", 1e-3, &[], 1e-7),
         ("amalgamated", "rk4", 1e-3, &[], 1e-7),
