@@ -1,6 +1,7 @@
 //! The `[[forces]]` of a spatial scene (`docs/scenes.md`, "Spatial scenes"): point forces and
 //! torques (constant or functions of time, global or body axes), torques about a joint's axis,
-//! spring–damper–actuators and rotational spring–dampers.
+//! spring–damper–actuators and rotational spring–dampers, and compliant sphere–plane contact
+//! (`docs/contact.md`).
 
 use super::error::SceneError;
 use super::format::FunctionDef;
@@ -39,7 +40,25 @@ pub(crate) struct ForceDef {
     pub free_length: Option<f64>,
     pub free_angle: Option<f64>,
     pub actuator: Option<FunctionDef>,
+    pub radius: Option<f64>,
+    pub plane: Option<PlaneDef>,
+    pub exponent: Option<f64>,
+    pub dissipation: Option<f64>,
+    pub friction: Option<f64>,
+    pub smoothing_velocity: Option<f64>,
 }
+
+/// A plane of the ground: a point and the normal out of the solid.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PlaneDef {
+    pub point: [f64; 3],
+    pub normal: [f64; 3],
+}
+
+/// The default smoothing velocity of contact friction (m/s): below it the friction force grows
+/// linearly with the sliding speed (`docs/contact.md`).
+pub(crate) const SMOOTHING_VELOCITY: f64 = 1e-3;
 
 /// A number or a function (a vector is refused).
 fn scalar(v: &ValueDef<3>, key: &str, inputs: &RefCell<Vec<String>>) -> Result<TimeFunction, String> {
@@ -107,6 +126,12 @@ impl ForceDef {
             ("free_length", self.free_length.is_some()),
             ("free_angle", self.free_angle.is_some()),
             ("actuator", self.actuator.is_some()),
+            ("radius", self.radius.is_some()),
+            ("plane", self.plane.is_some()),
+            ("exponent", self.exponent.is_some()),
+            ("dissipation", self.dissipation.is_some()),
+            ("friction", self.friction.is_some()),
+            ("smoothing_velocity", self.smoothing_velocity.is_some()),
         ];
         match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
             Some((k, _)) => Err(format!("'{k}' does not belong to a {} element", self.kind)),
@@ -209,6 +234,42 @@ pub(crate) fn force(
                 free_angle: d.free_angle.unwrap_or(0.0),
             }
         }
+        "sphere-plane" => {
+            check(d.only(&[
+                "body",
+                "at",
+                "radius",
+                "plane",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ]))?;
+            let body = body()?;
+            let centre = match (d.at, body) {
+                (Some(Points3::One(p)), _) => p,
+                (None, BodyRef::Body(i)) => positions[i],
+                (None, BodyRef::Ground) => [0.0; 3],
+                (Some(Points3::Two(_)), _) => return Err(err("'at' is the sphere's centre, one point [x, y, z] (global)")),
+            };
+            let plane = d.plane.as_ref().ok_or_else(|| {
+                err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
+            })?;
+            Force::SpherePlane {
+                name,
+                body,
+                centre,
+                radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+                point: plane.point,
+                normal: plane.normal,
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness' (N/m^exponent)"))?,
+                exponent: d.exponent.unwrap_or(1.5),
+                dissipation: d.dissipation.unwrap_or(0.0),
+                friction: d.friction.unwrap_or(0.0),
+                smoothing_velocity: d.smoothing_velocity.unwrap_or(SMOOTHING_VELOCITY),
+            }
+        }
         "code" => {
             check(
                 d.only(&["body"])
@@ -222,7 +283,7 @@ pub(crate) fn force(
         }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, code)"
             )))
         }
     })

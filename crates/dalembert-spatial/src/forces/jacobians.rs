@@ -120,7 +120,8 @@ impl ForceData {
                 Some(([ends[0].0, ends[1].0], w))
             }
             ForceData::AboutAxis(a) => Some(a.wrench_derivative(t, frame)),
-            ForceData::User(_) => None,
+            // Not differentiated analytically: the tangent takes central differences.
+            ForceData::SpherePlane(_) | ForceData::User(_) => None,
         }
     }
 }

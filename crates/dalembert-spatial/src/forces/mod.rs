@@ -8,9 +8,11 @@
 //! | torque | `T(t)`, global or body components | here |
 //! | spring–damper–actuator | tension `k (ℓ − ℓ₀) + c ℓ̇ + f(t)` along the line of its points | here |
 //! | joint torque, rotational spring–damper | `τ = −k (θ − θ₀) − c θ̇ + f(t)` about a revolute or cylindrical joint's axis | [`about_axis`] |
+//! | sphere–plane contact | Hunt–Crossley normal force and regularized Coulomb friction between a sphere on a body and a plane of the ground | `contact.rs` |
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
+mod contact;
 mod jacobians;
 pub mod user;
 
@@ -18,6 +20,7 @@ use crate::frame::{Frame, NV};
 use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
+use contact::SpherePlane;
 use dalembert_system::{ModelError, TimeFunction};
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -111,6 +114,33 @@ pub enum Force {
         /// Free angle `θ₀` (rad).
         free_angle: f64,
     },
+    /// Compliant contact of a sphere on `body` with a plane of the ground
+    /// (`docs/contact.md`): normal force `k δⁿ (1 + d δ̇)` with `δ` the penetration, Coulomb
+    /// friction `μ F_n` regularized below `smoothing_velocity`.
+    SpherePlane {
+        /// Name.
+        name: String,
+        /// The body carrying the sphere.
+        body: BodyRef,
+        /// The sphere's centre in the initial configuration (global).
+        centre: [f64; 3],
+        /// Radius (m).
+        radius: f64,
+        /// A point of the plane (global).
+        point: [f64; 3],
+        /// The plane's normal, out of the solid (any length but zero).
+        normal: [f64; 3],
+        /// `k` (N/mⁿ).
+        stiffness: f64,
+        /// `n` (1.5 for Hertz's sphere).
+        exponent: f64,
+        /// Hunt–Crossley's `d` (s/m).
+        dissipation: f64,
+        /// Friction coefficient `μ`.
+        friction: f64,
+        /// `v_s` (m/s): below it the friction grows linearly with the sliding speed.
+        smoothing_velocity: f64,
+    },
     /// A force the user writes ([`UserForce`]).
     User(Arc<dyn UserForce>),
 }
@@ -123,6 +153,7 @@ impl Force {
             | Force::Torque { name, .. }
             | Force::SpringDamper { name, .. }
             | Force::JointTorque { name, .. }
+            | Force::SpherePlane { name, .. }
             | Force::RotationalSpringDamper { name, .. } => name,
             Force::User(u) => u.name(),
         }
@@ -172,6 +203,7 @@ pub(crate) enum ForceData {
         actuator: Option<TimeFunction>,
     },
     AboutAxis(AxisForce),
+    SpherePlane(SpherePlane),
     User(Arc<dyn UserForce>),
 }
 
@@ -330,6 +362,54 @@ impl ForceData {
                 let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
                 ForceData::AboutAxis(AxisForce::new(j, *stiffness, *damping, *free_angle, None))
             }
+            Force::SpherePlane {
+                body,
+                centre,
+                radius,
+                point,
+                normal,
+                stiffness,
+                exponent,
+                dissipation,
+                friction,
+                smoothing_velocity,
+                ..
+            } => {
+                if !finite(centre) || !finite(point) || !finite(normal) {
+                    return Err(bad("centre, point and normal must be finite"));
+                }
+                let n = V3::from(*normal);
+                if n.norm() == 0.0 {
+                    return Err(bad("the plane's normal must not be zero"));
+                }
+                let positive = |v: f64, what: &str| -> Result<(), ModelError> {
+                    if v.is_finite() && v > 0.0 {
+                        Ok(())
+                    } else {
+                        Err(bad(&format!("{what} must be positive and finite, got {v}")))
+                    }
+                };
+                positive(*radius, "radius")?;
+                positive(*stiffness, "stiffness")?;
+                positive(*smoothing_velocity, "smoothing velocity")?;
+                if !(exponent.is_finite() && *exponent >= 1.0) {
+                    return Err(bad(&format!("exponent must be at least 1, got {exponent}")));
+                }
+                non_negative(&[(*dissipation, "dissipation"), (*friction, "friction")])?;
+                let b = moving(*body)?;
+                ForceData::SpherePlane(SpherePlane {
+                    body: b,
+                    centre: local(Some(b), centre),
+                    radius: *radius,
+                    point: V3::from(*point),
+                    normal: n / n.norm(),
+                    stiffness: *stiffness,
+                    exponent: *exponent,
+                    dissipation: *dissipation,
+                    friction: *friction,
+                    smoothing_velocity: *smoothing_velocity,
+                })
+            }
             Force::User(u) => ForceData::User(u.clone()),
         })
     }
@@ -339,6 +419,7 @@ impl ForceData {
     pub fn bodies(&self) -> Vec<usize> {
         match self {
             ForceData::PointForce { body, .. } | ForceData::Torque { body, .. } => vec![*body],
+            ForceData::SpherePlane(c) => vec![c.body],
             ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
             ForceData::AboutAxis(a) => a.bodies(),
             ForceData::User(u) => u
@@ -413,6 +494,7 @@ impl ForceData {
                 }
             }
             ForceData::AboutAxis(a) => a.add(t, frame, out),
+            ForceData::SpherePlane(c) => c.add(frame, out),
             ForceData::User(u) => u.add(t, &Frames::new(frame), &mut Loads::new(frame, out)),
         }
     }
@@ -431,6 +513,7 @@ impl ForceData {
                 0.5 * stiffness * (d.norm() - free_length).powi(2)
             }
             ForceData::AboutAxis(a) => a.potential(frame),
+            ForceData::SpherePlane(c) => c.potential(frame),
             ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => 0.0,
         }
@@ -441,6 +524,7 @@ impl ForceData {
         match self {
             ForceData::SpringDamper { damping, actuator, .. } => *damping == 0.0 && actuator.is_none(),
             ForceData::AboutAxis(a) => a.is_conservative(),
+            ForceData::SpherePlane(c) => c.is_conservative(),
             ForceData::User(u) => u.is_conservative(),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => false,
         }
