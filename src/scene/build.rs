@@ -16,8 +16,8 @@ use dalembert_constraints::{
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
-    Body, BodyId, BodyRef, BodyState, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque,
-    Vec2,
+    Body, BodyId, BodyRef, BodyState, CircleLine, ForceElement, Gravity, PointForce, RotationalSpringDamper,
+    SpringDamper, Torque, Vec2,
 };
 use dalembert_system::TimeFunction;
 use std::cell::RefCell;
@@ -528,6 +528,19 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
+    if d.kind != "circle-line" {
+        let contact = [
+            ("radius", d.radius.is_some()),
+            ("line", d.line.is_some()),
+            ("exponent", d.exponent.is_some()),
+            ("dissipation", d.dissipation.is_some()),
+            ("friction", d.friction.is_some()),
+            ("smoothing_velocity", d.smoothing_velocity.is_some()),
+        ];
+        if let Some((key, _)) = contact.iter().find(|(_, set)| *set) {
+            return Err(err(format!("'{key}' does not belong to a {} element", d.kind)));
+        }
+    }
     let element: Box<dyn ForceElement> = match d.kind.as_str() {
         "force" => {
             let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
@@ -625,6 +638,50 @@ fn force(
                 free_angle: d.free_angle.unwrap_or(b.angle(pr[1]) - b.angle(pr[0])),
             })
         }
+        "circle-line" => {
+            let extra = [
+                ("bodies", d.bodies.is_some()),
+                ("joint", d.joint.is_some()),
+                ("point", d.point.is_some()),
+                ("value", d.value.is_some()),
+                ("fx", d.fx.is_some()),
+                ("fy", d.fy.is_some()),
+                ("damping", d.damping.is_some()),
+                ("free_length", d.free_length.is_some()),
+                ("free_angle", d.free_angle.is_some()),
+                ("actuator", d.actuator.is_some()),
+            ];
+            if let Some((key, _)) = extra.iter().find(|(_, set)| *set) {
+                return Err(err(format!("'{key}' does not belong to a circle-line element")));
+            }
+            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+            let body = b.body(name, span, &owner)?;
+            let centre = match d.at {
+                Some(Points::One(p)) => local_point_of(body, &b.q, v2(p)),
+                None => Vec2::zeros(),
+                Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)".into())),
+            };
+            let line = d.line.as_ref().ok_or_else(|| {
+                err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
+            })?;
+            let normal = v2(line.normal);
+            if !(normal.norm() > 0.0) {
+                return Err(err("the line's normal must not be zero".into()));
+            }
+            Box::new(CircleLine {
+                name: d.name.clone(),
+                body,
+                centre,
+                radius: d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?,
+                point: v2(line.point),
+                normal: normal / normal.norm(),
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness' (N/m^exponent)".into()))?,
+                exponent: d.exponent.unwrap_or(1.5),
+                dissipation: d.dissipation.unwrap_or(0.0),
+                friction: d.friction.unwrap_or(0.0),
+                smoothing_velocity: d.smoothing_velocity.unwrap_or(super::spatial_forces::SMOOTHING_VELOCITY),
+            })
+        }
         "code" => {
             let extra = [
                 ("bodies", d.bodies.is_some()),
@@ -654,7 +711,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, code)"
             )))
         }
     };

@@ -133,6 +133,22 @@ pub(crate) struct ForceDef {
     pub free_length: Option<f64>,
     pub free_angle: Option<f64>,
     pub actuator: Option<FunctionDef>,
+    pub radius: Option<f64>,
+    pub line: Option<LineDef>,
+    pub exponent: Option<f64>,
+    pub dissipation: Option<f64>,
+    pub friction: Option<f64>,
+    pub smoothing_velocity: Option<f64>,
+}
+
+/// A line of the ground: a point and the normal out of the ground (any length but zero).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LineDef {
+    #[serde(deserialize_with = "strict::xy")]
+    pub point: [f64; 2],
+    #[serde(deserialize_with = "strict::xy")]
+    pub normal: [f64; 2],
 }
 
 /// `[simulation]`. The methods' parameters (`rtol`, `rho_inf`, …) come from the integrators'

@@ -6,12 +6,14 @@
 //!
 //! Users add their own forces by implementing [`ForceElement`].
 
+mod circle_line;
 mod gravity;
 mod point_force;
 mod rotational_spring_damper;
 mod spring_damper;
 mod torque;
 
+pub use circle_line::CircleLine;
 pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use rotational_spring_damper::RotationalSpringDamper;
