@@ -665,7 +665,7 @@ fn force(
                 err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
             })?;
             let normal = v2(line.normal);
-            if !(normal.norm() > 0.0) {
+            if normal.norm().is_nan() || normal.norm() == 0.0 {
                 return Err(err("the line's normal must not be zero".into()));
             }
             Box::new(CircleLine {
