@@ -510,12 +510,17 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let function = time_function(&d.function, Some(start), ctx.inputs).map_err(err)?;
         model.driver(Driver::new(&d.name, target, function));
     }
+    // A plane a contact rolls on is drawn as a square of the ground.
+    let mut floors = Vec::new();
     for sf in &file.forces {
         let span = sf.span();
         let d = sf.get_ref();
         names.unique(&ctx, &d.name, &span, "force")?;
         let owner = format!("force '{}'", d.name);
         let f = spatial_forces::force(d, &names, &ctx, &span, &owner, &positions)?;
+        if let dalembert_spatial::Force::SpherePlane { point, normal, .. } = &f {
+            floors.push(spatial_forces::floor_visual(point, normal, &owner));
+        }
         model.force(f);
     }
     let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
@@ -539,8 +544,9 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
                 .map_err(|m| ctx.err(Some(b.span()), format!("body '{}': {m}", d.name)))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let ground = super::visuals::visuals(&file.scene.visual, [0.0; 3], &format!("{origin} [scene]"))
+    let mut ground = super::visuals::visuals(&file.scene.visual, [0.0; 3], &format!("{origin} [scene]"))
         .map_err(|m| ctx.err(None, format!("[scene] {m}")))?;
+    ground.extend(floors);
     let drawing = Drawing {
         spatial: Some(SpatialDrawing {
             ground,

@@ -56,6 +56,36 @@ pub(crate) struct PlaneDef {
     pub normal: [f64; 3],
 }
 
+/// The side of the square the viewer draws a contact's plane with (m), centred on its point.
+const FLOOR_SIDE: f64 = 4.0;
+
+/// The viewer's drawing of a contact's plane: a thin square of side [`FLOOR_SIDE`] just below the
+/// plane, turned from z to its normal.
+pub(crate) fn floor_visual(point: &[f64; 3], normal: &[f64; 3], owner: &str) -> crate::animation::Visual {
+    let n = Vector3::from(*normal).normalize();
+    let z = Vector3::z();
+    let axis = z.cross(&n);
+    let rotation = if axis.norm() < 1e-12 {
+        if n.z > 0.0 {
+            [1.0, 0.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0, 0.0]
+        }
+    } else {
+        dalembert_spatial::euler_parameters::from_axis_angle(&axis, z.dot(&n).clamp(-1.0, 1.0).acos())
+    };
+    let thickness = 0.002;
+    let centre = Vector3::from(*point) - 0.5 * thickness * n;
+    crate::animation::Visual {
+        shape: crate::animation::Solid::Box {
+            size: [FLOOR_SIDE, FLOOR_SIDE, thickness],
+        },
+        position: centre.into(),
+        rotation,
+        declared: format!("{owner}'s plane"),
+    }
+}
+
 /// The default smoothing velocity of contact friction (m/s): below it the friction force grows
 /// linearly with the sliding speed (`docs/contact.md`).
 pub(crate) const SMOOTHING_VELOCITY: f64 = 1e-3;
