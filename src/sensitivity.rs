@@ -5,8 +5,7 @@
 //! The run carries `S = ∂y/∂p` along with its state ([`dalembert_integrators::Perturbed`]): each
 //! of its steps is taken again, by the same method with the same size, from `y ± δ S` on the scene
 //! with `p ± δ`, and `S ← (y₊ − y₋) / 2δ`. The sensitivities are those of the numerical solution
-//! the run computes (its method, steps and projections differentiated), recentred on the run at
-//! every step; an output column's derivative is `(column₊ − column₋) / 2δ` between the two models'
+//! the run computes (its method and steps differentiated), recentred on the run at every step; an output column's derivative is `(column₊ − column₋) / 2δ` between the two models'
 //! samples at the output time. The equations, the choice of `δ` and the measured accuracy are in
 //! `docs/sensitivities.md`.
 //!

@@ -591,7 +591,7 @@ impl Integration {
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
             // The loop does not tell a fixed-step method that its state was projected.
-            tangents.follow(ts, g.hh, t_after, mon.n, *stabilization, false)?;
+            tangents.follow(ts, g.hh, mon.n, false)?;
             *t = t_after;
             mon.monitor(f, t_after, y, g.hh, cancel)?;
             g.successes += 1;
@@ -646,7 +646,7 @@ impl Integration {
                 // (2.1e-2 of the kinetic energy on the driven four-bar, on the branch).
                 project(f, te, y, n_q, stab)?;
                 stepper.state_changed();
-                tangents.follow(*t, half, te, n_q, stab, true)?;
+                tangents.follow(*t, half, n_q, true)?;
                 *t = te;
                 forced.left -= 1;
                 if forced.left == 0 {
@@ -700,7 +700,7 @@ impl Integration {
                 if projected {
                     stepper.state_changed();
                 }
-                tangents.follow(*t, a.h, t_new, n_q, stab, projected)?;
+                tangents.follow(*t, a.h, n_q, projected)?;
                 let h = a.h;
                 *t = t_new;
                 a.guard.accepted(h);

@@ -4,8 +4,10 @@
 //! For a parameter `p` the run keeps `S = ∂y/∂p` (`y = [q; v]`) and advances it with each of the
 //! run's own accepted steps: from the run's state at the start of the step, the step is taken again
 //! from `y ± δ S` on the model with `p ± δ`, by the same method with the same size (a fixed step,
-//! or an adaptive one taken whatever its error estimate says), normalized and projected as the
-//! run's state is, and `S ← (y₊ − y₋) / 2δ`. This is the derivative of the method's own step map
+//! or an adaptive one taken whatever its error estimate says), normalized (unit Euler parameters)
+//! but not projected, and `S ← (y₊ − y₋) / 2δ`. The run's projection only removes its step's
+//! drift, of the order of the local error; differencing two projections would add their
+//! tolerance's noise to `S` instead (`docs/sensitivities.md`). This is the derivative of the method's own step map
 //! (internal differentiation: the sensitivity equations discretized exactly as the state is, with
 //! the run's step sizes and decisions), by central differences recentred on the run at every step,
 //! so that the perturbed states never drift from it (`docs/sensitivities.md`). Output samples of
@@ -151,16 +153,9 @@ impl Tangents {
     }
 
     /// Follows the run's accepted step of size `h` from `t` (begun at the state [`Tangents::mark`]
-    /// kept) to `t_after`, where `projected` says whether the run's state was projected there.
-    pub fn follow(
-        &mut self,
-        t: f64,
-        h: f64,
-        t_after: f64,
-        n_q: usize,
-        stabilization: Stabilization,
-        projected: bool,
-    ) -> Result<(), IntegrationError> {
+    /// kept), where `projected` says whether the run's state was projected after it (each side's
+    /// method is then told that its state changed, as the run's is).
+    pub fn follow(&mut self, t: f64, h: f64, n_q: usize, projected: bool) -> Result<(), IntegrationError> {
         let (start, adaptive) = (&self.start, self.adaptive);
         for tangent in &mut self.tangents {
             let Tangent { name, delta, s, sides } = tangent;
@@ -184,7 +179,6 @@ impl Tangents {
                     });
                 }
                 normalize(side.f.as_ref(), &mut side.y, n_q);
-                project(side.f.as_mut(), t_after, &mut side.y, n_q, stabilization)?;
                 if projected {
                     side.stepper.state_changed();
                 }
