@@ -1,7 +1,7 @@
 //! The `[[forces]]` of a spatial scene (`docs/scenes.md`, "Spatial scenes"): point forces and
 //! torques (constant or functions of time, global or body axes), torques about a joint's axis,
-//! spring–damper–actuators and rotational spring–dampers, and compliant sphere–plane contact
-//! (`docs/contact.md`).
+//! spring–damper–actuators and rotational spring–dampers, and compliant sphere–plane and
+//! sphere–sphere contact (`docs/contact.md`).
 
 use super::error::SceneError;
 use super::format::FunctionDef;
@@ -41,6 +41,7 @@ pub(crate) struct ForceDef {
     pub free_angle: Option<f64>,
     pub actuator: Option<FunctionDef>,
     pub radius: Option<f64>,
+    pub radii: Option<[f64; 2]>,
     pub plane: Option<PlaneDef>,
     pub exponent: Option<f64>,
     pub dissipation: Option<f64>,
@@ -157,6 +158,7 @@ impl ForceDef {
             ("free_angle", self.free_angle.is_some()),
             ("actuator", self.actuator.is_some()),
             ("radius", self.radius.is_some()),
+            ("radii", self.radii.is_some()),
             ("plane", self.plane.is_some()),
             ("exponent", self.exponent.is_some()),
             ("dissipation", self.dissipation.is_some()),
@@ -300,6 +302,42 @@ pub(crate) fn force(
                 smoothing_velocity: d.smoothing_velocity.unwrap_or(SMOOTHING_VELOCITY),
             }
         }
+        "sphere-sphere" => {
+            check(d.only(&[
+                "bodies",
+                "at",
+                "radii",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ]))?;
+            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
+            let bodies = [names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?];
+            let position = |b: BodyRef| match b {
+                BodyRef::Body(i) => positions[i],
+                BodyRef::Ground => [0.0; 3],
+            };
+            let centres = match d.at {
+                Some(Points3::Two(c)) => c,
+                None => bodies.map(position),
+                Some(Points3::One(_)) => {
+                    return Err(err("'at' is the two spheres' centres, [[x1, y1, z1], [x2, y2, z2]] (global)"))
+                }
+            };
+            Force::SphereSphere {
+                name,
+                bodies,
+                centres,
+                radii: d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)"))?,
+                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness' (N/m^exponent)"))?,
+                exponent: d.exponent.unwrap_or(1.5),
+                dissipation: d.dissipation.unwrap_or(0.0),
+                friction: d.friction.unwrap_or(0.0),
+                smoothing_velocity: d.smoothing_velocity.unwrap_or(SMOOTHING_VELOCITY),
+            }
+        }
         "code" => {
             check(
                 d.only(&["body"])
@@ -313,7 +351,7 @@ pub(crate) fn force(
         }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, sphere-sphere, code)"
             )))
         }
     })

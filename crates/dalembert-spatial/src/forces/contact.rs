@@ -1,5 +1,5 @@
-//! Compliant contact of a sphere on a body with a plane fixed to the ground
-//! (`docs/contact.md`).
+//! Compliant contact of a sphere on a body with a plane fixed to the ground, and of two spheres
+//! on two bodies (`docs/contact.md`).
 //!
 //! With the sphere's centre `c`, radius `R`, the plane's point `p₀` and unit normal `n` (out of
 //! the solid), the penetration is `δ = R − n·(c − p₀)` and its rate `δ̇ = −n·ċ`. Where `δ > 0` the
@@ -14,9 +14,115 @@
 //! `v_s` (m/s) the friction is Coulomb's `μ F_n` against the sliding; below it grows linearly with
 //! `v_t`, so that a body at rest on a slope creeps at a speed below `v_s` instead of sticking.
 //! With `d = 0` and `μ = 0` the element is conservative with the potential `k δⁿ⁺¹ / (n + 1)`.
+//!
+//! Two spheres (centres `cᵢ`, `cⱼ`, radii `Rᵢ`, `Rⱼ`) overlap by `δ = Rᵢ + Rⱼ − |cⱼ − cᵢ|` along
+//! `n = (cⱼ − cᵢ) / |cⱼ − cᵢ|`, `δ̇ = −n·(ċⱼ − ċᵢ)`; the same (K1) pushes `j` along `n` and `i`
+//! against it at the middle of the overlap, and (K2) acts on the relative sliding there.
 
 use super::{add_point_force, V3};
 use crate::frame::Frame;
+
+/// The law shared by the contact elements: stiffness, exponent, dissipation, friction and
+/// smoothing velocity.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Law {
+    /// `k` (N/mⁿ).
+    pub stiffness: f64,
+    /// `n`.
+    pub exponent: f64,
+    /// Hunt–Crossley's `d` (s/m).
+    pub dissipation: f64,
+    /// `μ`.
+    pub friction: f64,
+    /// `v_s` (m/s).
+    pub smoothing_velocity: f64,
+}
+
+impl Law {
+    /// (K1) at penetration `depth > 0` growing at `rate`.
+    fn normal_force(&self, depth: f64, rate: f64) -> f64 {
+        (self.stiffness * depth.powf(self.exponent) * (1.0 + self.dissipation * rate)).max(0.0)
+    }
+
+    /// (K2): the friction force against the sliding velocity `v` (relative, at the contact
+    /// point) with normal `n`, for normal force `f_n`.
+    fn friction_force(&self, f_n: f64, v: &V3, n: &V3) -> V3 {
+        if self.friction == 0.0 || f_n == 0.0 {
+            return V3::zeros();
+        }
+        let sliding = v - n.dot(v) * n;
+        -(self.friction * f_n / sliding.norm().max(self.smoothing_velocity)) * sliding
+    }
+
+    /// `k δⁿ⁺¹ / (n + 1)` where `depth > 0`, 0 elsewhere.
+    fn potential(&self, depth: f64) -> f64 {
+        if depth <= 0.0 {
+            return 0.0;
+        }
+        self.stiffness * depth.powf(self.exponent + 1.0) / (self.exponent + 1.0)
+    }
+
+    fn is_conservative(&self) -> bool {
+        self.dissipation == 0.0 && self.friction == 0.0
+    }
+}
+
+/// Two spheres on two bodies (either may be the ground).
+#[derive(Debug, Clone)]
+pub(crate) struct SphereSphere {
+    /// The bodies (`None`: the ground) and their spheres' centres in their frames.
+    pub ends: [(Option<usize>, V3); 2],
+    /// Radii `Rᵢ`, `Rⱼ` (m).
+    pub radii: [f64; 2],
+    /// The law.
+    pub law: Law,
+}
+
+impl SphereSphere {
+    /// Centres (global), their arms from the body origins, and the overlap `δ`.
+    fn geometry(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> ([Frame; 2], [V3; 2], [V3; 2], f64) {
+        let frames = [frame(self.ends[0].0), frame(self.ends[1].0)];
+        let arms = [frames[0].global(&self.ends[0].1), frames[1].global(&self.ends[1].1)];
+        let centres = [frames[0].r + arms[0], frames[1].r + arms[1]];
+        let depth = self.radii[0] + self.radii[1] - (centres[1] - centres[0]).norm();
+        (frames, arms, centres, depth)
+    }
+
+    /// Adds the contact force's generalized forces on both bodies.
+    pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
+        let ([fi, fj], [si, sj], [ci, cj], depth) = self.geometry(frame);
+        let d = cj - ci;
+        let length = d.norm();
+        if depth <= 0.0 || length == 0.0 {
+            // Apart, or concentric (no direction to push along).
+            return;
+        }
+        let n = d / length;
+        let rate = -n.dot(&(fj.point_velocity(&sj) - fi.point_velocity(&si)));
+        let normal_force = self.law.normal_force(depth, rate);
+        // The middle of the overlap, as an arm of each body.
+        let x = ci + (self.radii[0] - 0.5 * depth) * n;
+        let (ai, aj) = (x - fi.r, x - fj.r);
+        let slip = fj.point_velocity(&aj) - fi.point_velocity(&ai);
+        let force = normal_force * n + self.law.friction_force(normal_force, &slip, &n);
+        if let Some(b) = self.ends[1].0 {
+            add_point_force(out, b, &fj, &aj, &force);
+        }
+        if let Some(b) = self.ends[0].0 {
+            add_point_force(out, b, &fi, &ai, &(-force));
+        }
+    }
+
+    /// `k δⁿ⁺¹ / (n + 1)` where the spheres overlap.
+    pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
+        self.law.potential(self.geometry(frame).3)
+    }
+
+    /// True without dissipation and friction.
+    pub fn is_conservative(&self) -> bool {
+        self.law.is_conservative()
+    }
+}
 
 /// A sphere on a body against a plane of the ground.
 #[derive(Debug, Clone)]
@@ -31,16 +137,8 @@ pub(crate) struct SpherePlane {
     pub point: V3,
     /// The plane's unit normal, out of the solid (global).
     pub normal: V3,
-    /// `k` (N/mⁿ).
-    pub stiffness: f64,
-    /// `n`.
-    pub exponent: f64,
-    /// Hunt–Crossley's `d` (s/m).
-    pub dissipation: f64,
-    /// `μ`.
-    pub friction: f64,
-    /// `v_s` (m/s).
-    pub smoothing_velocity: f64,
+    /// The law.
+    pub law: Law,
 }
 
 impl SpherePlane {
@@ -60,29 +158,22 @@ impl SpherePlane {
             return;
         }
         let rate = -self.normal.dot(&f.point_velocity(&s_centre));
-        let normal_force = (self.stiffness * depth.powf(self.exponent) * (1.0 + self.dissipation * rate)).max(0.0);
+        let normal_force = self.law.normal_force(depth, rate);
         let arm = s_centre - self.radius * self.normal;
-        let mut force = normal_force * self.normal;
-        if self.friction > 0.0 && normal_force > 0.0 {
-            let v = f.point_velocity(&arm);
-            let sliding = v - self.normal.dot(&v) * self.normal;
-            let speed = sliding.norm();
-            force -= (self.friction * normal_force / speed.max(self.smoothing_velocity)) * sliding;
-        }
+        let force = normal_force * self.normal
+            + self
+                .law
+                .friction_force(normal_force, &f.point_velocity(&arm), &self.normal);
         add_point_force(out, self.body, &f, &arm, &force);
     }
 
     /// `k δⁿ⁺¹ / (n + 1)` where the sphere penetrates, 0 elsewhere.
     pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        let depth = self.penetration(frame);
-        if depth <= 0.0 {
-            return 0.0;
-        }
-        self.stiffness * depth.powf(self.exponent + 1.0) / (self.exponent + 1.0)
+        self.law.potential(self.penetration(frame))
     }
 
     /// True without dissipation and friction.
     pub fn is_conservative(&self) -> bool {
-        self.dissipation == 0.0 && self.friction == 0.0
+        self.law.is_conservative()
     }
 }

@@ -9,6 +9,7 @@
 //! | spring–damper–actuator | tension `k (ℓ − ℓ₀) + c ℓ̇ + f(t)` along the line of its points | here |
 //! | joint torque, rotational spring–damper | `τ = −k (θ − θ₀) − c θ̇ + f(t)` about a revolute or cylindrical joint's axis | [`about_axis`] |
 //! | sphere–plane contact | Hunt–Crossley normal force and regularized Coulomb friction between a sphere on a body and a plane of the ground | `contact.rs` |
+//! | sphere–sphere contact | the same law between spheres on two bodies | `contact.rs` |
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
@@ -20,7 +21,7 @@ use crate::frame::{Frame, NV};
 use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
-use contact::SpherePlane;
+use contact::{Law, SpherePlane, SphereSphere};
 use dalembert_system::{ModelError, TimeFunction};
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -141,6 +142,28 @@ pub enum Force {
         /// `v_s` (m/s): below it the friction grows linearly with the sliding speed.
         smoothing_velocity: f64,
     },
+    /// Compliant contact of two spheres on two bodies (either may be the ground), with the law of
+    /// [`Force::SpherePlane`].
+    SphereSphere {
+        /// Name.
+        name: String,
+        /// The two bodies.
+        bodies: [BodyRef; 2],
+        /// The spheres' centres in the initial configuration (global).
+        centres: [[f64; 3]; 2],
+        /// Radii (m).
+        radii: [f64; 2],
+        /// `k` (N/mⁿ).
+        stiffness: f64,
+        /// `n` (1.5 for Hertz's spheres).
+        exponent: f64,
+        /// Hunt–Crossley's `d` (s/m).
+        dissipation: f64,
+        /// Friction coefficient `μ`.
+        friction: f64,
+        /// `v_s` (m/s).
+        smoothing_velocity: f64,
+    },
     /// A force the user writes ([`UserForce`]).
     User(Arc<dyn UserForce>),
 }
@@ -154,6 +177,7 @@ impl Force {
             | Force::SpringDamper { name, .. }
             | Force::JointTorque { name, .. }
             | Force::SpherePlane { name, .. }
+            | Force::SphereSphere { name, .. }
             | Force::RotationalSpringDamper { name, .. } => name,
             Force::User(u) => u.name(),
         }
@@ -204,6 +228,7 @@ pub(crate) enum ForceData {
     },
     AboutAxis(AxisForce),
     SpherePlane(SpherePlane),
+    SphereSphere(SphereSphere),
     User(Arc<dyn UserForce>),
 }
 
@@ -225,6 +250,36 @@ pub(crate) fn add_torque(out: &mut [f64], b: usize, frame: &Frame, t: &V3) {
     for k in 0..3 {
         out[NV * b + 3 + k] += n[k];
     }
+}
+
+/// `Ok` when `v` is positive and finite; the message names `what` otherwise.
+fn positive(v: f64, what: &str) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{what} must be positive and finite, got {v}"))
+    }
+}
+
+/// A contact law from its parameters, checked.
+fn law(stiffness: f64, exponent: f64, dissipation: f64, friction: f64, smoothing_velocity: f64) -> Result<Law, String> {
+    positive(stiffness, "stiffness")?;
+    positive(smoothing_velocity, "smoothing velocity")?;
+    if !(exponent.is_finite() && exponent >= 1.0) {
+        return Err(format!("exponent must be at least 1, got {exponent}"));
+    }
+    for (v, what) in [(dissipation, "dissipation"), (friction, "friction")] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!("{what} must be finite and non-negative, got {v}"));
+        }
+    }
+    Ok(Law {
+        stiffness,
+        exponent,
+        dissipation,
+        friction,
+        smoothing_velocity,
+    })
 }
 
 /// The three components at `t`.
@@ -382,20 +437,9 @@ impl ForceData {
                 if n.norm() == 0.0 {
                     return Err(bad("the plane's normal must not be zero"));
                 }
-                let positive = |v: f64, what: &str| -> Result<(), ModelError> {
-                    if v.is_finite() && v > 0.0 {
-                        Ok(())
-                    } else {
-                        Err(bad(&format!("{what} must be positive and finite, got {v}")))
-                    }
-                };
-                positive(*radius, "radius")?;
-                positive(*stiffness, "stiffness")?;
-                positive(*smoothing_velocity, "smoothing velocity")?;
-                if !(exponent.is_finite() && *exponent >= 1.0) {
-                    return Err(bad(&format!("exponent must be at least 1, got {exponent}")));
-                }
-                non_negative(&[(*dissipation, "dissipation"), (*friction, "friction")])?;
+                positive(*radius, "radius").map_err(|m| bad(&m))?;
+                let law =
+                    law(*stiffness, *exponent, *dissipation, *friction, *smoothing_velocity).map_err(|m| bad(&m))?;
                 let b = moving(*body)?;
                 ForceData::SpherePlane(SpherePlane {
                     body: b,
@@ -403,11 +447,36 @@ impl ForceData {
                     radius: *radius,
                     point: V3::from(*point),
                     normal: n / n.norm(),
-                    stiffness: *stiffness,
-                    exponent: *exponent,
-                    dissipation: *dissipation,
-                    friction: *friction,
-                    smoothing_velocity: *smoothing_velocity,
+                    law,
+                })
+            }
+            Force::SphereSphere {
+                bodies,
+                centres,
+                radii,
+                stiffness,
+                exponent,
+                dissipation,
+                friction,
+                smoothing_velocity,
+                ..
+            } => {
+                if !finite(&centres[0]) || !finite(&centres[1]) {
+                    return Err(bad("centres must be finite"));
+                }
+                positive(radii[0], "radius")
+                    .and_then(|()| positive(radii[1], "radius"))
+                    .map_err(|m| bad(&m))?;
+                let law =
+                    law(*stiffness, *exponent, *dissipation, *friction, *smoothing_velocity).map_err(|m| bad(&m))?;
+                let (bi, bj) = (index(bodies[0])?, index(bodies[1])?);
+                if bi == bj {
+                    return Err(bad("must be between two different bodies"));
+                }
+                ForceData::SphereSphere(SphereSphere {
+                    ends: [(bi, local(bi, &centres[0])), (bj, local(bj, &centres[1]))],
+                    radii: *radii,
+                    law,
                 })
             }
             Force::User(u) => ForceData::User(u.clone()),
@@ -420,6 +489,7 @@ impl ForceData {
         match self {
             ForceData::PointForce { body, .. } | ForceData::Torque { body, .. } => vec![*body],
             ForceData::SpherePlane(c) => vec![c.body],
+            ForceData::SphereSphere(c) => c.ends.iter().filter_map(|e| e.0).collect(),
             ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
             ForceData::AboutAxis(a) => a.bodies(),
             ForceData::User(u) => u
@@ -495,6 +565,7 @@ impl ForceData {
             }
             ForceData::AboutAxis(a) => a.add(t, frame, out),
             ForceData::SpherePlane(c) => c.add(frame, out),
+            ForceData::SphereSphere(c) => c.add(frame, out),
             ForceData::User(u) => u.add(t, &Frames::new(frame), &mut Loads::new(frame, out)),
         }
     }
@@ -514,6 +585,7 @@ impl ForceData {
             }
             ForceData::AboutAxis(a) => a.potential(frame),
             ForceData::SpherePlane(c) => c.potential(frame),
+            ForceData::SphereSphere(c) => c.potential(frame),
             ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => 0.0,
         }
@@ -525,6 +597,7 @@ impl ForceData {
             ForceData::SpringDamper { damping, actuator, .. } => *damping == 0.0 && actuator.is_none(),
             ForceData::AboutAxis(a) => a.is_conservative(),
             ForceData::SpherePlane(c) => c.is_conservative(),
+            ForceData::SphereSphere(c) => c.is_conservative(),
             ForceData::User(u) => u.is_conservative(),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => false,
         }
