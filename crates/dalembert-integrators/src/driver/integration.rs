@@ -373,7 +373,7 @@ impl Integration {
         if let Some((ts, h)) = dense.filter(|&(ts, _)| t >= ts) {
             let theta = ((t - ts) / h).clamp(0.0, 1.0);
             self.stepper.interpolate(theta, &mut self.shown);
-            self.tangents.show(theta, t, n_q, self.stabilization)?;
+            self.tangents.show(theta, n_q);
         } else if (self.t - t).abs() <= tolerance(t) || self.t_prev.is_nan() {
             self.shown_is_run = true;
             self.tangents.show_run();

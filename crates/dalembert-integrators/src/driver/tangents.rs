@@ -192,23 +192,15 @@ impl Tangents {
     }
 
     /// Shows each side at fraction `theta` of the last step (dense output of an adaptive method),
-    /// normalized and projected at `t` as the run's state shown is.
-    pub fn show(
-        &mut self,
-        theta: f64,
-        t: f64,
-        n_q: usize,
-        stabilization: Stabilization,
-    ) -> Result<(), IntegrationError> {
+    /// normalized but not projected, as the sides' steps are.
+    pub fn show(&mut self, theta: f64, n_q: usize) {
         for tangent in &mut self.tangents {
             for side in &mut tangent.sides {
                 side.stepper.interpolate(theta, &mut side.shown);
                 normalize(side.f.as_ref(), &mut side.shown, n_q);
-                project(side.f.as_mut(), t, &mut side.shown, n_q, stabilization)?;
             }
         }
         self.shown_between = !self.is_empty();
-        Ok(())
     }
 
     /// The run is shown at its own state: so are the sides.
