@@ -496,3 +496,32 @@ fn a_run_with_sensitivities_allocates_nothing_per_step() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// A run whose steps end at contact events (the bouncing ball: touchdowns and lift-offs located
+/// on the chord or the dense output) allocates nothing per step either, every method: a run
+/// through twice the bounces costs no more allocations.
+#[test]
+fn a_run_with_contact_events_allocates_nothing_per_step() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let base = dalembert::Scene::from_path("scenes/bouncing-ball.toml").unwrap();
+    let mut failures = Vec::new();
+    for entry in METHODS {
+        let mut scene = base.clone();
+        scene.settings.method = Method::of(entry);
+        scene.settings.step = 1e-4;
+        let count = |end: f64| {
+            let mut sim = scene.simulation();
+            sim.end = end;
+            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            let stats = sim.run(&mut |_| {}).unwrap();
+            (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
+        };
+        let ((short, events_short), (long, events_long)) = (count(1.0), count(2.0));
+        assert!(events_long > events_short, "{}: no contact event", entry.name);
+        if long > short {
+            failures.push(format!("{}: {short} allocations for 1 s, {long} for 2 s", entry.name));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

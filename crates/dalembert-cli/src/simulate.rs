@@ -289,7 +289,7 @@ pub fn run(a: Args) -> Result<(), String> {
         );
     }
     outln!(
-        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions{}{}",
+        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions{}{}{}",
         stats.steps, stats.rejected, stats.evaluations, stats.factorizations, stats.newton_iterations, stats.repartitions,
         match stats.handovers {
             0 => String::new(),
@@ -298,6 +298,10 @@ pub fn run(a: Args) -> Result<(), String> {
         match stats.bridges {
             0 => String::new(),
             k => format!(", {k} singular positions bridged with checked steps (accurate to about 31 × the tolerances there)"),
+        },
+        match stats.events {
+            0 => String::new(),
+            k => format!(", {k} steps ended at a contact's beginning or end"),
         }
     );
     outln!(

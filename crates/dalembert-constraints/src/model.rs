@@ -208,6 +208,23 @@ impl MultibodySystem for Model {
             .sum()
     }
 
+    /// The contact elements (an element is one or not whatever the state: asked at zero).
+    fn num_events(&self) -> usize {
+        let q = vec![0.0; 3 * self.bodies.len()];
+        self.forces
+            .iter()
+            .filter(|f| f.contact_gap(&self.bodies, &q).is_some())
+            .count()
+    }
+
+    /// Each contact element's gap, in the order of the force elements.
+    fn events(&self, _t: f64, q: &[f64], _v: &[f64], out: &mut [f64]) {
+        let gaps = self.forces.iter().filter_map(|f| f.contact_gap(&self.bodies, q));
+        for (slot, gap) in out.iter_mut().zip(gaps) {
+            *slot = gap;
+        }
+    }
+
     /// Total potential energy of the conservative elements at `(t, q)`.
     fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
         self.forces

@@ -9,6 +9,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 mod bridge;
+mod events;
 mod guard;
 mod integration;
 mod monitors;

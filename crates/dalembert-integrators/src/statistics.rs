@@ -24,6 +24,9 @@ pub struct Statistics {
     /// steps (one step against two half steps; integrators/src/driver/bridge.rs). A bridged run is
     /// accurate to about 31 × its tolerances there, not to its tolerances.
     pub bridges: u64,
+    /// Events (a contact beginning or ending) a step was shortened to end at
+    /// ([`dalembert_system::MultibodySystem::events`]).
+    pub events: u64,
     /// Wall time of the integration loop (excluding the observer's own time is not attempted).
     pub wall_time: Duration,
     /// Largest `‖C‖∞` after any accepted step.
@@ -68,6 +71,7 @@ impl Statistics {
             repartitions: self.repartitions + later.repartitions,
             handovers: self.handovers + later.handovers,
             bridges: self.bridges + later.bridges,
+            events: self.events + later.events,
             wall_time: self.wall_time + later.wall_time,
             max_constraint_violation: self.max_constraint_violation.max(later.max_constraint_violation),
             max_velocity_violation: self.max_velocity_violation.max(later.max_velocity_violation),

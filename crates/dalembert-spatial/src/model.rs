@@ -539,6 +539,18 @@ impl MultibodySystem for Model {
             .sum()
     }
 
+    fn num_events(&self) -> usize {
+        self.forces.iter().filter(|f| f.is_contact()).count()
+    }
+
+    /// Each contact element's gap, in the order of the force elements.
+    fn events(&self, _t: f64, q: &[f64], _v: &[f64], out: &mut [f64]) {
+        let frame = |b: Option<usize>| self.frame(b, q, &[]);
+        for (slot, gap) in out.iter_mut().zip(self.forces.iter().filter_map(|f| f.gap(&frame))) {
+            *slot = gap;
+        }
+    }
+
     fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
         let gravity: f64 = self
             .bodies

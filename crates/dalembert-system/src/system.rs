@@ -74,6 +74,18 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// Euler parameters). Default: nothing to do.
     fn normalize(&self, _q: &mut [f64]) {}
 
+    /// The number of event functions ([`MultibodySystem::events`]): one per contact element.
+    /// Default 0.
+    fn num_events(&self) -> usize {
+        0
+    }
+
+    /// The event functions at `(t, q, v)` into `out` (length [`MultibodySystem::num_events`]):
+    /// each contact's gap, positive apart and negative in contact, so that a sign change within a
+    /// step is a contact beginning or ending there. The integration loop ends a step there
+    /// (`docs/contact.md`, "Events"). Allocates nothing.
+    fn events(&self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}
+
     /// The bodies (layout indices) whose coordinates each applied-force element reads and whose
     /// generalized forces it writes, one group per element; the quadratic-velocity terms and the
     /// mass of a body couple it only with itself and need no group. `None` when some element does

@@ -12,6 +12,7 @@
 //! restarts the method from the state shown, and the grid goes on from that time.
 
 use super::bridge::Bridge;
+use super::events::Events;
 use super::guard::SingularPassGuard;
 use super::monitors::Monitors;
 use super::tangents::{Perturbed, Tangents};
@@ -95,6 +96,9 @@ pub struct Integration {
     busy: Duration,
     /// The sensitivities carried along ([`Integration::with_sensitivities`]; none by default).
     tangents: Tangents,
+    /// The system's events (contacts beginning or ending), where an adaptive step is shortened
+    /// to end.
+    events: Events,
 }
 
 fn tolerance(t: f64) -> f64 {
@@ -190,6 +194,7 @@ impl Integration {
             }
         };
         let len = y.len();
+        let events = Events::new(f, t0, &y, n);
         Ok(Integration {
             mon,
             stepper,
@@ -209,6 +214,7 @@ impl Integration {
             rate: vec![0.0; len],
             busy: wall.elapsed(),
             tangents: Tangents::default(),
+            events,
         })
     }
 
@@ -466,6 +472,7 @@ impl Integration {
         self.mon.scale0 = 1.0 + inf_norm(&self.y);
         let conservative_fixed = self.mon.branch.watches_energy();
         self.mon.branch = BranchMonitor::new(f, q, qd, energy, conservative_fixed);
+        self.events.accepted(f, t, &self.y, n);
         self.restart_at(t);
         Ok(())
     }
@@ -555,6 +562,7 @@ impl Integration {
             t,
             y,
             tangents,
+            events,
             ..
         } = self
         else {
@@ -569,7 +577,23 @@ impl Integration {
             }
             let ts = g.base + g.done as f64 * g.hh;
             tangents.mark(y);
-            let outcome = stepper.step(f, ts, g.hh, y)?;
+            events.mark(y);
+            let mut h = g.hh;
+            let mut outcome = stepper.step(f, ts, h, y)?;
+            // A contact beginning or ending inside the step: the step again, to end there (the
+            // rest of the output interval is then spanned anew from it).
+            let mut located = false;
+            if outcome.accepted && !events.located {
+                if let Some(theta) = events.chord(f, ts, h, y, mon.n) {
+                    if theta * h > opts.min_step {
+                        events.restore(y);
+                        stepper.state_changed();
+                        h *= theta;
+                        outcome = stepper.step(f, ts, h, y)?;
+                        located = true;
+                    }
+                }
+            }
             if !outcome.accepted {
                 g.successes = 0;
                 g.h = 0.5 * g.hh;
@@ -582,18 +606,31 @@ impl Integration {
                 (g.steps, g.hh) = split(schedule.time(g.k) - g.base, g.h);
                 continue;
             }
-            g.done += 1;
-            let t_after = if g.done == g.steps {
-                schedule.time(g.k)
+            let t_after = if located {
+                ts + h
             } else {
-                g.base + g.done as f64 * g.hh
+                g.done += 1;
+                if g.done == g.steps {
+                    schedule.time(g.k)
+                } else {
+                    g.base + g.done as f64 * g.hh
+                }
             };
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
             // The loop does not tell a fixed-step method that its state was projected.
-            tangents.follow(ts, g.hh, mon.n, false)?;
+            tangents.follow(ts, h, mon.n, false)?;
+            events.accepted(f, t_after, y, mon.n);
             *t = t_after;
-            mon.monitor(f, t_after, y, g.hh, cancel)?;
+            mon.monitor(f, t_after, y, h, cancel)?;
+            if located {
+                mon.stats.events += 1;
+                // The rest of the interval from the event, at the run's step.
+                g.base = t_after;
+                g.done = 0;
+                (g.steps, g.hh) = split(schedule.time(g.k) - g.base, g.h);
+                return Ok(());
+            }
             g.successes += 1;
             if g.successes >= 4 && g.h < opts.step && g.done < g.steps {
                 // Grow back: the rest of the interval at the doubled step.
@@ -619,6 +656,7 @@ impl Integration {
             t,
             y,
             tangents,
+            events,
             ..
         } = self
         else {
@@ -690,7 +728,20 @@ impl Integration {
                 a.h = t_end - *t;
             }
             tangents.mark(y);
+            events.mark(y);
             let outcome = stepper.step(f, *t, a.h, y)?;
+            if outcome.accepted && !events.located {
+                // A contact beginning or ending inside the step: the step again, to end there.
+                if let Some(theta) = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q) {
+                    if theta * a.h > opts.min_step {
+                        events.restore(y);
+                        stepper.state_changed();
+                        a.h *= theta;
+                        events.located = true;
+                        continue;
+                    }
+                }
+            }
             let collapse = a.guard.check(f, *t, y, n_q, outcome.next_step, method).err();
             if outcome.accepted {
                 let t_new = if last { t_end } else { *t + a.h };
@@ -701,6 +752,10 @@ impl Integration {
                     stepper.state_changed();
                 }
                 tangents.follow(*t, a.h, n_q, projected)?;
+                if events.located {
+                    mon.stats.events += 1;
+                }
+                events.accepted(f, t_new, y, n_q);
                 let h = a.h;
                 *t = t_new;
                 a.guard.accepted(h);

@@ -93,6 +93,10 @@ impl ForceElement for CircleLine {
         })
     }
 
+    fn contact_gap(&self, _bodies: &[Body], q: &[f64]) -> Option<f64> {
+        Some(-self.penetration(q))
+    }
+
     fn is_conservative(&self) -> bool {
         self.dissipation == 0.0 && self.friction == 0.0
     }

@@ -45,6 +45,13 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// A contact element's gap at `q` (positive apart, negative in contact): the event function
+    /// the integration loop ends a step at where it changes sign. `None` (the default) for an
+    /// element that is not a contact; an element answers `Some` or `None` whatever `q`.
+    fn contact_gap(&self, _bodies: &[Body], _q: &[f64]) -> Option<f64> {
+        None
+    }
+
     /// Checks that every body the element refers to exists in a model of `bodies` moving bodies.
     fn validate(&self, _bodies: usize) -> Result<(), dalembert_system::ModelError> {
         Ok(())

@@ -113,9 +113,14 @@ impl SphereSphere {
         }
     }
 
+    /// The overlap `δ` at the state behind `frame` (negative: the gap).
+    pub fn overlap(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
+        self.geometry(frame).3
+    }
+
     /// `k δⁿ⁺¹ / (n + 1)` where the spheres overlap.
     pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        self.law.potential(self.geometry(frame).3)
+        self.law.potential(self.overlap(frame))
     }
 
     /// True without dissipation and friction.

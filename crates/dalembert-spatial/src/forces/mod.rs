@@ -591,6 +591,22 @@ impl ForceData {
         }
     }
 
+    /// True for a contact element (it has a gap: [`ForceData::gap`]).
+    pub fn is_contact(&self) -> bool {
+        matches!(self, ForceData::SpherePlane(_) | ForceData::SphereSphere(_))
+    }
+
+    /// A contact's gap at the state behind `frame` (positive apart, negative in contact), the
+    /// event function of [`dalembert_system::MultibodySystem::events`]; `None` for the other
+    /// elements.
+    pub fn gap(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<f64> {
+        match self {
+            ForceData::SpherePlane(c) => Some(-c.penetration(frame)),
+            ForceData::SphereSphere(c) => Some(-c.overlap(frame)),
+            _ => None,
+        }
+    }
+
     /// True when the element is conservative with its potential counted by [`ForceData::potential`].
     pub fn is_conservative(&self) -> bool {
         match self {

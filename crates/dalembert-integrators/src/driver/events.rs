@@ -1,0 +1,136 @@
+//! Events: where a contact begins or ends, a step of an adaptive method is shortened to end
+//! there (`docs/contact.md`, "Events").
+//!
+//! The system's event functions ([`dalembert_system::MultibodySystem::events`], each contact's
+//! gap) are evaluated after every accepted step. Where one changed sign within the step, the loop
+//! finds the first fraction `θ` of the step where one vanishes, on the method's dense output
+//! (bisection to `10⁻¹²` of the step; a fixed-step method, which has none, on the chord of the
+//! values at the step's ends), and takes the step again from its start with size `θ h`:
+//! the force's kink (a contact force starts from zero with an unbounded derivative) then falls on
+//! a step boundary instead of inside a step, and no contact is stepped over. The shortened step
+//! is accepted without another check, so that a root found slightly past the crossing cannot
+//! shorten it again.
+
+use crate::stepper::Stepper;
+use dalembert_system::Formulation;
+
+/// Bisection steps on `θ ∈ [0, 1]`: `2⁻⁴⁰ ≈ 10⁻¹²` of the step.
+const BISECTIONS: usize = 40;
+
+/// The event functions of a run and the state at the start of the step in progress.
+#[derive(Default)]
+pub(super) struct Events {
+    /// The event functions at the run's state.
+    g0: Vec<f64>,
+    /// Work space.
+    g: Vec<f64>,
+    /// The run's state at the start of the step in progress.
+    start: Vec<f64>,
+    /// A state on the dense output.
+    y: Vec<f64>,
+    /// True while the step in progress was shortened to end at an event.
+    pub located: bool,
+}
+
+impl Events {
+    /// The events of the system `f` integrates, at its initial state `y0` (`n_q` positions).
+    pub fn new(f: &dyn Formulation, t0: f64, y0: &[f64], n_q: usize) -> Self {
+        let system = f.system();
+        let m = system.num_events();
+        if m == 0 {
+            return Events::default();
+        }
+        let mut g0 = vec![0.0; m];
+        let (q, v) = y0.split_at(n_q);
+        system.events(t0, q, v, &mut g0);
+        Events {
+            g: vec![0.0; m],
+            g0,
+            start: vec![0.0; y0.len()],
+            y: vec![0.0; y0.len()],
+            located: false,
+        }
+    }
+
+    /// True when the system has no event function.
+    pub fn is_empty(&self) -> bool {
+        self.g0.is_empty()
+    }
+
+    /// Keeps the run's state `y` at the start of a step.
+    pub fn mark(&mut self, y: &[f64]) {
+        if !self.is_empty() {
+            self.start.copy_from_slice(y);
+        }
+    }
+
+    /// The run's state at the start of the step in progress, into `y` (the step is taken again).
+    pub fn restore(&self, y: &mut [f64]) {
+        y.copy_from_slice(&self.start);
+    }
+
+    /// After a step from `t` of size `h` ending at `y` (its dense output in `stepper`): the first
+    /// fraction `θ ∈ (0, 1)` of the step where an event function that changed sign vanishes, or
+    /// `None` when none changed sign.
+    pub fn crossing(
+        &mut self,
+        f: &dyn Formulation,
+        stepper: &dyn Stepper,
+        t: f64,
+        h: f64,
+        y: &[f64],
+        n_q: usize,
+    ) -> Option<f64> {
+        if self.is_empty() {
+            return None;
+        }
+        let system = f.system();
+        let (q, v) = y.split_at(n_q);
+        system.events(t + h, q, v, &mut self.g);
+        let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+        if !(self.g0.iter().zip(&self.g)).any(|(&a, &b)| changed(a, b)) {
+            return None;
+        }
+        // The first θ where any function that changed over the step has changed: bisection on
+        // "some function changed sign between 0 and θ".
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..BISECTIONS {
+            let mid = 0.5 * (lo + hi);
+            stepper.interpolate(mid, &mut self.y);
+            let (q, v) = self.y.split_at(n_q);
+            system.events(t + mid * h, q, v, &mut self.g);
+            if (self.g0.iter().zip(&self.g)).any(|(&a, &b)| changed(a, b)) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        Some(hi)
+    }
+
+    /// After a fixed step from `t` of size `h` ending at `y`: the fraction `θ ∈ (0, 1)` of the
+    /// step where the first event function that changed sign vanishes on the chord of its values
+    /// at the step's ends (a fixed-step method has no dense output), or `None`. The step taken
+    /// again to there ends near the event; where it falls short, the next step finds the rest.
+    pub fn chord(&mut self, f: &dyn Formulation, t: f64, h: f64, y: &[f64], n_q: usize) -> Option<f64> {
+        if self.is_empty() {
+            return None;
+        }
+        let (q, v) = y.split_at(n_q);
+        f.system().events(t + h, q, v, &mut self.g);
+        (self.g0.iter().zip(&self.g))
+            .filter(|&(&a, &b)| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0))
+            .map(|(&a, &b)| a / (a - b))
+            .min_by(f64::total_cmp)
+    }
+
+    /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.
+    pub fn accepted(&mut self, f: &dyn Formulation, t: f64, y: &[f64], n_q: usize) {
+        if self.is_empty() {
+            return;
+        }
+        let (q, v) = y.split_at(n_q);
+        f.system().events(t, q, v, &mut self.g0);
+        self.located = false;
+    }
+}
