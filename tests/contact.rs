@@ -353,3 +353,30 @@ fn an_adaptive_method_ends_its_steps_where_a_contact_begins_and_ends() {
     assert!((apex - 1.0).abs() < 1e-8, "apex {apex} m");
     assert!(stats.steps < 400, "{} steps", stats.steps);
 }
+
+#[test]
+fn two_disks_collide_as_two_balls() {
+    // circle-circle and sphere-sphere are two programs for one law: two equal disks in the plane
+    // and two equal balls in space, the same central impact with dissipation, move alike to
+    // within 1e-12 m/s.
+    let (v, gap, d) = (1.0, 0.25, 0.5);
+    let body = |name: &str, x: f64, vx: f64| {
+        format!("[[bodies]]\nname = \"{name}\"\nmass = {M}\nshape = {{ disk = {R} }}\nposition = [{x}, 0.0]\nvelocity = [{vx}, 0.0]\n")
+    };
+    let text = format!(
+        "[scene]\ngravity = [0.0, 0.0]\n{}{}\
+         [[forces]]\nname = \"touch\"\ntype = \"circle-circle\"\nbodies = [\"a\", \"b\"]\nradii = [{R}, {R}]\n\
+         stiffness = {K}\ndissipation = {d}\n\
+         [simulation]\nend = 0.3\nintegrator = \"rk4\"\nstep = 2.5e-5\noutput_every = 1e-3\n",
+        body("a", 0.0, v),
+        body("b", gap, 0.0)
+    );
+    let planar = run(&Scene::from_toml(&text, "two disks").unwrap());
+    let spatial = run(&two_balls(v, gap, d));
+    for (p, s) in [("a.vx", "a.vx"), ("b.vx", "b.vx"), ("b.x", "b.x")] {
+        let (x, y) = (planar.column(p).unwrap(), spatial.column(s).unwrap());
+        assert_eq!(x.len(), y.len());
+        let worst = x.iter().zip(&y).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(worst < 1e-12, "{p}: disks and balls differ by {worst:.2e}");
+    }
+}

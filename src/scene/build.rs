@@ -16,8 +16,8 @@ use dalembert_constraints::{
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
-    Body, BodyId, BodyRef, BodyState, CircleLine, ForceElement, Gravity, PointForce, RotationalSpringDamper,
-    SpringDamper, Torque, Vec2,
+    Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, PointForce,
+    RotationalSpringDamper, SpringDamper, Torque, Vec2,
 };
 use dalembert_system::TimeFunction;
 use std::cell::RefCell;
@@ -528,9 +528,10 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
-    if d.kind != "circle-line" {
+    if d.kind != "circle-line" && d.kind != "circle-circle" {
         let contact = [
             ("radius", d.radius.is_some()),
+            ("radii", d.radii.is_some()),
             ("line", d.line.is_some()),
             ("exponent", d.exponent.is_some()),
             ("dissipation", d.dissipation.is_some()),
@@ -668,6 +669,9 @@ fn force(
             if normal.norm().is_nan() || normal.norm() == 0.0 {
                 return Err(err("the line's normal must not be zero".into()));
             }
+            if d.radii.is_some() {
+                return Err(err("'radii' belongs to a circle-circle element: give 'radius'".into()));
+            }
             Box::new(CircleLine {
                 name: d.name.clone(),
                 body,
@@ -675,11 +679,42 @@ fn force(
                 radius: d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?,
                 point: v2(line.point),
                 normal: normal / normal.norm(),
-                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness' (N/m^exponent)".into()))?,
-                exponent: d.exponent.unwrap_or(1.5),
-                dissipation: d.dissipation.unwrap_or(0.0),
-                friction: d.friction.unwrap_or(0.0),
-                smoothing_velocity: d.smoothing_velocity.unwrap_or(super::spatial_forces::SMOOTHING_VELOCITY),
+                law: contact_law(d).map_err(err)?,
+            })
+        }
+        "circle-circle" => {
+            let extra = [
+                ("body", d.body.is_some()),
+                ("joint", d.joint.is_some()),
+                ("point", d.point.is_some()),
+                ("value", d.value.is_some()),
+                ("fx", d.fx.is_some()),
+                ("fy", d.fy.is_some()),
+                ("damping", d.damping.is_some()),
+                ("free_length", d.free_length.is_some()),
+                ("free_angle", d.free_angle.is_some()),
+                ("actuator", d.actuator.is_some()),
+                ("radius", d.radius.is_some()),
+                ("line", d.line.is_some()),
+            ];
+            if let Some((key, _)) = extra.iter().find(|(_, set)| *set) {
+                return Err(err(format!("'{key}' does not belong to a circle-circle element")));
+            }
+            let pr = pair()?;
+            let centres = match d.at {
+                Some(Points::Two([c0, c1])) => (local_point_of(pr[0], &b.q, v2(c0)), local_point_of(pr[1], &b.q, v2(c1))),
+                None => (Vec2::zeros(), Vec2::zeros()),
+                Some(Points::One(_)) => {
+                    return Err(err("'at' is the two circles' centres, [[x1, y1], [x2, y2]] (global)".into()))
+                }
+            };
+            let [r0, r1] = d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)".into()))?;
+            Box::new(CircleCircle {
+                name: d.name.clone(),
+                bodies: (pr[0], pr[1]),
+                centres,
+                radii: (r0, r1),
+                law: contact_law(d).map_err(err)?,
             })
         }
         "code" => {
@@ -711,7 +746,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, code)"
             )))
         }
     };
@@ -824,4 +859,19 @@ pub(crate) fn key_span(text: &str, table: &std::ops::Range<usize>, key: &str) ->
         offset += line.len();
     }
     None
+}
+
+/// The contact law of a `circle-line` or `circle-circle` element: `stiffness` required, the rest
+/// defaulted (exponent 1.5, no dissipation or friction, smoothing velocity 1 mm/s). Its ranges are
+/// the element's `validate`'s to check.
+fn contact_law(d: &ForceDef) -> Result<dalembert_system::ContactLaw, String> {
+    Ok(dalembert_system::ContactLaw {
+        stiffness: d.stiffness.ok_or("needs 'stiffness' (N/m^exponent)")?,
+        exponent: d.exponent.unwrap_or(1.5),
+        dissipation: d.dissipation.unwrap_or(0.0),
+        friction: d.friction.unwrap_or(0.0),
+        smoothing_velocity: d
+            .smoothing_velocity
+            .unwrap_or(super::spatial_forces::SMOOTHING_VELOCITY),
+    })
 }

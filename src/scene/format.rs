@@ -134,6 +134,8 @@ pub(crate) struct ForceDef {
     pub free_angle: Option<f64>,
     pub actuator: Option<FunctionDef>,
     pub radius: Option<f64>,
+    #[serde(default, deserialize_with = "strict::xy_opt")]
+    pub radii: Option<[f64; 2]>,
     pub line: Option<LineDef>,
     pub exponent: Option<f64>,
     pub dissipation: Option<f64>,

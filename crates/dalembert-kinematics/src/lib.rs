@@ -24,7 +24,9 @@ pub mod second_derivatives;
 
 pub use body::{Body, BodyId, BodyRef};
 pub use coordinates::{BodyState, Coordinates};
-pub use forces::{CircleLine, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque};
+pub use forces::{
+    CircleCircle, CircleLine, ForceElement, Gravity, PointForce, RotationalSpringDamper, SpringDamper, Torque,
+};
 pub use mass::MassMatrix;
 pub use point::PointState;
 pub use rotation::{perp, rotation, rotation_derivative};

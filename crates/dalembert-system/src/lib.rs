@@ -18,6 +18,7 @@
 
 pub mod blocks;
 pub mod constraint_set;
+pub mod contact_law;
 pub mod data;
 pub mod error;
 pub mod evaluated_at;
@@ -43,6 +44,7 @@ pub mod tree;
 
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
+pub use contact_law::ContactLaw;
 pub use data::{Data, Stage};
 pub use error::{ConstraintError, EquationRef};
 pub use evaluated_at::EvaluatedAt;

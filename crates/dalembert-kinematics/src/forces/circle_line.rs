@@ -1,16 +1,16 @@
 use super::{add_point_force, check_body, ForceElement};
 use crate::{Body, BodyRef, BodyState, PointState, Vec2};
-use dalembert_system::ModelError;
+use dalembert_system::{ContactLaw, ModelError};
 
 /// Compliant contact of a circle on a body with a line of the ground (`docs/contact.md`), the
 /// planar counterpart of the spatial sphere–plane element.
 ///
 /// With the circle's centre `c`, radius `R`, the line's point `p₀` and unit normal `n` (out of the
 /// ground), the penetration is `δ = R − n·(c − p₀)`, `δ̇ = −n·ċ`. Where `δ > 0` the line pushes
-/// at the circle's lowest point `x = c − R n` with `F_n = max(0, k δⁿ (1 + d δ̇))` (Hunt–Crossley)
-/// and `F_t = −μ F_n v_t / max(|v_t|, v_s)` (Coulomb's friction, linear below the smoothing
-/// velocity `v_s`), `v_t` the body point's velocity at `x` along the line. Conservative without
-/// dissipation and friction, with the potential `k δⁿ⁺¹ / (n + 1)`.
+/// at the circle's lowest point `x = c − R n` with [`ContactLaw`]'s normal force (Hunt–Crossley)
+/// and friction (Coulomb's, linear below the smoothing velocity) on the body point's velocity at
+/// `x` along the line. Conservative without dissipation and friction, with the potential
+/// `k δⁿ⁺¹ / (n + 1)`.
 #[derive(Debug, Clone)]
 pub struct CircleLine {
     /// Element name.
@@ -25,26 +25,57 @@ pub struct CircleLine {
     pub point: Vec2,
     /// The line's unit normal, out of the ground (global).
     pub normal: Vec2,
-    /// `k` (N/mⁿ).
-    pub stiffness: f64,
-    /// `n` (at least 1).
-    pub exponent: f64,
-    /// Hunt–Crossley's `d` (s/m).
-    pub dissipation: f64,
-    /// Friction coefficient `μ`.
-    pub friction: f64,
-    /// `v_s` (m/s).
-    pub smoothing_velocity: f64,
+    /// The contact law.
+    pub law: ContactLaw,
+}
+
+/// Compliant contact of two circles on two bodies (either may be the ground), with the law of
+/// [`CircleLine`]: they overlap by `δ = Rᵢ + Rⱼ − |cⱼ − cᵢ|` along `n = (cⱼ − cᵢ) / |cⱼ − cᵢ|`,
+/// `δ̇ = −n·(ċⱼ − ċᵢ)`; the normal force pushes `j` along `n` and `i` against it at the middle of
+/// the overlap, and friction acts on the bodies' relative sliding there.
+#[derive(Debug, Clone)]
+pub struct CircleCircle {
+    /// Element name.
+    pub name: String,
+    /// The two bodies.
+    pub bodies: (BodyRef, BodyRef),
+    /// The circles' centres in their bodies' coordinates.
+    pub centres: (Vec2, Vec2),
+    /// Radii `Rᵢ`, `Rⱼ` (m).
+    pub radii: (f64, f64),
+    /// The contact law.
+    pub law: ContactLaw,
+}
+
+/// The body point at global `x` of the body in state `s`.
+fn point_at(s: &BodyState, x: Vec2) -> PointState {
+    let d = x - s.position;
+    PointState::new(s, Vec2::new(s.cos * d.x + s.sin * d.y, -s.sin * d.x + s.cos * d.y))
+}
+
+/// The contact force at a point where the normal force is `normal_force` along `n` and the
+/// bodies slide at `slip` (the second's point relative to the first's).
+fn contact_force(law: &ContactLaw, normal_force: f64, n: Vec2, slip: Vec2) -> Vec2 {
+    let sliding = slip - n.dot(&slip) * n;
+    normal_force * n - law.friction_factor(normal_force, sliding.norm()) * sliding
+}
+
+/// `Err` naming the element when a radius or the law is out of range.
+fn check(name: &str, radii: &[f64], law: &ContactLaw) -> Result<(), ModelError> {
+    let bad = |what: String| ModelError::InvalidParameter {
+        element: format!("force '{name}'"),
+        what,
+    };
+    if let Some(r) = radii.iter().find(|r| !(r.is_finite() && **r > 0.0)) {
+        return Err(bad(format!("radius must be positive and finite, got {r}")));
+    }
+    law.check().map_err(bad)
 }
 
 impl CircleLine {
-    fn centre(&self, q: &[f64], qd: &[f64]) -> PointState {
-        PointState::new(&BodyState::of(self.body, q, qd), self.centre)
-    }
-
     /// The penetration `δ` at `q` (negative: the gap).
     pub fn penetration(&self, q: &[f64]) -> f64 {
-        let c = self.centre(q, &[]);
+        let c = PointState::new(&BodyState::of(self.body, q, &[]), self.centre);
         self.radius - self.normal.dot(&(c.position - self.point))
     }
 }
@@ -65,32 +96,20 @@ impl ForceElement for CircleLine {
         if depth <= 0.0 {
             return;
         }
-        let rate = -self.normal.dot(&c.velocity);
-        let normal_force = (self.stiffness * depth.powf(self.exponent) * (1.0 + self.dissipation * rate)).max(0.0);
-        // The contact point as a body point: the centre's body coordinates moved by −R n turned
-        // into the body's frame.
-        let (sin, cos) = s.angle.sin_cos();
-        let down = -self.radius * self.normal;
-        let local = self.centre + Vec2::new(cos * down.x + sin * down.y, -sin * down.x + cos * down.y);
-        let x = PointState::new(&s, local);
-        let mut force = normal_force * self.normal;
-        if self.friction > 0.0 && normal_force > 0.0 {
-            let sliding = x.velocity - self.normal.dot(&x.velocity) * self.normal;
-            let speed = sliding.norm();
-            force -= (self.friction * normal_force / speed.max(self.smoothing_velocity)) * sliding;
-        }
-        add_point_force(self.body, &x, force, q_e);
+        let normal_force = self.law.normal_force(depth, -self.normal.dot(&c.velocity));
+        let x = point_at(&s, c.position - self.radius * self.normal);
+        add_point_force(
+            self.body,
+            &x,
+            contact_force(&self.law, normal_force, self.normal, x.velocity),
+            q_e,
+        );
     }
 
     /// The elastic part's potential, counted whether or not the element dissipates (the
     /// dissipation and friction are its non-conservative work, as a damper's is).
     fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
-        let depth = self.penetration(q);
-        Some(if depth > 0.0 {
-            self.stiffness * depth.powf(self.exponent + 1.0) / (self.exponent + 1.0)
-        } else {
-            0.0
-        })
+        Some(self.law.potential(self.penetration(q)))
     }
 
     fn contact_gap(&self, _bodies: &[Body], q: &[f64]) -> Option<f64> {
@@ -98,7 +117,7 @@ impl ForceElement for CircleLine {
     }
 
     fn is_conservative(&self) -> bool {
-        self.dissipation == 0.0 && self.friction == 0.0
+        self.law.is_conservative()
     }
 
     fn validate(&self, count: usize) -> Result<(), ModelError> {
@@ -126,26 +145,72 @@ impl ForceElement for CircleLine {
                 self.normal.norm()
             ));
         }
-        for (v, what) in [
-            (self.radius, "radius"),
-            (self.stiffness, "stiffness"),
-            (self.smoothing_velocity, "smoothing velocity"),
-        ] {
-            if !(v.is_finite() && v > 0.0) {
-                return bad(format!("{what} must be positive and finite, got {v}"));
-            }
-        }
-        if !(self.exponent.is_finite() && self.exponent >= 1.0) {
-            return bad(format!("exponent must be at least 1, got {}", self.exponent));
-        }
-        for (v, what) in [(self.dissipation, "dissipation"), (self.friction, "friction")] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(format!("{what} must be finite and non-negative, got {v}"));
-            }
-        }
         if self.body == BodyRef::Ground {
             return bad("acts on the ground: give it a moving body".into());
         }
-        Ok(())
+        check(&self.name, &[self.radius], &self.law)
+    }
+}
+
+impl CircleCircle {
+    /// The centres' states and the overlap `δ` at `(q, q̇)`.
+    fn geometry(&self, q: &[f64], qd: &[f64]) -> (PointState, PointState, f64) {
+        let ci = PointState::new(&BodyState::of(self.bodies.0, q, qd), self.centres.0);
+        let cj = PointState::new(&BodyState::of(self.bodies.1, q, qd), self.centres.1);
+        let depth = self.radii.0 + self.radii.1 - (cj.position - ci.position).norm();
+        (ci, cj, depth)
+    }
+}
+
+impl ForceElement for CircleCircle {
+    fn bodies(&self) -> Option<Vec<BodyRef>> {
+        Some(vec![self.bodies.0, self.bodies.1])
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn add_generalized_force(&self, _t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
+        let (ci, cj, depth) = self.geometry(q, qd);
+        let d = cj.position - ci.position;
+        let length = d.norm();
+        if depth <= 0.0 || length == 0.0 {
+            // Apart, or concentric (no direction to push along).
+            return;
+        }
+        let n = d / length;
+        let normal_force = self.law.normal_force(depth, -n.dot(&(cj.velocity - ci.velocity)));
+        let x = ci.position + (self.radii.0 - 0.5 * depth) * n;
+        let (si, sj) = (BodyState::of(self.bodies.0, q, qd), BodyState::of(self.bodies.1, q, qd));
+        let (xi, xj) = (point_at(&si, x), point_at(&sj, x));
+        let force = contact_force(&self.law, normal_force, n, xj.velocity - xi.velocity);
+        add_point_force(self.bodies.1, &xj, force, q_e);
+        add_point_force(self.bodies.0, &xi, -force, q_e);
+    }
+
+    /// The elastic part's potential where the circles overlap.
+    fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
+        Some(self.law.potential(self.geometry(q, &[]).2))
+    }
+
+    fn contact_gap(&self, _bodies: &[Body], q: &[f64]) -> Option<f64> {
+        Some(-self.geometry(q, &[]).2)
+    }
+
+    fn is_conservative(&self) -> bool {
+        self.law.is_conservative()
+    }
+
+    fn validate(&self, count: usize) -> Result<(), ModelError> {
+        check_body(&self.name, self.bodies.0, count)?;
+        check_body(&self.name, self.bodies.1, count)?;
+        if self.bodies.0 == self.bodies.1 {
+            return Err(ModelError::InvalidParameter {
+                element: format!("force '{}'", self.name),
+                what: "must be between two different bodies".into(),
+            });
+        }
+        check(&self.name, &[self.radii.0, self.radii.1], &self.law)
     }
 }

@@ -13,7 +13,7 @@ mod rotational_spring_damper;
 mod spring_damper;
 mod torque;
 
-pub use circle_line::CircleLine;
+pub use circle_line::{CircleCircle, CircleLine};
 pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use rotational_spring_damper::RotationalSpringDamper;

@@ -21,51 +21,7 @@
 
 use super::{add_point_force, V3};
 use crate::frame::Frame;
-
-/// The law shared by the contact elements: stiffness, exponent, dissipation, friction and
-/// smoothing velocity.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Law {
-    /// `k` (N/mⁿ).
-    pub stiffness: f64,
-    /// `n`.
-    pub exponent: f64,
-    /// Hunt–Crossley's `d` (s/m).
-    pub dissipation: f64,
-    /// `μ`.
-    pub friction: f64,
-    /// `v_s` (m/s).
-    pub smoothing_velocity: f64,
-}
-
-impl Law {
-    /// (K1) at penetration `depth > 0` growing at `rate`.
-    fn normal_force(&self, depth: f64, rate: f64) -> f64 {
-        (self.stiffness * depth.powf(self.exponent) * (1.0 + self.dissipation * rate)).max(0.0)
-    }
-
-    /// (K2): the friction force against the sliding velocity `v` (relative, at the contact
-    /// point) with normal `n`, for normal force `f_n`.
-    fn friction_force(&self, f_n: f64, v: &V3, n: &V3) -> V3 {
-        if self.friction == 0.0 || f_n == 0.0 {
-            return V3::zeros();
-        }
-        let sliding = v - n.dot(v) * n;
-        -(self.friction * f_n / sliding.norm().max(self.smoothing_velocity)) * sliding
-    }
-
-    /// `k δⁿ⁺¹ / (n + 1)` where `depth > 0`, 0 elsewhere.
-    fn potential(&self, depth: f64) -> f64 {
-        if depth <= 0.0 {
-            return 0.0;
-        }
-        self.stiffness * depth.powf(self.exponent + 1.0) / (self.exponent + 1.0)
-    }
-
-    fn is_conservative(&self) -> bool {
-        self.dissipation == 0.0 && self.friction == 0.0
-    }
-}
+use dalembert_system::ContactLaw;
 
 /// Two spheres on two bodies (either may be the ground).
 #[derive(Debug, Clone)]
@@ -75,7 +31,7 @@ pub(crate) struct SphereSphere {
     /// Radii `Rᵢ`, `Rⱼ` (m).
     pub radii: [f64; 2],
     /// The law.
-    pub law: Law,
+    pub law: ContactLaw,
 }
 
 impl SphereSphere {
@@ -104,7 +60,8 @@ impl SphereSphere {
         let x = ci + (self.radii[0] - 0.5 * depth) * n;
         let (ai, aj) = (x - fi.r, x - fj.r);
         let slip = fj.point_velocity(&aj) - fi.point_velocity(&ai);
-        let force = normal_force * n + self.law.friction_force(normal_force, &slip, &n);
+        let (sliding, speed) = sliding_speed(&slip, &n);
+        let force = normal_force * n - self.law.friction_factor(normal_force, speed) * sliding;
         if let Some(b) = self.ends[1].0 {
             add_point_force(out, b, &fj, &aj, &force);
         }
@@ -143,7 +100,7 @@ pub(crate) struct SpherePlane {
     /// The plane's unit normal, out of the solid (global).
     pub normal: V3,
     /// The law.
-    pub law: Law,
+    pub law: ContactLaw,
 }
 
 impl SpherePlane {
@@ -165,10 +122,8 @@ impl SpherePlane {
         let rate = -self.normal.dot(&f.point_velocity(&s_centre));
         let normal_force = self.law.normal_force(depth, rate);
         let arm = s_centre - self.radius * self.normal;
-        let force = normal_force * self.normal
-            + self
-                .law
-                .friction_force(normal_force, &f.point_velocity(&arm), &self.normal);
+        let (sliding, speed) = sliding_speed(&f.point_velocity(&arm), &self.normal);
+        let force = normal_force * self.normal - self.law.friction_factor(normal_force, speed) * sliding;
         add_point_force(out, self.body, &f, &arm, &force);
     }
 
@@ -181,4 +136,11 @@ impl SpherePlane {
     pub fn is_conservative(&self) -> bool {
         self.law.is_conservative()
     }
+}
+
+/// The part of `v` along the plane of normal `n`, and its length.
+fn sliding_speed(v: &V3, n: &V3) -> (V3, f64) {
+    let sliding = v - n.dot(v) * n;
+    let speed = sliding.norm();
+    (sliding, speed)
 }

@@ -21,7 +21,8 @@ use crate::frame::{Frame, NV};
 use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
-use contact::{Law, SpherePlane, SphereSphere};
+use contact::{SpherePlane, SphereSphere};
+use dalembert_system::ContactLaw;
 use dalembert_system::{ModelError, TimeFunction};
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -262,24 +263,22 @@ fn positive(v: f64, what: &str) -> Result<(), String> {
 }
 
 /// A contact law from its parameters, checked.
-fn law(stiffness: f64, exponent: f64, dissipation: f64, friction: f64, smoothing_velocity: f64) -> Result<Law, String> {
-    positive(stiffness, "stiffness")?;
-    positive(smoothing_velocity, "smoothing velocity")?;
-    if !(exponent.is_finite() && exponent >= 1.0) {
-        return Err(format!("exponent must be at least 1, got {exponent}"));
-    }
-    for (v, what) in [(dissipation, "dissipation"), (friction, "friction")] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(format!("{what} must be finite and non-negative, got {v}"));
-        }
-    }
-    Ok(Law {
+fn law(
+    stiffness: f64,
+    exponent: f64,
+    dissipation: f64,
+    friction: f64,
+    smoothing_velocity: f64,
+) -> Result<ContactLaw, String> {
+    let law = ContactLaw {
         stiffness,
         exponent,
         dissipation,
         friction,
         smoothing_velocity,
-    })
+    };
+    law.check()?;
+    Ok(law)
 }
 
 /// The three components at `t`.
