@@ -96,8 +96,7 @@ pub struct Integration {
     busy: Duration,
     /// The sensitivities carried along ([`Integration::with_sensitivities`]; none by default).
     tangents: Tangents,
-    /// The system's events (contacts beginning or ending), where an adaptive step is shortened
-    /// to end.
+    /// The system's events (contacts beginning or ending), where a step is shortened to end.
     events: Events,
 }
 
