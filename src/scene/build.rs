@@ -529,16 +529,16 @@ fn force(
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
     if d.kind != "circle-line" && d.kind != "circle-circle" {
-        let contact = [
-            ("radius", d.radius.is_some()),
-            ("radii", d.radii.is_some()),
-            ("line", d.line.is_some()),
-            ("exponent", d.exponent.is_some()),
-            ("dissipation", d.dissipation.is_some()),
-            ("friction", d.friction.is_some()),
-            ("smoothing_velocity", d.smoothing_velocity.is_some()),
+        const CONTACT: [&str; 7] = [
+            "radius",
+            "radii",
+            "line",
+            "exponent",
+            "dissipation",
+            "friction",
+            "smoothing_velocity",
         ];
-        if let Some((key, _)) = contact.iter().find(|(_, set)| *set) {
+        if let Some(key) = d.keys_given().find(|k| CONTACT.contains(k)) {
             return Err(err(format!("'{key}' does not belong to a {} element", d.kind)));
         }
     }
@@ -640,19 +640,8 @@ fn force(
             })
         }
         "circle-line" => {
-            let extra = [
-                ("bodies", d.bodies.is_some()),
-                ("joint", d.joint.is_some()),
-                ("point", d.point.is_some()),
-                ("value", d.value.is_some()),
-                ("fx", d.fx.is_some()),
-                ("fy", d.fy.is_some()),
-                ("damping", d.damping.is_some()),
-                ("free_length", d.free_length.is_some()),
-                ("free_angle", d.free_angle.is_some()),
-                ("actuator", d.actuator.is_some()),
-            ];
-            if let Some((key, _)) = extra.iter().find(|(_, set)| *set) {
+            const KEYS: [&str; 10] = ["body", "at", "radius", "line", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity", "radii"];
+            if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
                 return Err(err(format!("'{key}' does not belong to a circle-line element")));
             }
             let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
@@ -683,21 +672,8 @@ fn force(
             })
         }
         "circle-circle" => {
-            let extra = [
-                ("body", d.body.is_some()),
-                ("joint", d.joint.is_some()),
-                ("point", d.point.is_some()),
-                ("value", d.value.is_some()),
-                ("fx", d.fx.is_some()),
-                ("fy", d.fy.is_some()),
-                ("damping", d.damping.is_some()),
-                ("free_length", d.free_length.is_some()),
-                ("free_angle", d.free_angle.is_some()),
-                ("actuator", d.actuator.is_some()),
-                ("radius", d.radius.is_some()),
-                ("line", d.line.is_some()),
-            ];
-            if let Some((key, _)) = extra.iter().find(|(_, set)| *set) {
+            const KEYS: [&str; 8] = ["bodies", "at", "radii", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"];
+            if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
                 return Err(err(format!("'{key}' does not belong to a circle-circle element")));
             }
             let pr = pair()?;
@@ -718,21 +694,7 @@ fn force(
             })
         }
         "code" => {
-            let extra = [
-                ("bodies", d.bodies.is_some()),
-                ("joint", d.joint.is_some()),
-                ("at", d.at.is_some()),
-                ("point", d.point.is_some()),
-                ("value", d.value.is_some()),
-                ("fx", d.fx.is_some()),
-                ("fy", d.fy.is_some()),
-                ("stiffness", d.stiffness.is_some()),
-                ("damping", d.damping.is_some()),
-                ("free_length", d.free_length.is_some()),
-                ("free_angle", d.free_angle.is_some()),
-                ("actuator", d.actuator.is_some()),
-            ];
-            if let Some((key, _)) = extra.iter().find(|(_, set)| *set) {
+            if let Some(key) = d.keys_given().find(|k| *k != "body") {
                 return Err(err(format!(
                     "'{key}' does not belong to a code element (its force comes from code: give 'body' only)"
                 )));

@@ -143,6 +143,36 @@ pub(crate) struct ForceDef {
     pub smoothing_velocity: Option<f64>,
 }
 
+impl ForceDef {
+    /// The optional keys the table gives, in the order of the format.
+    pub(crate) fn keys_given(&self) -> impl Iterator<Item = &'static str> {
+        [
+            ("body", self.body.is_some()),
+            ("bodies", self.bodies.is_some()),
+            ("joint", self.joint.is_some()),
+            ("at", self.at.is_some()),
+            ("point", self.point.is_some()),
+            ("value", self.value.is_some()),
+            ("fx", self.fx.is_some()),
+            ("fy", self.fy.is_some()),
+            ("stiffness", self.stiffness.is_some()),
+            ("damping", self.damping.is_some()),
+            ("free_length", self.free_length.is_some()),
+            ("free_angle", self.free_angle.is_some()),
+            ("actuator", self.actuator.is_some()),
+            ("radius", self.radius.is_some()),
+            ("radii", self.radii.is_some()),
+            ("line", self.line.is_some()),
+            ("exponent", self.exponent.is_some()),
+            ("dissipation", self.dissipation.is_some()),
+            ("friction", self.friction.is_some()),
+            ("smoothing_velocity", self.smoothing_velocity.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(k, given)| given.then_some(k))
+    }
+}
+
 /// A line of the ground: a point and the normal out of the ground (any length but zero).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

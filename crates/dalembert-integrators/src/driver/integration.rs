@@ -100,6 +100,30 @@ pub struct Integration {
     events: Events,
 }
 
+/// `q̈`, `λ`, the residuals and the energy of `f` at `(t, y = [q; q̇])`, as an output sample in
+/// `mon`'s buffers.
+fn evaluated<'a>(
+    f: &mut dyn Formulation,
+    mon: &'a mut Monitors,
+    t: f64,
+    y: &'a [f64],
+) -> Result<Sample<'a>, IntegrationError> {
+    let (q, qd) = y.split_at(mon.n);
+    f.accelerations(t, q, qd, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
+    f.residuals(t, q, qd, &mut mon.c, &mut mon.cdot);
+    let energy = f.energy(t, q, qd).total();
+    Ok(Sample {
+        t,
+        q,
+        qd,
+        qdd: &mon.qdd,
+        lambda: &mon.lambda,
+        constraint_violation: inf_norm(&mon.c),
+        velocity_violation: inf_norm(&mon.cdot),
+        energy,
+    })
+}
+
 fn tolerance(t: f64) -> f64 {
     1e-12 * (1.0 + t.abs())
 }
@@ -254,25 +278,9 @@ impl Integration {
     /// sample, and `δ`: a column's derivative is `(value₊ − value₋) / 2δ`.
     pub fn perturbed_sample(&mut self, j: usize, plus: bool) -> Result<(Sample<'_>, f64), IntegrationError> {
         let started = Instant::now();
-        let t = self.shown_t;
-        let n = self.mon.n;
         let (f, y, delta) = self.tangents.side(j, plus);
-        let (q, qd) = y.split_at(n);
-        let mon = &mut self.mon;
-        f.accelerations(t, q, qd, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
-        f.residuals(t, q, qd, &mut mon.c, &mut mon.cdot);
-        let energy = f.energy(t, q, qd).total();
+        let sample = evaluated(f, &mut self.mon, self.shown_t, y)?;
         self.busy += started.elapsed();
-        let sample = Sample {
-            t,
-            q,
-            qd,
-            qdd: &mon.qdd,
-            lambda: &mon.lambda,
-            constraint_violation: inf_norm(&mon.c),
-            velocity_violation: inf_norm(&mon.cdot),
-            energy,
-        };
         Ok((sample, delta))
     }
 
@@ -506,22 +514,9 @@ impl Integration {
         let started = Instant::now();
         let t = self.shown_t;
         let y = if self.shown_is_run { &self.y } else { &self.shown };
-        let (q, qd) = y.split_at(self.mon.n);
-        let mon = &mut self.mon;
-        f.accelerations(t, q, qd, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
-        f.residuals(t, q, qd, &mut mon.c, &mut mon.cdot);
-        let energy = f.energy(t, q, qd).total();
+        let sample = evaluated(f, &mut self.mon, t, y)?;
         self.busy += started.elapsed();
-        Ok(Sample {
-            t,
-            q,
-            qd,
-            qdd: &mon.qdd,
-            lambda: &mon.lambda,
-            constraint_violation: inf_norm(&mon.c),
-            velocity_violation: inf_norm(&mon.cdot),
-            energy,
-        })
+        Ok(sample)
     }
 
     /// The statistics of the run so far (wall time: the run's own work, without the caller's).
