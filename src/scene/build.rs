@@ -823,17 +823,7 @@ pub(crate) fn key_span(text: &str, table: &std::ops::Range<usize>, key: &str) ->
     None
 }
 
-/// The contact law of a `circle-line` or `circle-circle` element: `stiffness` required, the rest
-/// defaulted (exponent 1.5, no dissipation or friction, smoothing velocity 1 mm/s). Its ranges are
-/// the element's `validate`'s to check.
+/// The contact law of a `circle-line` or `circle-circle` element (the spatial reader's rule).
 fn contact_law(d: &ForceDef) -> Result<dalembert_system::ContactLaw, String> {
-    Ok(dalembert_system::ContactLaw {
-        stiffness: d.stiffness.ok_or("needs 'stiffness' (N/m^exponent)")?,
-        exponent: d.exponent.unwrap_or(1.5),
-        dissipation: d.dissipation.unwrap_or(0.0),
-        friction: d.friction.unwrap_or(0.0),
-        smoothing_velocity: d
-            .smoothing_velocity
-            .unwrap_or(super::spatial_forces::SMOOTHING_VELOCITY),
-    })
+    super::spatial_forces::contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
 }

@@ -91,6 +91,25 @@ pub(crate) fn floor_visual(point: &[f64; 3], normal: &[f64; 3], owner: &str) -> 
 /// linearly with the sliding speed (`docs/contact.md`).
 pub(crate) const SMOOTHING_VELOCITY: f64 = 1e-3;
 
+/// A contact law from a force table's keys (planar and spatial tables alike): `stiffness`
+/// required, the rest defaulted (exponent 1.5, no dissipation or friction, smoothing velocity
+/// 1 mm/s); its ranges are checked when the model is built.
+pub(crate) fn contact_law(
+    stiffness: Option<f64>,
+    exponent: Option<f64>,
+    dissipation: Option<f64>,
+    friction: Option<f64>,
+    smoothing_velocity: Option<f64>,
+) -> Result<dalembert_system::ContactLaw, String> {
+    Ok(dalembert_system::ContactLaw {
+        stiffness: stiffness.ok_or("needs 'stiffness' (N/m^exponent)")?,
+        exponent: exponent.unwrap_or(1.5),
+        dissipation: dissipation.unwrap_or(0.0),
+        friction: friction.unwrap_or(0.0),
+        smoothing_velocity: smoothing_velocity.unwrap_or(SMOOTHING_VELOCITY),
+    })
+}
+
 /// A number or a function (a vector is refused).
 fn scalar(v: &ValueDef<3>, key: &str, inputs: &RefCell<Vec<String>>) -> Result<TimeFunction, String> {
     match v {
@@ -295,11 +314,8 @@ pub(crate) fn force(
                 radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
                 point: plane.point,
                 normal: plane.normal,
-                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness' (N/m^exponent)"))?,
-                exponent: d.exponent.unwrap_or(1.5),
-                dissipation: d.dissipation.unwrap_or(0.0),
-                friction: d.friction.unwrap_or(0.0),
-                smoothing_velocity: d.smoothing_velocity.unwrap_or(SMOOTHING_VELOCITY),
+                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
+                    .map_err(|m| err(&m))?,
             }
         }
         "sphere-sphere" => {
@@ -331,11 +347,8 @@ pub(crate) fn force(
                 bodies,
                 centres,
                 radii: d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)"))?,
-                stiffness: d.stiffness.ok_or_else(|| err("needs 'stiffness' (N/m^exponent)"))?,
-                exponent: d.exponent.unwrap_or(1.5),
-                dissipation: d.dissipation.unwrap_or(0.0),
-                friction: d.friction.unwrap_or(0.0),
-                smoothing_velocity: d.smoothing_velocity.unwrap_or(SMOOTHING_VELOCITY),
+                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
+                    .map_err(|m| err(&m))?,
             }
         }
         "code" => {

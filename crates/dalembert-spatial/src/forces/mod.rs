@@ -132,16 +132,8 @@ pub enum Force {
         point: [f64; 3],
         /// The plane's normal, out of the solid (any length but zero).
         normal: [f64; 3],
-        /// `k` (N/mⁿ).
-        stiffness: f64,
-        /// `n` (1.5 for Hertz's sphere).
-        exponent: f64,
-        /// Hunt–Crossley's `d` (s/m).
-        dissipation: f64,
-        /// Friction coefficient `μ`.
-        friction: f64,
-        /// `v_s` (m/s): below it the friction grows linearly with the sliding speed.
-        smoothing_velocity: f64,
+        /// The contact law (checked when the model is built).
+        law: ContactLaw,
     },
     /// Compliant contact of two spheres on two bodies (either may be the ground), with the law of
     /// [`Force::SpherePlane`].
@@ -154,16 +146,8 @@ pub enum Force {
         centres: [[f64; 3]; 2],
         /// Radii (m).
         radii: [f64; 2],
-        /// `k` (N/mⁿ).
-        stiffness: f64,
-        /// `n` (1.5 for Hertz's spheres).
-        exponent: f64,
-        /// Hunt–Crossley's `d` (s/m).
-        dissipation: f64,
-        /// Friction coefficient `μ`.
-        friction: f64,
-        /// `v_s` (m/s).
-        smoothing_velocity: f64,
+        /// The contact law (checked when the model is built).
+        law: ContactLaw,
     },
     /// A force the user writes ([`UserForce`]).
     User(Arc<dyn UserForce>),
@@ -260,25 +244,6 @@ fn positive(v: f64, what: &str) -> Result<(), String> {
     } else {
         Err(format!("{what} must be positive and finite, got {v}"))
     }
-}
-
-/// A contact law from its parameters, checked.
-fn law(
-    stiffness: f64,
-    exponent: f64,
-    dissipation: f64,
-    friction: f64,
-    smoothing_velocity: f64,
-) -> Result<ContactLaw, String> {
-    let law = ContactLaw {
-        stiffness,
-        exponent,
-        dissipation,
-        friction,
-        smoothing_velocity,
-    };
-    law.check()?;
-    Ok(law)
 }
 
 /// The three components at `t`.
@@ -422,11 +387,7 @@ impl ForceData {
                 radius,
                 point,
                 normal,
-                stiffness,
-                exponent,
-                dissipation,
-                friction,
-                smoothing_velocity,
+                law,
                 ..
             } => {
                 if !finite(centre) || !finite(point) || !finite(normal) {
@@ -437,8 +398,7 @@ impl ForceData {
                     return Err(bad("the plane's normal must not be zero"));
                 }
                 positive(*radius, "radius").map_err(|m| bad(&m))?;
-                let law =
-                    law(*stiffness, *exponent, *dissipation, *friction, *smoothing_velocity).map_err(|m| bad(&m))?;
+                law.check().map_err(|m| bad(&m))?;
                 let b = moving(*body)?;
                 ForceData::SpherePlane(SpherePlane {
                     body: b,
@@ -446,18 +406,14 @@ impl ForceData {
                     radius: *radius,
                     point: V3::from(*point),
                     normal: n / n.norm(),
-                    law,
+                    law: *law,
                 })
             }
             Force::SphereSphere {
                 bodies,
                 centres,
                 radii,
-                stiffness,
-                exponent,
-                dissipation,
-                friction,
-                smoothing_velocity,
+                law,
                 ..
             } => {
                 if !finite(&centres[0]) || !finite(&centres[1]) {
@@ -466,8 +422,7 @@ impl ForceData {
                 positive(radii[0], "radius")
                     .and_then(|()| positive(radii[1], "radius"))
                     .map_err(|m| bad(&m))?;
-                let law =
-                    law(*stiffness, *exponent, *dissipation, *friction, *smoothing_velocity).map_err(|m| bad(&m))?;
+                law.check().map_err(|m| bad(&m))?;
                 let (bi, bj) = (index(bodies[0])?, index(bodies[1])?);
                 if bi == bj {
                     return Err(bad("must be between two different bodies"));
@@ -475,7 +430,7 @@ impl ForceData {
                 ForceData::SphereSphere(SphereSphere {
                     ends: [(bi, local(bi, &centres[0])), (bj, local(bj, &centres[1]))],
                     radii: *radii,
-                    law,
+                    law: *law,
                 })
             }
             Force::User(u) => ForceData::User(u.clone()),
