@@ -4,7 +4,7 @@
 //! its integration (and quadrature) error: the number that shows a non-conservative run is right.
 
 use dalembert_integrators::Sample;
-use dalembert_system::{ConstraintValues, MultibodySystem};
+use dalembert_system::{ConstraintValues, MultibodySystem, SlipRow};
 
 /// `E(t) − W(t)` along a run, from its output samples: `W = ∫ P dt` with `P` the power of the
 /// non-conservative applied forces ([`MultibodySystem::nonconservative_power`]) and of the
@@ -46,6 +46,12 @@ impl EnergyBalance {
     pub fn power(&mut self, system: &dyn MultibodySystem, s: &Sample<'_>) -> f64 {
         let sys = system.constraints();
         let mut p = system.nonconservative_power(s.t, s.q, s.qd);
+        // Joint friction: F_k w_k (`docs/friction.md`).
+        let mut row = SlipRow::default();
+        for (k, f) in s.friction.iter().enumerate() {
+            system.slip_row(k, s.t, s.q, s.qd, &mut row);
+            p += f * row.dot(s.qd);
+        }
         if !self.c_q_v.is_empty() && s.lambda.len() == self.c_q_v.len() {
             sys.evaluate(s.t, s.q, s.qd, &mut self.values);
             sys.jacobian_mul(&self.values, s.qd, &mut self.c_q_v);

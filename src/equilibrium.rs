@@ -372,6 +372,7 @@ impl Scene {
                 qd: &zero,
                 qdd: &zero,
                 lambda,
+                friction: &[],
                 constraint_violation: 0.0,
                 velocity_violation: 0.0,
                 energy: 0.0,

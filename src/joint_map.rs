@@ -102,6 +102,7 @@ impl JointMap {
             qd: &self.qd,
             qdd: &self.qdd,
             lambda: &self.lambda,
+            friction: &[],
             constraint_violation: max(&self.c),
             velocity_violation: max(&self.cdot),
             energy: s.energy,

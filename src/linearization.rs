@@ -133,6 +133,12 @@ impl Scene {
     /// documentation), with the scene's formulation.
     pub fn linearize(&self, options: &LinearizeOptions) -> Result<Linearization, LinearizationError> {
         let request = LinearizationError::Request;
+        if let Some(f) = self.model.system().frictions().first() {
+            return Err(LinearizationError::Model(format!(
+                "joint '{}' has Coulomb friction, which has no linearization (stick and slip are not smooth)",
+                f.name
+            )));
+        }
         let input_of = options
             .inputs
             .iter()
@@ -588,6 +594,7 @@ impl<'a> Reduced<'a> {
                 qd: &self.v,
                 qdd: &self.qdd,
                 lambda: &self.lambda,
+                friction: &[],
                 constraint_violation: largest(&self.c),
                 velocity_violation: largest(&self.cdot),
                 energy,

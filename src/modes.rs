@@ -39,6 +39,12 @@ impl Scene {
     /// documentation). A neutral direction ([`Equilibrium::free_directions`]) is a mode of 0 Hz;
     /// an unstable equilibrium is refused (its "frequencies" would be growth rates).
     pub fn modes(&self) -> Result<Modes, EquilibriumError> {
+        if let Some(f) = self.model.system().frictions().first() {
+            return Err(EquilibriumError::Model(format!(
+                "joint '{}' has Coulomb friction: small vibrations with it are not linear, so it has no modes",
+                f.name
+            )));
+        }
         let equilibrium = self.equilibrium()?;
         if !equilibrium.unstable_directions.is_empty() {
             return Err(EquilibriumError::Model(format!(

@@ -284,6 +284,7 @@ impl Scene {
         let mut qd = Vec::new();
         let mut qdd = Vec::new();
         let mut lambda = Vec::new();
+        let mut friction = Vec::new();
         let result = integrate_sensitivities(
             f.as_mut(),
             sim.start,
@@ -301,6 +302,7 @@ impl Scene {
                         (&mut qd, s.qd),
                         (&mut qdd, s.qdd),
                         (&mut lambda, s.lambda),
+                        (&mut friction, s.friction),
                     ] {
                         to.clear();
                         to.extend_from_slice(from);
@@ -314,6 +316,7 @@ impl Scene {
                             qd: &qd,
                             qdd: &qdd,
                             lambda: &lambda,
+                            friction: &friction,
                             constraint_violation: last[1],
                             velocity_violation: last[2],
                             energy: last[3],

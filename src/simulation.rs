@@ -343,7 +343,31 @@ impl Simulation {
             redundancy: self.redundancy,
             independent,
         };
-        Ok((entry.build)(system, &settings)?)
+        let model = self.model.system();
+        let frictions = model.frictions();
+        if frictions.is_empty() {
+            return Ok((entry.build)(system, &settings)?);
+        }
+        let refuse = |what: String| {
+            SimulationError::Setup(DynamicsError::Friction {
+                time: self.start,
+                joint: frictions[0].name.clone(),
+                what,
+            })
+        };
+        if system.frictions().len() != frictions.len() {
+            return Err(refuse(
+                "joint friction is solved in absolute coordinates only: use coordinates = \"absolute\"".into(),
+            ));
+        }
+        let method = self.integrator.method.entry();
+        if method.applies == dalembert_integrators::Applies::AugmentedIndex3 {
+            return Err(refuse(format!(
+                "{} integrates the frictionless index-3 equations: use rk4 or dopri5 with joint friction",
+                method.name
+            )));
+        }
+        Ok(Box::new(dalembert_system::Frictional::new((entry.build)(system, &settings)?)?))
     }
 
     /// Runs from the current initial state, handing every output sample to `observer`.

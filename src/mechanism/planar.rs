@@ -107,6 +107,9 @@ impl ColumnWriter for PlanarColumns {
                 ConstraintRole::Driver => names.push(format!("{}.effort", c.name())),
             }
         }
+        // Joint friction: its force (N) or torque (N·m) on the second body, also in the joint's
+        // reaction above (`docs/friction.md`).
+        names.extend(self.model.frictions().iter().map(|f| format!("{}.friction", f.name())));
         names
     }
 
@@ -114,6 +117,9 @@ impl ColumnWriter for PlanarColumns {
         let sys = self.model.constraints();
         sys.evaluate(s.t, s.q, s.qd, &mut self.values);
         sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
+        for (f, force) in self.model.frictions().iter().zip(s.friction) {
+            f.add_to_reaction(s.q, *force, &mut self.reactions[f.constraint]);
+        }
         for i in 0..s.q.len() / 3 {
             row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
             row.extend_from_slice(&s.qd[3 * i..3 * i + 3]);
@@ -128,6 +134,12 @@ impl ColumnWriter for PlanarColumns {
                 }
                 ConstraintRole::Driver => row.push(r.effort.unwrap_or(f64::NAN)),
             }
+        }
+        let frictions = self.model.frictions().len();
+        if s.friction.len() == frictions {
+            row.extend_from_slice(s.friction);
+        } else {
+            row.extend(std::iter::repeat_n(0.0, frictions));
         }
     }
 

@@ -2,7 +2,7 @@
 
 use super::error::SceneError;
 use super::format::SIM_KEYS;
-use super::format::{BodyDef, DriverDef, ForceDef, JointDef, Points, SceneFile, SimDef, ValueDef};
+use super::format::{BodyDef, DriverDef, ForceDef, FrictionDef, JointDef, Points, SceneFile, SimDef, ValueDef};
 use super::functions::time_function;
 use super::names::{Ctx, Names};
 use super::{method_parameter, parameter_keys, unknown_name, RunSettings, Scene};
@@ -11,8 +11,8 @@ use crate::mechanism::Mechanism;
 use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
-    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Gear, JointAngle, JointDisplacement, Model,
-    PointOnLine, Prismatic, RackPinion, Revolute, Rigid,
+    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear, JointAngle,
+    JointDisplacement, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
@@ -197,6 +197,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     // Joints.
     let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
     let mut joints: HashMap<String, JointInfo> = HashMap::new();
+    let mut frictions = Vec::new();
     for sj in &file.joints {
         let span = sj.span();
         let d = sj.get_ref();
@@ -296,6 +297,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         if let Some(mark) = mark {
             drawing.add(mark);
         }
+        if let Some(def) = &d.friction {
+            frictions.push(friction(&b, d, def, &info, constraints.len())?);
+        }
         constraints.push(c);
         joints.insert(d.name.clone(), info);
     }
@@ -324,7 +328,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         }
         forces.push(element);
     }
-    let model = Model::new(bodies, forces, constraints).map_err(|e| b.ctx.err(None, e.to_string()))?;
+    let model = Model::new(bodies, forces, constraints)
+        .and_then(|m| m.with_frictions(frictions))
+        .map_err(|e| b.ctx.err(None, e.to_string()))?;
     let mechanism: Mechanism = Arc::new(model).into();
     let settings = settings(
         b.ctx.file,
@@ -348,6 +354,57 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     let name = file.scene.and_then(|s| s.name).unwrap_or_else(|| origin.to_string());
     let state = (q, qd, weights);
     assembled(&b.ctx, name, mechanism, state, settings, drawing)
+}
+
+/// The friction of joint `d` (`constraint`: its index in the model's constraint list), checked
+/// against the joint's type (`docs/friction.md`); errors are placed at the `friction` table.
+fn friction(
+    b: &Builder<'_>,
+    d: &JointDef,
+    def: &Spanned<FrictionDef>,
+    info: &JointInfo,
+    constraint: usize,
+) -> Result<Friction, SceneError> {
+    let span = Some(def.span());
+    let f = def.get_ref();
+    let owner = format!("joint '{}'", d.name);
+    let joint = match info {
+        JointInfo::Revolute(r) => FrictionJoint::Revolute(r.clone()),
+        JointInfo::Prismatic(p) => {
+            if f.radius.is_some() {
+                return Err(b.ctx.err(
+                    span,
+                    format!("{owner}: a prismatic joint's friction has no 'radius' (the friction force is μ N)"),
+                ));
+            }
+            FrictionJoint::Prismatic(p.clone())
+        }
+        JointInfo::Other(_) => {
+            return Err(b.ctx.err(
+                span,
+                format!("{owner}: friction is for revolute and prismatic joints, this one is '{}'", d.kind),
+            ))
+        }
+    };
+    let radius = match (&joint, f.radius) {
+        (FrictionJoint::Revolute(_), None) => {
+            return Err(b.ctx.err(
+                span,
+                format!("{owner}: a revolute joint's friction needs 'radius', the pin radius in m (torque μ r |F|)"),
+            ))
+        }
+        (_, r) => r.unwrap_or(0.0),
+    };
+    let friction = Friction {
+        joint,
+        constraint,
+        coefficient: f.coefficient,
+        radius,
+        viscous: f.viscous.unwrap_or(0.0),
+        stick_speed: f.stick_speed.unwrap_or(STICK_SPEED),
+    };
+    friction.validate().map_err(|e| b.ctx.err(span, e.to_string()))?;
+    Ok(friction)
 }
 
 /// `Ok` unless `settings` ask for joint coordinates that `mechanism` cannot take (a planar model,

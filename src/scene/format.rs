@@ -71,6 +71,18 @@ pub(crate) struct JointDef {
     pub length: Option<f64>,
     pub ratio: Option<f64>,
     pub radius: Option<f64>,
+    pub friction: Option<Spanned<FrictionDef>>,
+}
+
+/// `friction = { coefficient = μ, radius = r, viscous = c, stick_speed = w }` on a revolute or
+/// prismatic joint (`docs/friction.md`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FrictionDef {
+    pub coefficient: f64,
+    pub radius: Option<f64>,
+    pub viscous: Option<f64>,
+    pub stick_speed: Option<f64>,
 }
 
 #[derive(Debug, Clone, Deserialize)]

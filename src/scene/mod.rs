@@ -168,6 +168,25 @@ impl Scene {
     /// augmented one): for settings changed after loading, by the command line or Python, checked
     /// before a run writes anything.
     pub fn check_settings(&self, spelling: Spelling) -> Result<(), String> {
+        if let Some(f) = self.model.system().frictions().first() {
+            let method = self.settings.method.entry();
+            if method.applies == dalembert_integrators::Applies::AugmentedIndex3 {
+                return Err(format!(
+                    "invalid integrator options: {} integrates the frictionless index-3 equations: use rk4 or dopri5 with the friction of joint '{}'",
+                    method.name, f.name
+                ));
+            }
+            if self.settings.coordinates == crate::Coordinates::Joint {
+                let setting = match spelling {
+                    Spelling::Flags => "--coordinates joint",
+                    Spelling::Keywords => "coordinates=\"joint\"",
+                };
+                return Err(format!(
+                    "{setting}: joint '{}' has friction, which is solved in absolute coordinates only",
+                    f.name
+                ));
+            }
+        }
         if self.settings.coordinates != crate::Coordinates::Joint {
             // A method the formulation cannot take, refused before anything (a CSV) is written.
             let f = self.settings.formulation;

@@ -273,6 +273,10 @@ impl Formulation for Amalgamated {
     fn stats(&self) -> FormulationStats {
         self.stats
     }
+
+    fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
+        self.data.set_extra_force(extra)
+    }
 }
 
 /// The registry entry of the amalgamated formulation.

@@ -281,4 +281,8 @@ impl Formulation for Augmented {
     fn is_index3_augmented(&self) -> bool {
         true
     }
+
+    fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
+        self.data.set_extra_force(extra)
+    }
 }

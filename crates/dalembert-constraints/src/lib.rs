@@ -19,6 +19,7 @@
 
 pub mod constraint;
 pub mod drivers;
+pub mod friction;
 pub mod joints;
 pub mod model;
 pub mod primitives;
@@ -28,6 +29,7 @@ pub mod system;
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
+pub use friction::{Friction, FrictionJoint, STICK_SPEED};
 pub use model::Model;
 pub use reactions::Reaction;
 pub use system::ConstraintSystem;

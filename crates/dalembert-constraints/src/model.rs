@@ -2,7 +2,8 @@
 //! implementation of the system seam ([`MultibodySystem`]).
 
 use crate::system::PLANAR_LABELS;
-use crate::{Constraint, ConstraintSystem};
+use crate::{Constraint, ConstraintSystem, Friction};
+use dalembert_system::{JointFriction, SlipRow};
 use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 use dalembert_system::{ConstraintError, ConstraintSet};
@@ -15,6 +16,8 @@ pub struct Model {
     constraints: ConstraintSystem,
     layout: Layout,
     mass_is_constant: bool,
+    frictions: Vec<Friction>,
+    friction_specs: Vec<JointFriction>,
 }
 
 impl Model {
@@ -38,7 +41,37 @@ impl Model {
             constraints,
             layout,
             mass_is_constant,
+            frictions: Vec::new(),
+            friction_specs: Vec::new(),
         })
+    }
+
+    /// The model with friction in some of its revolute and prismatic joints
+    /// (`docs/friction.md`). Errors name the joint.
+    pub fn with_frictions(mut self, frictions: Vec<Friction>) -> Result<Self, ConstraintError> {
+        for f in &frictions {
+            f.validate()?;
+            if f.constraint >= self.constraints.constraints().len()
+                || self.constraints.constraints()[f.constraint].name() != f.name()
+            {
+                return Err(dalembert_system::ModelError::InvalidParameter {
+                    element: format!("joint '{}'", f.name()),
+                    what: "friction refers to a joint the model does not hold".to_string(),
+                }
+                .into());
+            }
+        }
+        self.friction_specs = frictions
+            .iter()
+            .map(|f| f.spec(self.constraints.row_offset(f.constraint)))
+            .collect();
+        self.frictions = frictions;
+        Ok(self)
+    }
+
+    /// The joints with friction.
+    pub fn frictions(&self) -> &[Friction] {
+        &self.frictions
     }
 
     /// The moving bodies, in coordinate order.
@@ -91,6 +124,14 @@ impl MultibodySystem for Model {
 
     fn mass_is_constant(&self) -> bool {
         self.mass_is_constant
+    }
+
+    fn frictions(&self) -> &[JointFriction] {
+        &self.friction_specs
+    }
+
+    fn slip_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut SlipRow) {
+        self.frictions[k].slip_row(q, v, row);
     }
 
     /// The moving bodies of each force element ([`ForceElement::bodies`]); `None` when an element
@@ -248,9 +289,11 @@ impl MultibodySystem for Model {
         applied + dalembert_system::system::potential_rate(self, t, q, qd)
     }
 
-    /// Every force element is conservative and no constraint is driven (a driver does work).
+    /// Every force element is conservative, no joint has friction and no constraint is driven (a
+    /// driver does work).
     fn is_conservative(&self) -> bool {
-        self.forces.iter().all(|f| f.is_conservative())
+        self.frictions.is_empty()
+            && self.forces.iter().all(|f| f.is_conservative())
             && self
                 .constraints
                 .constraints()

@@ -313,6 +313,10 @@ impl Formulation for Embedding {
     fn stats(&self) -> FormulationStats {
         self.stats
     }
+
+    fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
+        self.data.set_extra_force(extra)
+    }
 }
 
 /// The registry entry of the embedding formulation.

@@ -31,6 +31,9 @@ pub struct Sample<'a> {
     pub qdd: &'a [f64],
     /// Multipliers at this state.
     pub lambda: &'a [f64],
+    /// The friction force of each friction element of the system at this state
+    /// ([`dalembert_system::MultibodySystem::frictions`]; empty without friction).
+    pub friction: &'a [f64],
     /// `‖C‖∞` at this state.
     pub constraint_violation: f64,
     /// `‖Ċ‖∞` at this state.

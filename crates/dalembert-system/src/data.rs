@@ -32,6 +32,8 @@ pub struct Data {
     pub cdot: Vec<f64>,
     /// Right-hand side of the acceleration equations, `γ − 2α Ċ − β² C`.
     pub rhs: Vec<f64>,
+    /// A generalized force added to `Q` ([`Data::set_extra_force`]; empty: none).
+    extra: Vec<f64>,
     evaluated_at: EvaluatedAt,
     mass_loaded: bool,
     articulated: Option<Articulated>,
@@ -57,6 +59,7 @@ impl Data {
             values: model.constraints().values(),
             cdot: vec![0.0; m],
             rhs: vec![0.0; m],
+            extra: Vec::new(),
             evaluated_at: EvaluatedAt::new(n_q, n_v),
             mass_loaded: false,
             articulated: if solve_trees {
@@ -102,6 +105,9 @@ impl Data {
         }
         model.applied_forces(t, q, qd, &mut self.q_e);
         model.check_forces(t, q, qd, &self.q_e)?;
+        if !self.extra.is_empty() {
+            self.q_e.iter_mut().zip(&self.extra).for_each(|(a, b)| *a += b);
+        }
         self.evaluated_at
             .evaluate(model.constraints(), t, q, qd, &mut self.values);
         model.constraints().check_values(t, &self.values)
@@ -118,6 +124,23 @@ impl Data {
     ) {
         self.evaluated_at
             .residuals(model.constraints(), (t, q, qd), &mut self.values, c, cdot);
+    }
+
+    /// Adds `extra` to the applied forces of the following evaluations (`None`: stops). Allocates
+    /// only the first time. Returns false for a tree solved outright, whose forces this does not
+    /// reach.
+    pub fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
+        if self.articulated.is_some() {
+            return false;
+        }
+        match extra {
+            Some(e) => {
+                self.extra.resize(e.len(), 0.0);
+                self.extra.copy_from_slice(e);
+            }
+            None => self.extra.clear(),
+        }
+        true
     }
 
     /// The constraint values were written by something else (a projection's own evaluations).

@@ -189,6 +189,16 @@ pub enum DynamicsError {
         /// The solver's message.
         what: String,
     },
+    /// Joint friction could not be solved (`docs/friction.md`).
+    #[error("t = {t}: friction in joint '{joint}': {what}", t = crate::Shortest(*.time))]
+    Friction {
+        /// Time.
+        time: f64,
+        /// The joint (or joints).
+        joint: String,
+        /// What happened.
+        what: String,
+    },
 }
 
 impl DynamicsError {
@@ -201,7 +211,8 @@ impl DynamicsError {
             | DynamicsError::Singular { time, .. }
             | DynamicsError::NonFinite { time, .. }
             | DynamicsError::ForceElement { time, .. }
-            | DynamicsError::Factorization { time, .. } => Some(*time),
+            | DynamicsError::Factorization { time, .. }
+            | DynamicsError::Friction { time, .. } => Some(*time),
             DynamicsError::Kinematics(_) | DynamicsError::WrongLength { .. } => None,
         }
     }
@@ -272,5 +283,19 @@ pub trait Formulation: Send {
     /// replacing it (default: false).
     fn is_index3_augmented(&self) -> bool {
         false
+    }
+
+    /// Adds the generalized force `extra` (length `n`) to the applied forces of the following
+    /// evaluations, or stops adding one (`None`). Joint friction ([`crate::Frictional`]) finds a
+    /// formulation's response to a unit friction force with it. Returns false when the
+    /// formulation cannot (default).
+    fn set_extra_force(&mut self, _extra: Option<&[f64]>) -> bool {
+        false
+    }
+
+    /// The friction force of each friction element of the system ([`MultibodySystem::frictions`])
+    /// at the last evaluation (N or N·m; empty without friction).
+    fn friction_forces(&self) -> &[f64] {
+        &[]
     }
 }

@@ -24,6 +24,8 @@ pub mod error;
 pub mod evaluated_at;
 pub mod finite;
 pub mod formulation;
+pub mod friction;
+pub mod frictional;
 pub mod gram;
 pub mod inputs;
 pub mod inverse;
@@ -49,6 +51,8 @@ pub use data::{Data, Stage};
 pub use error::{ConstraintError, EquationRef};
 pub use evaluated_at::EvaluatedAt;
 pub use finite::all_finite;
+pub use friction::{solve_friction, FrictionTerms, JointFriction, SlipRow};
+pub use frictional::Frictional;
 pub use formulation::{
     Baumgarte, DynamicsError, Energy, Formulation, FormulationEntry, FormulationSettings, FormulationStats,
     RedundancyTreatment,

@@ -86,6 +86,17 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// (`docs/contact.md`, "Events"). Allocates nothing.
     fn events(&self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}
 
+    /// The friction elements of the joints (`docs/friction.md`), in a fixed order. Default none.
+    fn frictions(&self) -> &[crate::JointFriction] {
+        &[]
+    }
+
+    /// The slip row of friction element `k` ([`MultibodySystem::frictions`]) at `(t, q, v)`.
+    /// Allocates nothing. Default: an empty row.
+    fn slip_row(&self, _k: usize, _t: f64, _q: &[f64], _v: &[f64], row: &mut crate::SlipRow) {
+        row.clear();
+    }
+
     /// The bodies (layout indices) whose coordinates each applied-force element reads and whose
     /// generalized forces it writes, one group per element; the quadratic-velocity terms and the
     /// mass of a body couple it only with itself and need no group. `None` when some element does

@@ -112,12 +112,17 @@ fn evaluated<'a>(
     f.accelerations(t, q, qd, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
     f.residuals(t, q, qd, &mut mon.c, &mut mon.cdot);
     let energy = f.energy(t, q, qd).total();
+    let forces = f.friction_forces();
+    if forces.len() == mon.friction.len() {
+        mon.friction.copy_from_slice(forces);
+    }
     Ok(Sample {
         t,
         q,
         qd,
         qdd: &mon.qdd,
         lambda: &mon.lambda,
+        friction: &mon.friction,
         constraint_violation: inf_norm(&mon.c),
         velocity_violation: inf_norm(&mon.cdot),
         energy,
@@ -169,6 +174,7 @@ impl Integration {
             cdot: vec![0.0; m],
             qdd: vec![0.0; n_v],
             lambda: vec![0.0; m],
+            friction: vec![0.0; f.system().frictions().len()],
             energy0,
             scale0: 1.0 + inf_norm(&y),
             divergence_factor: opts.divergence_factor,

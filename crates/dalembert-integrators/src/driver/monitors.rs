@@ -19,6 +19,8 @@ pub(super) struct Monitors {
     pub cdot: Vec<f64>,
     pub qdd: Vec<f64>,
     pub lambda: Vec<f64>,
+    /// The friction forces of the joints at the last sample (`Formulation::friction_forces`).
+    pub friction: Vec<f64>,
     pub energy0: f64,
     pub scale0: f64,
     pub divergence_factor: f64,

@@ -1,0 +1,133 @@
+//! Any formulation with joint friction ([`Frictional`], `docs/friction.md`): the formulation's
+//! frictionless accelerations, its response to a unit force in each friction element, and the
+//! stick–slip law of [`crate::friction`] on top. One code for every formulation.
+
+use crate::friction::{solve_friction, FrictionTerms};
+use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
+
+/// A formulation whose system has joint friction ([`MultibodySystem::frictions`]).
+///
+/// Each evaluation costs one evaluation of the inner formulation plus one per friction element
+/// (its response to a unit friction force, at the same state); nothing is allocated after setup.
+pub struct Frictional {
+    inner: Box<dyn Formulation>,
+    terms: Vec<FrictionTerms>,
+    forces: Vec<f64>,
+    dense: Vec<f64>,
+    qdd: Vec<f64>,
+    lambda: Vec<f64>,
+}
+
+impl std::fmt::Debug for Frictional {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Frictional({}, {} elements)", self.inner.name(), self.terms.len())
+    }
+}
+
+impl Frictional {
+    /// `inner` with the friction of its system's joints; an error when the formulation cannot
+    /// take an added force (a tree solved outright by the articulated-body algorithm).
+    pub fn new(mut inner: Box<dyn Formulation>) -> Result<Self, DynamicsError> {
+        let (n, m, count) = {
+            let s = inner.system();
+            (s.layout().n_v(), s.num_equations(), s.frictions().len())
+        };
+        if count > 0 && !inner.set_extra_force(None) {
+            return Err(DynamicsError::Friction {
+                time: 0.0,
+                joint: inner.system().frictions()[0].name.clone(),
+                what: format!(
+                    "the {} formulation solves this model without forces added to it (a tree in joint \
+                     coordinates): use absolute coordinates",
+                    inner.name()
+                ),
+            });
+        }
+        Ok(Frictional {
+            inner,
+            terms: (0..count).map(|_| FrictionTerms::new(n, m)).collect(),
+            forces: vec![0.0; count],
+            dense: vec![0.0; n],
+            qdd: vec![0.0; n],
+            lambda: vec![0.0; m],
+        })
+    }
+}
+
+impl Formulation for Frictional {
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+
+    fn system(&self) -> &dyn MultibodySystem {
+        self.inner.system()
+    }
+
+    /// `v̇₀`, `λ₀` without friction; the response `A_k`, `Λ_k` to a force `s g_k` (`s` the
+    /// largest multiplier or 1, so that the difference keeps its digits), divided by `s`; then
+    /// (F1)–(F3) of `docs/friction.md`.
+    fn accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        baumgarte: Option<Baumgarte>,
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        self.inner.accelerations(t, q, qd, baumgarte, qdd, lambda)?;
+        if self.terms.is_empty() {
+            return Ok(());
+        }
+        let scale = lambda.iter().fold(1.0f64, |a, l| a.max(l.abs()));
+        for k in 0..self.terms.len() {
+            self.inner.system().slip_row(k, t, q, qd, &mut self.terms[k].row);
+            self.terms[k].row.write_dense(&mut self.dense);
+            self.dense.iter_mut().for_each(|g| *g *= scale);
+            self.inner.set_extra_force(Some(&self.dense));
+            let solved = self
+                .inner
+                .accelerations(t, q, qd, baumgarte, &mut self.qdd, &mut self.lambda);
+            self.inner.set_extra_force(None);
+            solved?;
+            let term = &mut self.terms[k];
+            for ((r, a), a0) in term.dv.iter_mut().zip(&self.qdd).zip(qdd.iter()) {
+                *r = (a - a0) / scale;
+            }
+            for ((r, l), l0) in term.dlambda.iter_mut().zip(&self.lambda).zip(lambda.iter()) {
+                *r = (l - l0) / scale;
+            }
+        }
+        solve_friction(self.inner.system(), t, qd, qdd, lambda, &mut self.terms)?;
+        for (f, k) in self.forces.iter_mut().zip(&self.terms) {
+            *f = k.force;
+        }
+        Ok(())
+    }
+
+    fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {
+        self.inner.residuals(t, q, qd, c, cdot);
+    }
+
+    fn project(&mut self, t: f64, q: &mut [f64], qd: &mut [f64], tolerance: f64) -> Result<usize, DynamicsError> {
+        self.inner.project(t, q, qd, tolerance)
+    }
+
+    fn stats(&self) -> FormulationStats {
+        self.inner.stats()
+    }
+
+    /// False: the implicit methods integrate the frictionless index-3 system themselves, which
+    /// holds no friction.
+    fn is_index3_augmented(&self) -> bool {
+        false
+    }
+
+    fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
+        self.inner.set_extra_force(extra)
+    }
+
+    fn friction_forces(&self) -> &[f64] {
+        &self.forces
+    }
+}
