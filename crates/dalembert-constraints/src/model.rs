@@ -249,19 +249,30 @@ impl MultibodySystem for Model {
             .sum()
     }
 
-    /// The contact elements (an element is one or not whatever the state: asked at zero).
+    /// The friction elements, then the contact elements (an element is one or not whatever the
+    /// state: asked at zero).
     fn num_events(&self) -> usize {
         let q = vec![0.0; 3 * self.bodies.len()];
-        self.forces
-            .iter()
-            .filter(|f| f.contact_gap(&self.bodies, &q).is_some())
-            .count()
+        self.frictions.len()
+            + self
+                .forces
+                .iter()
+                .filter(|f| f.contact_gap(&self.bodies, &q).is_some())
+                .count()
     }
 
-    /// Each contact element's gap, in the order of the force elements.
-    fn events(&self, _t: f64, q: &[f64], _v: &[f64], out: &mut [f64]) {
-        let gaps = self.forces.iter().filter_map(|f| f.contact_gap(&self.bodies, q));
-        for (slot, gap) in out.iter_mut().zip(gaps) {
+    /// Each friction element's slip rate (0 within its stick speed), then each contact element's
+    /// gap, in the order of the force elements.
+    fn events(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+        let mut row = SlipRow::default();
+        let (slips, gaps) = out.split_at_mut(self.frictions.len().min(out.len()));
+        for ((slot, f), spec) in slips.iter_mut().zip(&self.frictions).zip(&self.friction_specs) {
+            f.slip_row(q, v, &mut row);
+            let w = row.dot(v);
+            *slot = if w.abs() > spec.stick_speed { w } else { 0.0 };
+        }
+        let contacts = self.forces.iter().filter_map(|f| f.contact_gap(&self.bodies, q));
+        for (slot, gap) in gaps.iter_mut().zip(contacts) {
             *slot = gap;
         }
     }

@@ -293,6 +293,14 @@ pub trait Formulation: Send {
         false
     }
 
+    /// At the end of a step shortened to end at an event, where `crossed[i]` says which event
+    /// functions ([`MultibodySystem::events`]) changed sign over it: whatever the event asks of
+    /// the state (a joint whose slip stopped there made to stick, `docs/friction.md`). Returns
+    /// true when it changed `v`. Default: nothing.
+    fn at_event(&mut self, _t: f64, _q: &[f64], _v: &mut [f64], _crossed: &[bool]) -> Result<bool, DynamicsError> {
+        Ok(false)
+    }
+
     /// The friction force of each friction element of the system ([`MultibodySystem::frictions`])
     /// at the last evaluation (N or N·m; empty without friction).
     fn friction_forces(&self) -> &[f64] {

@@ -16,6 +16,10 @@ pub struct Frictional {
     dense: Vec<f64>,
     qdd: Vec<f64>,
     lambda: Vec<f64>,
+    /// `v̇`, `λ` and `v` at an event ([`Formulation::at_event`]).
+    event_qdd: Vec<f64>,
+    event_lambda: Vec<f64>,
+    event_v: Vec<f64>,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -50,6 +54,9 @@ impl Frictional {
             dense: vec![0.0; n],
             qdd: vec![0.0; n],
             lambda: vec![0.0; m],
+            event_qdd: vec![0.0; n],
+            event_lambda: vec![0.0; m],
+            event_v: vec![0.0; n],
         })
     }
 }
@@ -125,6 +132,41 @@ impl Formulation for Frictional {
 
     fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
         self.inner.set_extra_force(extra)
+    }
+
+    /// A joint whose slip rate changed sign over the step (`crossed`, the first event functions
+    /// are the friction elements') is made to stick if its friction can hold it: the impulse
+    /// `P = −w / (g·A)` along its slip row sets `w` to zero, `v ← v + A P` (the response to a
+    /// force is the response to an impulse: the constraints' velocities stay zero); where the law
+    /// then finds the joint slipping (the friction cannot hold it), `v` is left as it was and the
+    /// joint slips back (`docs/friction.md`, "Events").
+    fn at_event(&mut self, t: f64, q: &[f64], v: &mut [f64], crossed: &[bool]) -> Result<bool, DynamicsError> {
+        let mut changed = false;
+        for k in 0..self.terms.len().min(crossed.len()) {
+            if !crossed[k] {
+                continue;
+            }
+            self.event_v.copy_from_slice(v);
+            let mut qdd = std::mem::take(&mut self.event_qdd);
+            let mut lambda = std::mem::take(&mut self.event_lambda);
+            let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
+            let snapped = result.and_then(|()| {
+                let term = &self.terms[k];
+                let d = term.row.dot(&term.dv);
+                let impulse = -term.row.dot(v) / d;
+                v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
+                self.accelerations(t, q, v, None, &mut qdd, &mut lambda)?;
+                Ok(self.terms[k].sticks)
+            });
+            self.event_qdd = qdd;
+            self.event_lambda = lambda;
+            if snapped? {
+                changed = true;
+            } else {
+                v.copy_from_slice(&self.event_v);
+            }
+        }
+        Ok(changed)
     }
 
     fn friction_forces(&self) -> &[f64] {

@@ -74,14 +74,16 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// Euler parameters). Default: nothing to do.
     fn normalize(&self, _q: &mut [f64]) {}
 
-    /// The number of event functions ([`MultibodySystem::events`]): one per contact element.
-    /// Default 0.
+    /// The number of event functions ([`MultibodySystem::events`]): one per friction element
+    /// ([`MultibodySystem::frictions`], first) and one per contact element. Default 0.
     fn num_events(&self) -> usize {
         0
     }
 
     /// The event functions at `(t, q, v)` into `out` (length [`MultibodySystem::num_events`]):
-    /// each contact's gap, positive apart and negative in contact, so that a sign change within a
+    /// first each friction element's slip rate `w` (0 while `|w|` is within its stick speed, so
+    /// that a sign change is a slip that stops or reverses, `docs/friction.md`), then each
+    /// contact's gap, positive apart and negative in contact, so that a sign change within a
     /// step is a contact beginning or ending there. The integration loop ends a step there
     /// (`docs/contact.md`, "Events"). Allocates nothing.
     fn events(&self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}

@@ -12,7 +12,8 @@
 //! shorten it again.
 
 use crate::stepper::Stepper;
-use dalembert_system::Formulation;
+use crate::methods::first_order::derivative;
+use dalembert_system::{Baumgarte, DynamicsError, Formulation};
 
 /// Bisection steps on `θ ∈ [0, 1]`: `2⁻⁴⁰ ≈ 10⁻¹²` of the step.
 const BISECTIONS: usize = 40;
@@ -28,6 +29,12 @@ pub(super) struct Events {
     start: Vec<f64>,
     /// A state on the dense output.
     y: Vec<f64>,
+    /// Which functions changed sign over the step just located ([`Events::settle`]).
+    crossed: Vec<bool>,
+    /// The rate `ẏ` at the start of the step ([`Events::tangent`]).
+    rate: Vec<f64>,
+    /// The functions a little way along that rate.
+    ahead: Vec<f64>,
     /// True while the step in progress was shortened to end at an event.
     pub located: bool,
 }
@@ -48,6 +55,9 @@ impl Events {
             g0,
             start: vec![0.0; y0.len()],
             y: vec![0.0; y0.len()],
+            crossed: vec![false; m],
+            rate: vec![0.0; y0.len()],
+            ahead: vec![0.0; m],
             located: false,
         }
     }
@@ -122,6 +132,55 @@ impl Events {
             .filter(|&(&a, &b)| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0))
             .map(|(&a, &b)| a / (a - b))
             .min_by(f64::total_cmp)
+    }
+
+    /// After a step shortened to end at an event, ending at `y` at `t`: the formulation does what
+    /// the events that changed sign over it ask of the state
+    /// ([`Formulation::at_event`], a slip that stopped made to stick). True when it changed `y`.
+    pub fn settle(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64], n_q: usize) -> Result<bool, DynamicsError> {
+        if self.is_empty() {
+            return Ok(false);
+        }
+        let (q, v) = y.split_at_mut(n_q);
+        f.system().events(t, q, v, &mut self.g);
+        for ((c, &a), &b) in self.crossed.iter_mut().zip(&self.g0).zip(&self.g) {
+            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+        }
+        if !self.crossed.iter().any(|&c| c) {
+            return Ok(false);
+        }
+        f.at_event(t, q, v, &self.crossed)
+    }
+
+    /// After a fixed step from `t` of size `h` that [`Events::chord`] found crossing: the first
+    /// fraction `θ ∈ (0, 1]` where a function that changed sign vanishes on its tangent at the
+    /// step's start, `θ = −g₀ / (ġ₀ h)`, with `ġ₀` a difference along the state's rate there
+    /// (one evaluation of the formulation). Exact where the function is linear in time (a slip
+    /// under constant force), where the chord of the end values is not: the method's stages past
+    /// the event make the end value wrong (a friction that reversed in them). `None` where no
+    /// tangent points into the step.
+    pub fn tangent(
+        &mut self,
+        f: &mut dyn Formulation,
+        (t, h, n_q): (f64, f64, usize),
+        baumgarte: Option<Baumgarte>,
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<Option<f64>, DynamicsError> {
+        derivative(f, t, &self.start, baumgarte, qdd, lambda, &mut self.rate)?;
+        let eps = 1e-6 * h;
+        for ((y, s), r) in self.y.iter_mut().zip(&self.start).zip(&self.rate) {
+            *y = s + eps * r;
+        }
+        let (q, v) = self.y.split_at(n_q);
+        f.system().events(t + eps, q, v, &mut self.ahead);
+        let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+        let theta = (self.g0.iter().zip(&self.g).zip(&self.ahead))
+            .filter(|((&a, &b), _)| changed(a, b))
+            .map(|((&a, _), &c)| -a * eps / ((c - a) * h))
+            .filter(|th| *th > 0.0 && *th <= 1.0)
+            .min_by(f64::total_cmp);
+        Ok(theta)
     }
 
     /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.

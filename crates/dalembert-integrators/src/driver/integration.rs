@@ -129,6 +129,9 @@ fn evaluated<'a>(
     })
 }
 
+/// How many times a fixed step is shortened to end at an event.
+const RELOCATIONS: usize = 4;
+
 fn tolerance(t: f64) -> f64 {
     1e-12 * (1.0 + t.abs())
 }
@@ -580,18 +583,33 @@ impl Integration {
             events.mark(y);
             let mut h = g.hh;
             let mut outcome = stepper.step(f, ts, h, y)?;
-            // A contact beginning or ending inside the step: the step again, to end there (the
-            // rest of the output interval is then spanned anew from it).
+            // An event inside the step (a contact beginning or ending, a slip stopping): the
+            // step again, to end there (the rest of the output interval is then spanned anew from
+            // it), first where the event's tangent at the step's start says, then, while the
+            // step still crosses, on the chord of its own end (at most `RELOCATIONS` times).
             let mut located = false;
             if outcome.accepted && !events.located {
-                if let Some(theta) = events.chord(f, ts, h, y, mon.n) {
-                    if theta * h > opts.min_step {
-                        events.restore(y);
-                        stepper.state_changed();
-                        h *= theta;
-                        outcome = stepper.step(f, ts, h, y)?;
-                        located = true;
+                let mut tries = 0;
+                while let Some(chord) = events.chord(f, ts, h, y, mon.n) {
+                    if tries == RELOCATIONS || !outcome.accepted {
+                        break;
                     }
+                    let theta = if tries == 0 {
+                        let at = (ts, h, mon.n);
+                        let tangent = events.tangent(f, at, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
+                        tangent.unwrap_or(chord)
+                    } else {
+                        chord
+                    };
+                    if theta * h <= opts.min_step {
+                        break;
+                    }
+                    events.restore(y);
+                    stepper.state_changed();
+                    h *= theta;
+                    outcome = stepper.step(f, ts, h, y)?;
+                    located = true;
+                    tries += 1;
                 }
             }
             if !outcome.accepted {
@@ -618,6 +636,9 @@ impl Integration {
             };
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
+            if located && events.settle(f, t_after, y, mon.n)? {
+                stepper.state_changed();
+            }
             // The loop does not tell a fixed-step method that its state was projected.
             tangents.follow(ts, h, mon.n, false)?;
             events.accepted(f, t_after, y, mon.n);
@@ -747,7 +768,10 @@ impl Integration {
                 let t_new = if last { t_end } else { *t + a.h };
                 a.dense = Some((*t, a.h));
                 normalize(f, y, n_q);
-                let projected = mon.project_step(f, t_new, y, stab)?;
+                let mut projected = mon.project_step(f, t_new, y, stab)?;
+                if events.located && events.settle(f, t_new, y, n_q)? {
+                    projected = true;
+                }
                 if projected {
                     stepper.state_changed();
                 }
