@@ -293,10 +293,22 @@ pub trait Formulation: Send {
         false
     }
 
+    /// A run starts (or starts again) at `(t, q, v)`: a formulation whose law has modes (joint
+    /// friction: stick or slip) takes them from this state. Default: nothing.
+    fn start_events(&mut self, _t: f64, _q: &[f64], _v: &[f64]) {}
+
+    /// The event functions at `(t, q, v)` into `out` (length `num_events` of the system): the
+    /// system's ([`MultibodySystem::events`]) by default; a formulation with modes writes its own
+    /// for the elements that have them (a sign change ends a mode). Allocates nothing.
+    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+        self.system().events(t, q, v, out);
+    }
+
     /// At the end of a step shortened to end at an event, where `crossed[i]` says which event
     /// functions ([`MultibodySystem::events`]) changed sign over it: whatever the event asks of
-    /// the state (a joint whose slip stopped there made to stick, `docs/friction.md`). Returns
-    /// true when it changed `v`. Default: nothing.
+    /// the state and the law (a joint whose slip stopped there made to stick, one whose stick
+    /// ended made to slip, `docs/friction.md`). Returns true when it changed `v` or the law (a
+    /// method must not reuse a derivative from before). Default: nothing.
     fn at_event(&mut self, _t: f64, _q: &[f64], _v: &mut [f64], _crossed: &[bool]) -> Result<bool, DynamicsError> {
         Ok(false)
     }

@@ -9,10 +9,16 @@
 //! power `F_k w_k`):
 //!
 //! ```text
-//! slip  (|w_k| > w_s):  F_k = −c_k w_k − sign(w_k) μ_k N_k(F)                         (F1)
-//! stick (|w_k| ≤ w_s):  F_k = F_hold, the force that makes ẇ_k = 0, if |F_hold| ≤ μ_k N_k(F)   (F2)
-//!                       otherwise F_k = sign(F_hold) μ_k N_k(F)  (slip begins against it)   (F3)
+//! slipping in direction σ:  F_k = −c_k w_k − σ μ_k N_k(F)                                  (F1)
+//! sticking:                 F_k = F_hold, the force that makes ẇ_k = 0, if |F_hold| ≤ μ_k N_k(F)   (F2)
+//!                           otherwise F_k = sign(F_hold) μ_k N_k(F) − c_k w_k  (slip begins)   (F3)
 //! ```
+//!
+//! Each element is in one [`Mode`] for a whole step, so that the step's stages see one smooth law;
+//! the mode changes only at an event, at the end of a step shortened to end there: a slip whose
+//! rate reaches zero sticks (if (F2) can hold it) or reverses, and a stuck joint whose rate
+//! leaves its stick speed `w_s` slips ([`Mode::event`]). (F3) is continuous with (F1), so a
+//! joint begins to slip within a step without a jump in its force.
 //!
 //! Accelerations and multipliers are affine in the friction forces: `v̇ = v̇₀ + Σ A_k F_k`,
 //! `λ = λ₀ + Σ Λ_k F_k`, with `A_k`, `Λ_k` the response of the formulation to a unit generalized
@@ -98,6 +104,36 @@ impl SlipRow {
     }
 }
 
+/// What a friction element does over a step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Mode {
+    /// At rest (its slip rate within the stick speed): (F2), or (F3) where (F2) cannot hold it.
+    Stick,
+    /// Slipping in the direction of the sign (±1): (F1).
+    Slip(f64),
+}
+
+impl Mode {
+    /// The mode of an element whose slip rate is `w` at the start of a run.
+    pub fn at(w: f64, stick_speed: f64) -> Mode {
+        if w.abs() <= stick_speed {
+            Mode::Stick
+        } else {
+            Mode::Slip(w.signum())
+        }
+    }
+
+    /// The event function of the mode at slip rate `w`: positive while the mode holds, so that a
+    /// sign change ends it: `σ w` for a slip (its rate reaches zero), `w_s − |w|` for a stuck
+    /// joint (its rate leaves the stick speed).
+    pub fn event(self, w: f64, stick_speed: f64) -> f64 {
+        match self {
+            Mode::Stick => stick_speed - w.abs(),
+            Mode::Slip(sign) => sign * w,
+        }
+    }
+}
+
 /// One friction element's terms at a state, as [`solve_friction`] takes them.
 #[derive(Debug, Clone)]
 pub struct FrictionTerms {
@@ -109,8 +145,10 @@ pub struct FrictionTerms {
     pub dlambda: Vec<f64>,
     /// The friction force found (`F_k`).
     pub force: f64,
-    /// True when the joint sticks.
+    /// True when the joint sticks ((F2) held it).
     pub sticks: bool,
+    /// The element's mode over the step in progress.
+    pub mode: Mode,
 }
 
 impl FrictionTerms {
@@ -122,6 +160,7 @@ impl FrictionTerms {
             dlambda: vec![0.0; m],
             force: 0.0,
             sticks: false,
+            mode: Mode::Stick,
         }
     }
 }
@@ -132,8 +171,8 @@ const MAX_SWEEPS: usize = 200;
 /// The largest number of Newton iterations of one element's equation.
 const MAX_NEWTON: usize = 50;
 
-/// Solves (F1)–(F3) for every element: on entry `a`, `lambda` are the frictionless `v̇₀`, `λ₀`
-/// and `terms[k]` hold the rows and responses; on exit `a`, `lambda` include the friction forces,
+/// Solves (F1)–(F3) for every element in its mode: on entry `a`, `lambda` are the frictionless
+/// `v̇₀`, `λ₀` and `terms[k]` hold the rows, responses and modes; on exit `a`, `lambda` include the friction forces,
 /// and `terms[k].force`, `terms[k].sticks` say what each element does. Allocates nothing.
 pub fn solve_friction(
     system: &dyn MultibodySystem,
@@ -185,14 +224,15 @@ pub fn solve_friction(
             };
             let w = k.row.dot(v);
             let alpha0 = k.row.dot(a) + k.row.bias - d * old;
-            let (base, sign, sticks) = if w.abs() > spec.stick_speed {
-                (-spec.viscous * w, w.signum(), false)
-            } else {
-                let hold = -alpha0 / d;
-                if hold.abs() <= load(hold) {
-                    (hold, 0.0, true)
-                } else {
-                    (-spec.viscous * w, -hold.signum(), false)
+            let (base, sign, sticks) = match k.mode {
+                Mode::Slip(sign) => (-spec.viscous * w, sign, false),
+                Mode::Stick => {
+                    let hold = -alpha0 / d;
+                    if hold.abs() <= load(hold) {
+                        (hold, 0.0, true)
+                    } else {
+                        (-spec.viscous * w, -hold.signum(), false)
+                    }
                 }
             };
             let force = if sign == 0.0 {

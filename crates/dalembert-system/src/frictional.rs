@@ -2,7 +2,7 @@
 //! frictionless accelerations, its response to a unit force in each friction element, and the
 //! stick–slip law of [`crate::friction`] on top. One code for every formulation.
 
-use crate::friction::{solve_friction, FrictionTerms};
+use crate::friction::{solve_friction, FrictionTerms, Mode};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
 /// A formulation whose system has joint friction ([`MultibodySystem::frictions`]).
@@ -20,6 +20,8 @@ pub struct Frictional {
     event_qdd: Vec<f64>,
     event_lambda: Vec<f64>,
     event_v: Vec<f64>,
+    /// True once the modes were set ([`Formulation::start_events`]).
+    started: bool,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -57,6 +59,7 @@ impl Frictional {
             event_qdd: vec![0.0; n],
             event_lambda: vec![0.0; m],
             event_v: vec![0.0; n],
+            started: false,
         })
     }
 }
@@ -85,6 +88,9 @@ impl Formulation for Frictional {
         self.inner.accelerations(t, q, qd, baumgarte, qdd, lambda)?;
         if self.terms.is_empty() {
             return Ok(());
+        }
+        if !self.started {
+            self.start_events(t, q, qd);
         }
         let scale = lambda.iter().fold(1.0f64, |a, l| a.max(l.abs()));
         for k in 0..self.terms.len() {
@@ -134,36 +140,71 @@ impl Formulation for Frictional {
         self.inner.set_extra_force(extra)
     }
 
-    /// A joint whose slip rate changed sign over the step (`crossed`, the first event functions
-    /// are the friction elements') is made to stick if its friction can hold it: the impulse
-    /// `P = −w / (g·A)` along its slip row sets `w` to zero, `v ← v + A P` (the response to a
-    /// force is the response to an impulse: the constraints' velocities stay zero); where the law
-    /// then finds the joint slipping (the friction cannot hold it), `v` is left as it was and the
-    /// joint slips back (`docs/friction.md`, "Events").
+    /// Each element's mode from its slip rate at `(q, v)`: stuck within its stick speed,
+    /// otherwise slipping in the rate's direction.
+    fn start_events(&mut self, t: f64, q: &[f64], v: &[f64]) {
+        let system = self.inner.system();
+        for (k, (term, spec)) in self.terms.iter_mut().zip(system.frictions()).enumerate() {
+            system.slip_row(k, t, q, v, &mut term.row);
+            term.mode = Mode::at(term.row.dot(v), spec.stick_speed);
+        }
+        self.started = true;
+    }
+
+    /// The system's event functions, with each friction element's [`Mode::event`] first.
+    fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+        if !self.started {
+            self.start_events(t, q, v);
+        }
+        let system = self.inner.system();
+        system.events(t, q, v, out);
+        for (k, (term, spec)) in self.terms.iter_mut().zip(system.frictions()).enumerate() {
+            if let Some(slot) = out.get_mut(k) {
+                system.slip_row(k, t, q, v, &mut term.row);
+                *slot = term.mode.event(term.row.dot(v), spec.stick_speed);
+            }
+        }
+    }
+
+    /// The modes whose events changed sign over the step (`crossed`, the first functions are the
+    /// friction elements'): a stuck joint whose rate left its stick speed slips in the rate's
+    /// direction; a slip whose rate reached zero is made to stick if its friction can hold it
+    /// (the impulse `P = −w / (g·A)` along the slip row sets `w` to zero, `v ← v + A P`: the
+    /// response to a force is also the response to an impulse, and keeps the constraints'
+    /// velocities zero), and otherwise reverses with `v` left as it was
+    /// (`docs/friction.md`, "Events").
     fn at_event(&mut self, t: f64, q: &[f64], v: &mut [f64], crossed: &[bool]) -> Result<bool, DynamicsError> {
         let mut changed = false;
         for k in 0..self.terms.len().min(crossed.len()) {
             if !crossed[k] {
                 continue;
             }
+            changed = true;
+            let sign = match self.terms[k].mode {
+                Mode::Stick => {
+                    self.inner.system().slip_row(k, t, q, v, &mut self.terms[k].row);
+                    self.terms[k].mode = Mode::Slip(self.terms[k].row.dot(v).signum());
+                    continue;
+                }
+                Mode::Slip(sign) => sign,
+            };
             self.event_v.copy_from_slice(v);
             let mut qdd = std::mem::take(&mut self.event_qdd);
             let mut lambda = std::mem::take(&mut self.event_lambda);
             let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
-            let snapped = result.and_then(|()| {
-                let term = &self.terms[k];
-                let d = term.row.dot(&term.dv);
-                let impulse = -term.row.dot(v) / d;
+            let sticks = result.and_then(|()| {
+                let term = &mut self.terms[k];
+                let impulse = -term.row.dot(v) / term.row.dot(&term.dv);
                 v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
+                term.mode = Mode::Stick;
                 self.accelerations(t, q, v, None, &mut qdd, &mut lambda)?;
                 Ok(self.terms[k].sticks)
             });
             self.event_qdd = qdd;
             self.event_lambda = lambda;
-            if snapped? {
-                changed = true;
-            } else {
+            if !sticks? {
                 v.copy_from_slice(&self.event_v);
+                self.terms[k].mode = Mode::Slip(-sign);
             }
         }
         Ok(changed)

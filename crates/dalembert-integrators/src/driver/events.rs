@@ -41,15 +41,15 @@ pub(super) struct Events {
 
 impl Events {
     /// The events of the system `f` integrates, at its initial state `y0` (`n_q` positions).
-    pub fn new(f: &dyn Formulation, t0: f64, y0: &[f64], n_q: usize) -> Self {
-        let system = f.system();
-        let m = system.num_events();
+    pub fn new(f: &mut dyn Formulation, t0: f64, y0: &[f64], n_q: usize) -> Self {
+        let m = f.system().num_events();
         if m == 0 {
             return Events::default();
         }
         let mut g0 = vec![0.0; m];
         let (q, v) = y0.split_at(n_q);
-        system.events(t0, q, v, &mut g0);
+        f.start_events(t0, q, v);
+        f.events(t0, q, v, &mut g0);
         Events {
             g: vec![0.0; m],
             g0,
@@ -84,7 +84,7 @@ impl Events {
     /// `None` when none changed sign.
     pub fn crossing(
         &mut self,
-        f: &dyn Formulation,
+        f: &mut dyn Formulation,
         stepper: &dyn Stepper,
         t: f64,
         h: f64,
@@ -94,9 +94,8 @@ impl Events {
         if self.is_empty() {
             return None;
         }
-        let system = f.system();
         let (q, v) = y.split_at(n_q);
-        system.events(t + h, q, v, &mut self.g);
+        f.events(t + h, q, v, &mut self.g);
         let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
         if !(self.g0.iter().zip(&self.g)).any(|(&a, &b)| changed(a, b)) {
             return None;
@@ -108,7 +107,7 @@ impl Events {
             let mid = 0.5 * (lo + hi);
             stepper.interpolate(mid, &mut self.y);
             let (q, v) = self.y.split_at(n_q);
-            system.events(t + mid * h, q, v, &mut self.g);
+            f.events(t + mid * h, q, v, &mut self.g);
             if (self.g0.iter().zip(&self.g)).any(|(&a, &b)| changed(a, b)) {
                 hi = mid;
             } else {
@@ -122,12 +121,12 @@ impl Events {
     /// step where the first event function that changed sign vanishes on the chord of its values
     /// at the step's ends (a fixed-step method has no dense output), or `None`. The step taken
     /// again to there ends near the event; where it falls short, the next step finds the rest.
-    pub fn chord(&mut self, f: &dyn Formulation, t: f64, h: f64, y: &[f64], n_q: usize) -> Option<f64> {
+    pub fn chord(&mut self, f: &mut dyn Formulation, t: f64, h: f64, y: &[f64], n_q: usize) -> Option<f64> {
         if self.is_empty() {
             return None;
         }
         let (q, v) = y.split_at(n_q);
-        f.system().events(t + h, q, v, &mut self.g);
+        f.events(t + h, q, v, &mut self.g);
         (self.g0.iter().zip(&self.g))
             .filter(|&(&a, &b)| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0))
             .map(|(&a, &b)| a / (a - b))
@@ -142,7 +141,7 @@ impl Events {
             return Ok(false);
         }
         let (q, v) = y.split_at_mut(n_q);
-        f.system().events(t, q, v, &mut self.g);
+        f.events(t, q, v, &mut self.g);
         for ((c, &a), &b) in self.crossed.iter_mut().zip(&self.g0).zip(&self.g) {
             *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
         }
@@ -173,7 +172,7 @@ impl Events {
             *y = s + eps * r;
         }
         let (q, v) = self.y.split_at(n_q);
-        f.system().events(t + eps, q, v, &mut self.ahead);
+        f.events(t + eps, q, v, &mut self.ahead);
         let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
         let theta = (self.g0.iter().zip(&self.g).zip(&self.ahead))
             .filter(|((&a, &b), _)| changed(a, b))
@@ -184,12 +183,12 @@ impl Events {
     }
 
     /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.
-    pub fn accepted(&mut self, f: &dyn Formulation, t: f64, y: &[f64], n_q: usize) {
+    pub fn accepted(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64], n_q: usize) {
         if self.is_empty() {
             return;
         }
         let (q, v) = y.split_at(n_q);
-        f.system().events(t, q, v, &mut self.g0);
+        f.events(t, q, v, &mut self.g0);
         self.located = false;
     }
 }
