@@ -124,12 +124,13 @@ impl Mode {
     }
 
     /// The event function of the mode at slip rate `w`: positive while the mode holds, so that a
-    /// sign change ends it: `σ w` for a slip (its rate reaches zero), `w_s − |w|` for a stuck
-    /// joint (its rate leaves the stick speed).
+    /// sign change ends it: `σ w + w_s` for a slip (its rate passes zero by the stick speed, so
+    /// that a slip that begins at rest starts clear of its event), `w_s − |w|` for a stuck joint
+    /// (its rate leaves the stick speed).
     pub fn event(self, w: f64, stick_speed: f64) -> f64 {
         match self {
             Mode::Stick => stick_speed - w.abs(),
-            Mode::Slip(sign) => sign * w,
+            Mode::Slip(sign) => sign * w + stick_speed,
         }
     }
 }

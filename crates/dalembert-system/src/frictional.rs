@@ -16,10 +16,9 @@ pub struct Frictional {
     dense: Vec<f64>,
     qdd: Vec<f64>,
     lambda: Vec<f64>,
-    /// `v̇`, `λ` and `v` at an event ([`Formulation::at_event`]).
+    /// `v̇` and `λ` at an event ([`Formulation::at_event`]).
     event_qdd: Vec<f64>,
     event_lambda: Vec<f64>,
-    event_v: Vec<f64>,
     /// True once the modes were set ([`Formulation::start_events`]).
     started: bool,
 }
@@ -58,7 +57,6 @@ impl Frictional {
             lambda: vec![0.0; m],
             event_qdd: vec![0.0; n],
             event_lambda: vec![0.0; m],
-            event_v: vec![0.0; n],
             started: false,
         })
     }
@@ -168,11 +166,11 @@ impl Formulation for Frictional {
 
     /// The modes whose events changed sign over the step (`crossed`, the first functions are the
     /// friction elements'): a stuck joint whose rate left its stick speed slips in the rate's
-    /// direction; a slip whose rate reached zero is made to stick if its friction can hold it
-    /// (the impulse `P = −w / (g·A)` along the slip row sets `w` to zero, `v ← v + A P`: the
-    /// response to a force is also the response to an impulse, and keeps the constraints'
-    /// velocities zero), and otherwise reverses with `v` left as it was
-    /// (`docs/friction.md`, "Events").
+    /// direction; a slip whose rate reached zero (to the location's round-off) has it set to
+    /// zero by the impulse `P = −w / (g·A)` along its slip row, `v ← v + A P` (the response to a
+    /// force is also the response to an impulse, and keeps the constraints' velocities zero),
+    /// then sticks if its friction can hold it and otherwise reverses (`docs/friction.md`,
+    /// "Events").
     fn at_event(&mut self, t: f64, q: &[f64], v: &mut [f64], crossed: &[bool]) -> Result<bool, DynamicsError> {
         let mut changed = false;
         for k in 0..self.terms.len().min(crossed.len()) {
@@ -188,7 +186,6 @@ impl Formulation for Frictional {
                 }
                 Mode::Slip(sign) => sign,
             };
-            self.event_v.copy_from_slice(v);
             let mut qdd = std::mem::take(&mut self.event_qdd);
             let mut lambda = std::mem::take(&mut self.event_lambda);
             let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
@@ -203,7 +200,6 @@ impl Formulation for Frictional {
             self.event_qdd = qdd;
             self.event_lambda = lambda;
             if !sticks? {
-                v.copy_from_slice(&self.event_v);
                 self.terms[k].mode = Mode::Slip(-sign);
             }
         }

@@ -31,6 +31,9 @@ pub(super) struct Events {
     y: Vec<f64>,
     /// Which functions changed sign over the step just located ([`Events::settle`]).
     crossed: Vec<bool>,
+    /// The function a fixed step was shortened to end at: it counts as crossed at the step's
+    /// end even where the step fell short of it by round-off ([`Events::settle`]).
+    aimed: Option<usize>,
     /// The rate `ẏ` at the start of the step ([`Events::tangent`]).
     rate: Vec<f64>,
     /// The functions a little way along that rate.
@@ -56,6 +59,7 @@ impl Events {
             start: vec![0.0; y0.len()],
             y: vec![0.0; y0.len()],
             crossed: vec![false; m],
+            aimed: None,
             rate: vec![0.0; y0.len()],
             ahead: vec![0.0; m],
             located: false,
@@ -72,6 +76,20 @@ impl Events {
         if !self.is_empty() {
             self.start.copy_from_slice(y);
         }
+    }
+
+    /// A fixed step from `t` crossed an event so near its start (`θ h` below the smallest step)
+    /// that it cannot end there: the event is settled at the start instead ([`Events::settle`]
+    /// on the state kept by [`Events::mark`], into `y`), whose functions then start the step
+    /// again. True when the formulation changed the state or its law.
+    pub fn settle_at_start(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64], n_q: usize) -> Result<bool, DynamicsError> {
+        y.copy_from_slice(&self.start);
+        let changed = self.settle(f, t, y, n_q)?;
+        let (q, v) = y.split_at(n_q);
+        f.events(t, q, v, &mut self.g0);
+        self.start.copy_from_slice(y);
+        self.aimed = None;
+        Ok(changed)
     }
 
     /// The run's state at the start of the step in progress, into `y` (the step is taken again).
@@ -114,6 +132,12 @@ impl Events {
                 lo = mid;
             }
         }
+        // The function that changed first: the step taken again to `hi` ends at its zero, even
+        // where that step falls short of it by round-off ([`Events::settle`]).
+        stepper.interpolate(hi, &mut self.y);
+        let (q, v) = self.y.split_at(n_q);
+        f.events(t + hi * h, q, v, &mut self.g);
+        self.aimed = (self.g0.iter().zip(&self.g)).position(|(&a, &b)| changed(a, b));
         Some(hi)
     }
 
@@ -127,10 +151,14 @@ impl Events {
         }
         let (q, v) = y.split_at(n_q);
         f.events(t + h, q, v, &mut self.g);
-        (self.g0.iter().zip(&self.g))
-            .filter(|&(&a, &b)| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0))
-            .map(|(&a, &b)| a / (a - b))
-            .min_by(f64::total_cmp)
+        let first = (self.g0.iter().zip(&self.g).enumerate())
+            .filter(|&(_, (&a, &b))| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0))
+            .map(|(i, (&a, &b))| (i, a / (a - b)))
+            .min_by(|x, y| x.1.total_cmp(&y.1));
+        if let Some((i, _)) = first {
+            self.aimed = Some(i);
+        }
+        first.map(|(_, theta)| theta)
     }
 
     /// After a step shortened to end at an event, ending at `y` at `t`: the formulation does what
@@ -142,8 +170,8 @@ impl Events {
         }
         let (q, v) = y.split_at_mut(n_q);
         f.events(t, q, v, &mut self.g);
-        for ((c, &a), &b) in self.crossed.iter_mut().zip(&self.g0).zip(&self.g) {
-            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+        for (i, ((c, &a), &b)) in self.crossed.iter_mut().zip(&self.g0).zip(&self.g).enumerate() {
+            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0) || self.aimed == Some(i);
         }
         if !self.crossed.iter().any(|&c| c) {
             return Ok(false);
@@ -174,12 +202,15 @@ impl Events {
         let (q, v) = self.y.split_at(n_q);
         f.events(t + eps, q, v, &mut self.ahead);
         let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
-        let theta = (self.g0.iter().zip(&self.g).zip(&self.ahead))
-            .filter(|((&a, &b), _)| changed(a, b))
-            .map(|((&a, _), &c)| -a * eps / ((c - a) * h))
-            .filter(|th| *th > 0.0 && *th <= 1.0)
-            .min_by(f64::total_cmp);
-        Ok(theta)
+        let first = (self.g0.iter().zip(&self.g).zip(&self.ahead).enumerate())
+            .filter(|(_, ((&a, &b), _))| changed(a, b))
+            .map(|(i, ((&a, _), &c))| (i, -a * eps / ((c - a) * h)))
+            .filter(|(_, th)| *th > 0.0 && *th <= 1.0)
+            .min_by(|x, y| x.1.total_cmp(&y.1));
+        if let Some((i, _)) = first {
+            self.aimed = Some(i);
+        }
+        Ok(first.map(|(_, theta)| theta))
     }
 
     /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.
@@ -190,5 +221,6 @@ impl Events {
         let (q, v) = y.split_at(n_q);
         f.events(t, q, v, &mut self.g0);
         self.located = false;
+        self.aimed = None;
     }
 }

@@ -602,6 +602,13 @@ impl Integration {
                         chord
                     };
                     if theta * h <= opts.min_step {
+                        if tries == 0 && events.settle_at_start(f, ts, y, mon.n)? {
+                            // The event at the step's start changed the law: the step again.
+                            stepper.state_changed();
+                            outcome = stepper.step(f, ts, h, y)?;
+                            tries += 1;
+                            continue;
+                        }
                         break;
                     }
                     events.restore(y);
@@ -684,6 +691,7 @@ impl Integration {
             unreachable!("an adaptive step of a fixed-step method")
         };
         let (n_q, t_end, stab) = (mon.n, schedule.t_end, *stabilization);
+        let mut settled = false;
         loop {
             // A bridge in progress: its next half step, a step of the run.
             if let Some(forced) = a.forced.as_mut() {
@@ -759,6 +767,13 @@ impl Integration {
                         stepper.state_changed();
                         a.h *= theta;
                         events.located = true;
+                        continue;
+                    }
+                    // At the step's start: settled there (once), and the step taken again.
+                    if !settled && events.settle_at_start(f, *t, y, n_q)? {
+                        settled = true;
+                        stepper.state_changed();
+                        mon.stats.events += 1;
                         continue;
                     }
                 }
