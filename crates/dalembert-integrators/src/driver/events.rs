@@ -78,18 +78,23 @@ impl Events {
         }
     }
 
-    /// A fixed step from `t` crossed an event so near its start (`θ h` below the smallest step)
-    /// that it cannot end there: the event is settled at the start instead ([`Events::settle`]
-    /// on the state kept by [`Events::mark`], into `y`), whose functions then start the step
-    /// again. True when the formulation changed the state or its law.
+    /// A step from `t` crossed an event so near its start (`θ h` below the smallest step) that
+    /// it cannot end there: the event is settled at the start instead ([`Events::settle`] on the
+    /// state kept by [`Events::mark`]). Where the formulation changed the state or its law, `y`
+    /// is that state, its functions start the step again, and the result is true (the step is
+    /// to be taken again); otherwise `y` is left as the step ended.
     pub fn settle_at_start(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64], n_q: usize) -> Result<bool, DynamicsError> {
+        let mut start = std::mem::take(&mut self.start);
+        let settled = self.settle(f, t, &mut start, n_q);
+        self.start = start;
+        self.aimed = None;
+        if !settled? {
+            return Ok(false);
+        }
         y.copy_from_slice(&self.start);
-        let changed = self.settle(f, t, y, n_q)?;
         let (q, v) = y.split_at(n_q);
         f.events(t, q, v, &mut self.g0);
-        self.start.copy_from_slice(y);
-        self.aimed = None;
-        Ok(changed)
+        Ok(true)
     }
 
     /// The run's state at the start of the step in progress, into `y` (the step is taken again).
