@@ -183,6 +183,12 @@ impl Scene {
                     .into(),
             );
         }
+        if let Some(f) = self.model.system().frictions().first() {
+            return bad(format!(
+                "joint '{}' has Coulomb friction, whose stick and slip switch at events: a run with friction has no sensitivities yet",
+                f.name
+            ));
+        }
         if !(request.relative_change.is_finite() && request.relative_change > 0.0 && request.relative_change < 0.1) {
             return bad(format!(
                 "the relative change of a parameter must be in (0, 0.1), got {}",

@@ -277,6 +277,38 @@ impl Formulation for Amalgamated {
     fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
         self.data.set_extra_force(extra)
     }
+
+    /// The last evaluation's factors with right-hand side `[g; 0; 0]`, and the multipliers from
+    /// the dependent columns.
+    fn force_response(&mut self, t: f64, g: &[f64], dqdd: &mut [f64], dlambda: &mut [f64]) -> Result<bool, DynamicsError> {
+        let Amalgamated {
+            tracker,
+            work,
+            data,
+            minimum_norm,
+            model,
+            ..
+        } = self;
+        let Some((partition, vt)) = tracker.last() else {
+            return Ok(false);
+        };
+        let n = g.len();
+        let ni = partition.independent.len();
+        if work.rhs.len() != 2 * n + ni || work.y.len() != partition.rows.len() {
+            return Ok(false);
+        }
+        work.rhs.iter_mut().for_each(|v| *v = 0.0);
+        work.rhs[..n].copy_from_slice(g);
+        amalgamated_solve(&data.mass, vt, &mut work.schur, &work.rhs, &mut work.sol, &mut work.tmp);
+        dqdd.copy_from_slice(&work.sol[..n]);
+        for (y, &d) in work.y.iter_mut().zip(&partition.dependent) {
+            *y = -work.sol[n + d];
+        }
+        vt.solve_dependent_transpose(&mut work.y);
+        let sys = model.constraints();
+        scatter_minimum_norm(minimum_norm, sys, t, &data.values, &partition.rows, &work.y, dlambda)?;
+        Ok(dqdd.iter().chain(dlambda.iter()).all(|v| v.is_finite()))
+    }
 }
 
 /// The registry entry of the amalgamated formulation.

@@ -285,4 +285,27 @@ impl Formulation for Augmented {
     fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
         self.data.set_extra_force(extra)
     }
+
+    /// `[M C_qᵀ; C_q 0] [Δq̈; Δλ] = [g; 0]` with the last factorization (false after a solve on
+    /// an independent row set, which keeps its own).
+    fn force_response(&mut self, _t: f64, g: &[f64], dqdd: &mut [f64], dlambda: &mut [f64]) -> Result<bool, DynamicsError> {
+        if self.independent.is_some() {
+            return Ok(false);
+        }
+        let n = g.len();
+        self.b[..n].copy_from_slice(g);
+        self.b[n..].iter_mut().for_each(|v| *v = 0.0);
+        let solved = checked_solve(
+            &mut self.solver,
+            (&self.data.mass, self.model.constraints().pattern(), &self.data.values),
+            &self.b,
+            (&mut self.x, &mut self.r),
+            self.options.residual_tolerance,
+        );
+        if solved {
+            dqdd.copy_from_slice(&self.x[..n]);
+            dlambda.copy_from_slice(&self.x[n..]);
+        }
+        Ok(solved)
+    }
 }

@@ -42,8 +42,9 @@ pub struct Friction {
     pub stick_speed: f64,
 }
 
-/// The default slip rate below which a joint counts as at rest: 1e-9 m/s or rad/s.
-pub const STICK_SPEED: f64 = 1e-9;
+/// The default slip rate within which a stuck joint stays stuck: 1e-6 m/s or rad/s
+/// (`docs/friction.md`, "Stick speed").
+pub const STICK_SPEED: f64 = 1e-6;
 
 impl Friction {
     /// The joint's name.

@@ -317,6 +317,52 @@ impl Formulation for Embedding {
     fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
         self.data.set_extra_force(extra)
     }
+
+    /// The last evaluation's solve with `g` for `Q_e` and no `γ_i`: `Δq̈ = B_i M_i⁻¹ B_iᵀ g`
+    /// (or the elimination matrix's factors) and the multipliers from the dependent columns.
+    fn force_response(&mut self, t: f64, g: &[f64], dqdd: &mut [f64], dlambda: &mut [f64]) -> Result<bool, DynamicsError> {
+        let Embedding {
+            tracker,
+            work,
+            data,
+            minimum_norm,
+            model,
+            ..
+        } = self;
+        let Some((partition, vt)) = tracker.last() else {
+            return Ok(false);
+        };
+        let ni = partition.independent.len();
+        let r = partition.rows.len();
+        if work.ni != ni || work.lam_r.len() != r || work.rhs_full.len() != g.len() {
+            return Ok(false);
+        }
+        work.rhs_full.copy_from_slice(g);
+        match &mut work.elimination {
+            None => {
+                vt.mul_transpose(&work.rhs_full, &mut work.sol[..ni]);
+                work.mi.solve_vec(&mut work.sol[..ni]);
+            }
+            Some(lu) => {
+                work.sol.copy_from_slice(&work.rhs_full);
+                lu.solve_vec(&mut work.sol);
+                work.lam_r.copy_from_slice(&work.sol[ni..ni + r]);
+            }
+        }
+        dqdd.iter_mut().for_each(|v| *v = 0.0);
+        vt.mul_add(&work.sol[..ni], dqdd);
+        if work.elimination.is_none() {
+            work.f.copy_from_slice(g);
+            data.mass.mul_add(-1.0, dqdd, &mut work.f);
+            for (l, &d) in work.lam_r.iter_mut().zip(&partition.dependent) {
+                *l = work.f[d];
+            }
+            vt.solve_dependent_transpose(&mut work.lam_r);
+        }
+        let sys = model.constraints();
+        scatter_minimum_norm(minimum_norm, sys, t, &data.values, &partition.rows, &work.lam_r, dlambda)?;
+        Ok(dqdd.iter().chain(dlambda.iter()).all(|v| v.is_finite()))
+    }
 }
 
 /// The registry entry of the embedding formulation.

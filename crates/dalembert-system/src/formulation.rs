@@ -293,6 +293,20 @@ pub trait Formulation: Send {
         false
     }
 
+    /// After [`Formulation::accelerations`] at a state: the change of `q̈` and `λ` per unit of an
+    /// added generalized force `g` (length `n`), solved with the same factorization (a few
+    /// triangular solves). Returns false where the formulation cannot (the caller then evaluates
+    /// again with the force added, [`Formulation::set_extra_force`]). Default false.
+    fn force_response(
+        &mut self,
+        _t: f64,
+        _g: &[f64],
+        _dqdd: &mut [f64],
+        _dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        Ok(false)
+    }
+
     /// A run starts (or starts again) at `(t, q, v)`: a formulation whose law has modes (joint
     /// friction: stick or slip) takes them from this state. Default: nothing.
     fn start_events(&mut self, _t: f64, _q: &[f64], _v: &[f64]) {}

@@ -23,10 +23,11 @@
 //! Accelerations and multipliers are affine in the friction forces: `v̇ = v̇₀ + Σ A_k F_k`,
 //! `λ = λ₀ + Σ Λ_k F_k`, with `A_k`, `Λ_k` the response of the formulation to a unit generalized
 //! force `g_k` (same state, same matrix). So stick is exact: the slip acceleration is zero to
-//! round-off and a joint at rest stays at rest. (F1)–(F3) are solved joint by joint
-//! (Gauss–Seidel sweeps); each joint's equation `F = b − σ μ |ℓ₀ + ℓ₁ F|` by Newton. It has one
-//! solution when `μ |ℓ₁| < 1`; otherwise the friction force is not determined by the law (a
-//! Painlevé configuration), reported as an error naming the joint.
+//! round-off and a joint at rest stays at rest. (F1)–(F3) of all elements are solved together
+//! by Newton's method ([`solve_friction`]). A slipping element's equation
+//! `F = −c w − σ μ |L(λ₀ + Λ F)|` has one solution when `μ |L Λ| < 1`; otherwise the friction
+//! force is not determined by the law (a Painlevé configuration), reported as an error naming
+//! the joint.
 
 use crate::{DynamicsError, MultibodySystem};
 
@@ -150,6 +151,8 @@ pub struct FrictionTerms {
     pub sticks: bool,
     /// The element's mode over the step in progress.
     pub mode: Mode,
+    /// The direction (±1) a stuck element that (F2) cannot hold begins to slip in (0 otherwise).
+    pub direction: f64,
 }
 
 impl FrictionTerms {
@@ -162,129 +165,239 @@ impl FrictionTerms {
             force: 0.0,
             sticks: false,
             mode: Mode::Stick,
+            direction: 0.0,
         }
     }
 }
 
-/// The largest number of Gauss–Seidel sweeps over the friction elements.
-const MAX_SWEEPS: usize = 200;
+/// The largest number of Newton iterations of [`solve_friction`].
+const MAX_ITERATIONS: usize = 60;
 
-/// The largest number of Newton iterations of one element's equation.
-const MAX_NEWTON: usize = 50;
+/// The iterations after which a stuck element's law may change only from holding to slipping.
+const SETTLING: usize = 12;
+
+/// Work space of [`solve_friction`] for `K` elements and `m` multipliers.
+#[derive(Debug, Clone)]
+pub struct FrictionWork {
+    /// `W_kj = g_k·A_j` (row-major, `K × K`).
+    coupling: Vec<f64>,
+    /// Newton matrix (row-major, `K × K`) and its row permutation.
+    jacobian: Vec<f64>,
+    pivots: Vec<usize>,
+    /// Residuals, then the Newton step.
+    residual: Vec<f64>,
+    /// `ẇ₀ = g·v̇₀ + b` without friction.
+    alpha0: Vec<f64>,
+    /// `λ(F)`.
+    lambda: Vec<f64>,
+    /// Each element's law in the last iteration: true where (F2) holds it.
+    holding: Vec<bool>,
+    /// The slip direction of each element in the last iteration (0 where held).
+    direction: Vec<f64>,
+}
+
+impl FrictionWork {
+    /// Storage for `k` elements and `m` multipliers.
+    pub fn new(k: usize, m: usize) -> Self {
+        FrictionWork {
+            coupling: vec![0.0; k * k],
+            jacobian: vec![0.0; k * k],
+            pivots: vec![0; k],
+            residual: vec![0.0; k],
+            alpha0: vec![0.0; k],
+            lambda: vec![0.0; m],
+            holding: vec![false; k],
+            direction: vec![0.0; k],
+        }
+    }
+}
+
+/// The normal load `μ |L λ|` of `spec` and its gradient `μ (Lλ)ᵀ L / |Lλ|` dotted with `dl`.
+fn load(spec: &JointFriction, lambda: &[f64]) -> f64 {
+    spec.coefficient * spec.load_rows.iter().map(|&r| lambda[r] * lambda[r]).sum::<f64>().sqrt()
+}
+
+fn load_change(spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
+    let norm = spec.load_rows.iter().map(|&r| lambda[r] * lambda[r]).sum::<f64>().sqrt();
+    if norm == 0.0 {
+        return 0.0;
+    }
+    spec.coefficient * spec.load_rows.iter().map(|&r| lambda[r] * dl[r]).sum::<f64>() / norm
+}
 
 /// Solves (F1)–(F3) for every element in its mode: on entry `a`, `lambda` are the frictionless
-/// `v̇₀`, `λ₀` and `terms[k]` hold the rows, responses and modes; on exit `a`, `lambda` include the friction forces,
-/// and `terms[k].force`, `terms[k].sticks` say what each element does. Allocates nothing.
+/// `v̇₀`, `λ₀` and `terms[k]` hold the rows, responses and modes; on exit `a`, `lambda` include
+/// the friction forces, and `terms[k].force`, `terms[k].sticks` say what each element does.
+///
+/// The forces couple through the accelerations (`ẇ = ẇ₀ + W F`, `W_kj = g_k·A_j`) and the loads
+/// (`λ = λ₀ + Σ Λ_j F_j`), so the equations are solved together by Newton's method: a held
+/// element's row is `ẇ_k = 0`, a slipping one's `F_k + c_k w_k + σ N_k(F) = 0`, and which law a
+/// stuck element follows (F2 or F3) is decided at each iterate by whether its holding force is
+/// within `N_k`; the iteration ends when the laws stop changing and the step is at round-off.
+/// Allocates nothing.
 pub fn solve_friction(
     system: &dyn MultibodySystem,
     t: f64,
     v: &[f64],
-    a: &mut [f64],
-    lambda: &mut [f64],
+    (a, lambda): (&mut [f64], &mut [f64]),
     terms: &mut [FrictionTerms],
+    work: &mut FrictionWork,
 ) -> Result<(), DynamicsError> {
     let frictions = system.frictions();
+    let k_len = terms.len();
+    let fail = |joint: &str, what: String| DynamicsError::Friction {
+        time: t,
+        joint: joint.to_string(),
+        what,
+    };
+    for (k, term) in terms.iter().enumerate() {
+        work.alpha0[k] = term.row.dot(a) + term.row.bias;
+        for (j, other) in terms.iter().enumerate() {
+            work.coupling[k * k_len + j] = term.row.dot(&other.dv);
+        }
+        let d = work.coupling[k * k_len + k];
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(fail(
+                &frictions[k].name,
+                format!("a friction force does not move the joint (its response is {d:e})"),
+            ));
+        }
+    }
     terms.iter_mut().for_each(|k| k.force = 0.0);
-    for sweep in 0..MAX_SWEEPS {
-        let mut change = 0.0f64;
+    work.holding.iter_mut().for_each(|h| *h = false);
+    for iteration in 0..MAX_ITERATIONS {
+        // λ(F) and the residuals and Newton matrix at F.
+        work.lambda.copy_from_slice(lambda);
+        for term in terms.iter() {
+            work.lambda.iter_mut().zip(&term.dlambda).for_each(|(l, d)| *l += d * term.force);
+        }
+        let mut changed = false;
         let mut scale = 0.0f64;
-        for (spec, k) in frictions.iter().zip(terms.iter_mut()) {
-            let old = k.force;
-            let d = k.row.dot(&k.dv);
-            if !(d > 0.0 && d.is_finite()) {
-                return Err(DynamicsError::Friction {
-                    time: t,
-                    joint: spec.name.clone(),
-                    what: format!("a friction force does not move the joint (its response is {d:e})"),
-                });
-            }
-            // The load without this element's own force, and its change per unit force.
-            let mut l0 = [0.0; 3];
-            let mut l1 = [0.0; 3];
-            for (j, &r) in spec.load_rows.iter().take(3).enumerate() {
-                l0[j] = lambda[r] - k.dlambda[r] * old;
-                l1[j] = k.dlambda[r];
-            }
-            let slope = spec.coefficient * l1.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if slope >= 1.0 {
-                return Err(DynamicsError::Friction {
-                    time: t,
-                    joint: spec.name.clone(),
-                    what: format!(
-                        "the friction force is not determined by Coulomb's law (Painlevé): μ × the load's change \
-                         per unit friction force is {slope:.3} ≥ 1"
-                    ),
-                });
-            }
-            let load = |f: f64| -> f64 {
-                spec.coefficient
-                    * (0..3)
-                        .map(|j| (l0[j] + l1[j] * f).powi(2))
-                        .sum::<f64>()
-                        .sqrt()
-            };
-            let w = k.row.dot(v);
-            let alpha0 = k.row.dot(a) + k.row.bias - d * old;
-            let (base, sign, sticks) = match k.mode {
-                Mode::Slip(sign) => (-spec.viscous * w, sign, false),
+        for k in 0..k_len {
+            let (spec, term) = (&frictions[k], &terms[k]);
+            let row = k * k_len;
+            let alpha: f64 = work.alpha0[k]
+                + (0..k_len)
+                    .map(|j| work.coupling[row + j] * terms[j].force)
+                    .sum::<f64>();
+            let w = term.row.dot(v);
+            let bound = load(spec, &work.lambda);
+            let sign = match term.mode {
+                Mode::Slip(sign) => Some(sign),
                 Mode::Stick => {
-                    let hold = -alpha0 / d;
-                    if hold.abs() <= load(hold) {
-                        (hold, 0.0, true)
+                    let hold = term.force - alpha / work.coupling[row + k];
+                    // After `SETTLING` iterations a joint found unable to hold stays so: the
+                    // laws then change only one way and the iteration ends (a joint grazing
+                    // the limit of its friction can make the laws cycle).
+                    let stays_slipping = iteration >= SETTLING && !work.holding[k];
+                    if hold.abs() <= bound && !stays_slipping {
+                        None
+                    } else if stays_slipping && work.direction[k] != 0.0 {
+                        Some(work.direction[k])
                     } else {
-                        (-spec.viscous * w, -hold.signum(), false)
+                        Some(-hold.signum())
                     }
                 }
             };
-            let force = if sign == 0.0 {
-                base
-            } else {
-                newton(base, sign, &l0, &l1, spec.coefficient)
-            };
-            if !force.is_finite() {
-                return Err(DynamicsError::Friction {
-                    time: t,
-                    joint: spec.name.clone(),
-                    what: "the friction force is not finite".to_string(),
-                });
+            let holding = sign.is_none();
+            work.direction[k] = sign.unwrap_or(0.0);
+            changed |= holding != work.holding[k];
+            work.holding[k] = holding;
+            match sign {
+                None => {
+                    work.residual[k] = alpha;
+                    work.jacobian[row..row + k_len].copy_from_slice(&work.coupling[row..row + k_len]);
+                    scale = scale.max(term.force.abs());
+                }
+                Some(sign) => {
+                    work.residual[k] = term.force + spec.viscous * w + sign * bound;
+                    for j in 0..k_len {
+                        let e = if j == k { 1.0 } else { 0.0 };
+                        work.jacobian[row + j] = e + sign * load_change(spec, &work.lambda, &terms[j].dlambda);
+                    }
+                    scale = scale.max(term.force.abs()).max(bound);
+                    let slope = load_change(spec, &work.lambda, &term.dlambda).abs();
+                    if slope >= 1.0 {
+                        return Err(fail(
+                            &spec.name,
+                            format!(
+                                "the friction force is not determined by Coulomb's law (Painlevé): μ × the load's \
+                                 change per unit friction force is {slope:.3} ≥ 1"
+                            ),
+                        ));
+                    }
+                }
             }
-            k.force = force;
-            k.sticks = sticks;
-            let delta = force - old;
-            a.iter_mut().zip(&k.dv).for_each(|(x, r)| *x += r * delta);
-            lambda.iter_mut().zip(&k.dlambda).for_each(|(x, r)| *x += r * delta);
-            change = change.max(delta.abs());
-            scale = scale.max(force.abs());
         }
-        if change <= 4.0 * f64::EPSILON * scale.max(f64::MIN_POSITIVE) || (sweep > 0 && change == 0.0) {
-            return Ok(());
+        if !solve_dense(&mut work.jacobian, &mut work.pivots, &mut work.residual, k_len) {
+            let names: Vec<&str> = frictions.iter().map(|f| f.name.as_str()).collect();
+            return Err(fail(
+                &names.join("', '"),
+                "the friction forces of these joints are not determined (their joints move together)".into(),
+            ));
         }
-    }
-    Err(DynamicsError::Friction {
-        time: t,
-        joint: frictions.iter().map(|f| f.name.as_str()).collect::<Vec<_>>().join("', '"),
-        what: format!("the friction forces of the joints did not settle in {MAX_SWEEPS} sweeps"),
-    })
-}
-
-/// Solves `F = base − σ μ |ℓ₀ + ℓ₁ F|` (one solution when `μ|ℓ₁| < 1`) by Newton's method from the
-/// fixed-point iterate.
-fn newton(base: f64, sign: f64, l0: &[f64; 3], l1: &[f64; 3], mu: f64) -> f64 {
-    let norm = |f: f64| (0..3).map(|j| (l0[j] + l1[j] * f).powi(2)).sum::<f64>().sqrt();
-    let mut f = base - sign * mu * norm(base);
-    for _ in 0..MAX_NEWTON {
-        let n = norm(f);
-        let phi = f - base + sign * mu * n;
-        let dn = if n > 0.0 {
-            (0..3).map(|j| (l0[j] + l1[j] * f) * l1[j]).sum::<f64>() / n
-        } else {
-            0.0
-        };
-        let step = phi / (1.0 + sign * mu * dn);
-        f -= step;
-        if step.abs() <= f64::EPSILON * f.abs().max(f64::MIN_POSITIVE) {
+        let mut step = 0.0f64;
+        for (term, d) in terms.iter_mut().zip(&work.residual) {
+            term.force -= d;
+            step = step.max(d.abs());
+        }
+        if iteration > 0 && !changed && step <= 1e-13 * scale.max(f64::MIN_POSITIVE) {
             break;
         }
+        if iteration + 1 == MAX_ITERATIONS {
+            let names: Vec<&str> = frictions.iter().map(|f| f.name.as_str()).collect();
+            return Err(fail(
+                &names.join("', '"),
+                format!("the friction forces did not settle in {MAX_ITERATIONS} iterations"),
+            ));
+        }
     }
-    f
+    for (k, term) in terms.iter_mut().enumerate() {
+        if !term.force.is_finite() {
+            return Err(fail(&frictions[k].name, "the friction force is not finite".into()));
+        }
+        term.sticks = work.holding[k];
+        term.direction = match (term.mode, term.sticks) {
+            (Mode::Stick, false) => work.direction[k],
+            _ => 0.0,
+        };
+        a.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * term.force);
+        lambda.iter_mut().zip(&term.dlambda).for_each(|(x, r)| *x += r * term.force);
+    }
+    Ok(())
+}
+
+/// Solves `A x = b` in place (`A` row-major `n × n`, overwritten by its LU factors; `b` by `x`)
+/// by Gaussian elimination with partial pivoting. False when `A` is singular.
+fn solve_dense(a: &mut [f64], pivots: &mut [usize], b: &mut [f64], n: usize) -> bool {
+    let largest = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| a[i * n + c].abs().total_cmp(&a[j * n + c].abs()))
+            .unwrap_or(c);
+        pivots[c] = p;
+        if !(a[p * n + c].abs() > 1e-14 * largest) {
+            return false;
+        }
+        if p != c {
+            for j in 0..n {
+                a.swap(c * n + j, p * n + j);
+            }
+            b.swap(c, p);
+        }
+        for i in c + 1..n {
+            let f = a[i * n + c] / a[c * n + c];
+            if f != 0.0 {
+                for j in c..n {
+                    a[i * n + j] -= f * a[c * n + j];
+                }
+                b[i] -= f * b[c];
+            }
+        }
+    }
+    for c in (0..n).rev() {
+        let s: f64 = (c + 1..n).map(|j| a[c * n + j] * b[j]).sum();
+        b[c] = (b[c] - s) / a[c * n + c];
+    }
+    b.iter().all(|x| x.is_finite())
 }

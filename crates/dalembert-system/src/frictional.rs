@@ -2,16 +2,18 @@
 //! frictionless accelerations, its response to a unit force in each friction element, and the
 //! stick–slip law of [`crate::friction`] on top. One code for every formulation.
 
-use crate::friction::{solve_friction, FrictionTerms, Mode};
+use crate::friction::{solve_friction, FrictionTerms, FrictionWork, Mode};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
 /// A formulation whose system has joint friction ([`MultibodySystem::frictions`]).
 ///
-/// Each evaluation costs one evaluation of the inner formulation plus one per friction element
-/// (its response to a unit friction force, at the same state); nothing is allocated after setup.
+/// Each evaluation costs one evaluation of the inner formulation plus, per friction element, a
+/// solve with its factorization (its response to a unit friction force); nothing is allocated
+/// after setup.
 pub struct Frictional {
     inner: Box<dyn Formulation>,
     terms: Vec<FrictionTerms>,
+    work: FrictionWork,
     forces: Vec<f64>,
     dense: Vec<f64>,
     qdd: Vec<f64>,
@@ -51,6 +53,7 @@ impl Frictional {
         Ok(Frictional {
             inner,
             terms: (0..count).map(|_| FrictionTerms::new(n, m)).collect(),
+            work: FrictionWork::new(count, m),
             forces: vec![0.0; count],
             dense: vec![0.0; n],
             qdd: vec![0.0; n],
@@ -71,9 +74,10 @@ impl Formulation for Frictional {
         self.inner.system()
     }
 
-    /// `v̇₀`, `λ₀` without friction; the response `A_k`, `Λ_k` to a force `s g_k` (`s` the
-    /// largest multiplier or 1, so that the difference keeps its digits), divided by `s`; then
-    /// (F1)–(F3) of `docs/friction.md`.
+    /// `v̇₀`, `λ₀` without friction; the response `A_k`, `Λ_k` to a unit force along `g_k` from
+    /// the formulation's factorization ([`Formulation::force_response`]), or else from a second
+    /// evaluation with a force `s g_k` added (`s` the largest multiplier or 1, so that the
+    /// difference keeps its digits), divided by `s`; then (F1)–(F3) of `docs/friction.md`.
     fn accelerations(
         &mut self,
         t: f64,
@@ -94,6 +98,10 @@ impl Formulation for Frictional {
         for k in 0..self.terms.len() {
             self.inner.system().slip_row(k, t, q, qd, &mut self.terms[k].row);
             self.terms[k].row.write_dense(&mut self.dense);
+            let term = &mut self.terms[k];
+            if self.inner.force_response(t, &self.dense, &mut term.dv, &mut term.dlambda)? {
+                continue;
+            }
             self.dense.iter_mut().for_each(|g| *g *= scale);
             self.inner.set_extra_force(Some(&self.dense));
             let solved = self
@@ -109,7 +117,7 @@ impl Formulation for Frictional {
                 *r = (l - l0) / scale;
             }
         }
-        solve_friction(self.inner.system(), t, qd, qdd, lambda, &mut self.terms)?;
+        solve_friction(self.inner.system(), t, qd, (qdd, lambda), &mut self.terms, &mut self.work)?;
         for (f, k) in self.forces.iter_mut().zip(&self.terms) {
             *f = k.force;
         }
@@ -200,7 +208,9 @@ impl Formulation for Frictional {
             self.event_qdd = qdd;
             self.event_lambda = lambda;
             if !sticks? {
-                self.terms[k].mode = Mode::Slip(-sign);
+                // It slips on where (F3) says: nearly always back (−σ).
+                let direction = self.terms[k].direction;
+                self.terms[k].mode = Mode::Slip(if direction != 0.0 { direction } else { -sign });
             }
         }
         Ok(changed)

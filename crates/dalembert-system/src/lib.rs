@@ -51,7 +51,7 @@ pub use data::{Data, Stage};
 pub use error::{ConstraintError, EquationRef};
 pub use evaluated_at::EvaluatedAt;
 pub use finite::all_finite;
-pub use friction::{solve_friction, FrictionTerms, JointFriction, Mode, SlipRow};
+pub use friction::{solve_friction, FrictionTerms, FrictionWork, JointFriction, Mode, SlipRow};
 pub use frictional::Frictional;
 pub use formulation::{
     Baumgarte, DynamicsError, Energy, Formulation, FormulationEntry, FormulationSettings, FormulationStats,
