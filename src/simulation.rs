@@ -367,7 +367,9 @@ impl Simulation {
                 method.name
             )));
         }
-        Ok(Box::new(dalembert_system::Frictional::new((entry.build)(system, &settings)?)?))
+        Ok(Box::new(dalembert_system::Frictional::new((entry.build)(
+            system, &settings,
+        )?)?))
     }
 
     /// Runs from the current initial state, handing every output sample to `observer`.

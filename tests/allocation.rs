@@ -525,3 +525,43 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// A run with joint friction (a pendulum with pin friction: the stick–slip law solved at every
+/// evaluation, its responses from the formulation's factorization, its swings reversing at
+/// events) allocates nothing per step, every formulation × every method that takes friction: a
+/// run through twice the reversals costs no more allocations.
+#[test]
+fn a_run_with_joint_friction_allocates_nothing_per_step() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let text = "[scene]\ngravity = [0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\nshape = { rod = 1.0 }\nposition = [0.5, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
+        friction = { coefficient = 0.2, radius = 0.05 }\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    let base = dalembert::Scene::from_toml(text, "pin friction").unwrap();
+    let mut failures = Vec::new();
+    for formulation in ["augmented", "embedding", "amalgamated"] {
+        for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {
+            let mut scene = base.clone();
+            scene.settings.method = Method::of(entry);
+            scene.settings.formulation = dalembert::FormulationKind::parse(formulation).unwrap();
+            let count = |end: f64| {
+                let mut sim = scene.simulation();
+                sim.end = end;
+                let before = ALLOCATIONS.load(Ordering::Relaxed);
+                let stats = sim.run(&mut |_| {}).unwrap();
+                (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
+            };
+            let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
+            assert!(events_long > events_short, "{formulation}, {}: no reversal", entry.name);
+            if long > short {
+                failures.push(format!(
+                    "{formulation}, {}: {short} allocations for 1.5 s, {long} for 3 s",
+                    entry.name
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

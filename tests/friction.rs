@@ -57,7 +57,11 @@ fn a_block_slides_down_an_incline_at_g_sin_minus_mu_cos() {
             let friction = table.column("guide.friction").unwrap();
             for k in 0..t.len() {
                 let error = (slid(&table, alpha, k) - 0.5 * a * t[k] * t[k]).abs();
-                assert!(error < 1e-12, "{formulation}, {integrator}: t = {}: off by {error:.2e} m", t[k]);
+                assert!(
+                    error < 1e-12,
+                    "{formulation}, {integrator}: t = {}: off by {error:.2e} m",
+                    t[k]
+                );
                 let expected = -mu * 2.0 * G * alpha.cos();
                 assert!(
                     (friction[k] - expected).abs() < 1e-12 * expected.abs(),
@@ -82,7 +86,11 @@ fn a_block_stays_at_rest_on_an_incline_steeper_friction() {
             let friction = table.column("guide.friction").unwrap();
             for k in 0..t.len() {
                 let moved = slid(&table, alpha, k).abs();
-                assert!(moved < 1e-12, "{formulation}, {integrator}: moved {moved:.2e} m by t = {}", t[k]);
+                assert!(
+                    moved < 1e-12,
+                    "{formulation}, {integrator}: moved {moved:.2e} m by t = {}",
+                    t[k]
+                );
                 let hold = -2.0 * G * alpha.sin();
                 assert!(
                     (friction[k] - hold).abs() < 1e-12 * hold.abs(),
@@ -110,7 +118,11 @@ fn the_energy_balance_of_a_sliding_block_closes() {
     for k in 0..t.len() {
         let work = friction[k] * 0.5 * a * t[k] * t[k];
         let balance = e[k] - work - e[0];
-        assert!(balance.abs() < 1e-12 * 19.62, "t = {}: E − W moved by {balance:.2e} J", t[k]);
+        assert!(
+            balance.abs() < 1e-12 * 19.62,
+            "t = {}: E − W moved by {balance:.2e} J",
+            t[k]
+        );
     }
 }
 
@@ -135,7 +147,11 @@ fn a_block_pushed_up_an_incline_stops_where_the_closed_form_says_and_stays() {
                 let tt = t[k].min(stop);
                 let expected = -(2.0 * tt - 0.5 * a * tt * tt);
                 let error = (slid(&table, alpha, k) - expected).abs();
-                assert!(error < 1e-12, "{formulation}, {integrator}: t = {}: off by {error:.2e} m", t[k]);
+                assert!(
+                    error < 1e-12,
+                    "{formulation}, {integrator}: t = {}: off by {error:.2e} m",
+                    t[k]
+                );
             }
             assert_eq!(stats.events, 1, "{formulation}, {integrator}: events");
         }
@@ -175,8 +191,14 @@ fn pendulum_reference(mu: f64, r: f64, end: f64) -> Vec<f64> {
     };
     let rk4 = |(phi, w): (f64, f64), h: f64, sigma: f64| -> (f64, f64) {
         let k1 = (w, accel(phi, w, sigma));
-        let k2 = (w + 0.5 * h * k1.1, accel(phi + 0.5 * h * k1.0, w + 0.5 * h * k1.1, sigma));
-        let k3 = (w + 0.5 * h * k2.1, accel(phi + 0.5 * h * k2.0, w + 0.5 * h * k2.1, sigma));
+        let k2 = (
+            w + 0.5 * h * k1.1,
+            accel(phi + 0.5 * h * k1.0, w + 0.5 * h * k1.1, sigma),
+        );
+        let k3 = (
+            w + 0.5 * h * k2.1,
+            accel(phi + 0.5 * h * k2.0, w + 0.5 * h * k2.1, sigma),
+        );
         let k4 = (w + h * k3.1, accel(phi + h * k3.0, w + h * k3.1, sigma));
         (
             phi + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0),

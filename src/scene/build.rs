@@ -382,7 +382,10 @@ fn friction(
         JointInfo::Other(_) => {
             return Err(b.ctx.err(
                 span,
-                format!("{owner}: friction is for revolute and prismatic joints, this one is '{}'", d.kind),
+                format!(
+                    "{owner}: friction is for revolute and prismatic joints, this one is '{}'",
+                    d.kind
+                ),
             ))
         }
     };

@@ -280,7 +280,13 @@ impl Formulation for Amalgamated {
 
     /// The last evaluation's factors with right-hand side `[g; 0; 0]`, and the multipliers from
     /// the dependent columns.
-    fn force_response(&mut self, t: f64, g: &[f64], dqdd: &mut [f64], dlambda: &mut [f64]) -> Result<bool, DynamicsError> {
+    fn force_response(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
         let Amalgamated {
             tracker,
             work,

@@ -288,7 +288,13 @@ impl Formulation for Augmented {
 
     /// `[M C_qᵀ; C_q 0] [Δq̈; Δλ] = [g; 0]` with the last factorization (false after a solve on
     /// an independent row set, which keeps its own).
-    fn force_response(&mut self, _t: f64, g: &[f64], dqdd: &mut [f64], dlambda: &mut [f64]) -> Result<bool, DynamicsError> {
+    fn force_response(
+        &mut self,
+        _t: f64,
+        g: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
         if self.independent.is_some() {
             return Ok(false);
         }

@@ -62,7 +62,10 @@ impl Friction {
             what,
         };
         if !(self.coefficient.is_finite() && self.coefficient >= 0.0) {
-            return Err(bad(format!("friction coefficient must be ≥ 0, got {}", self.coefficient)));
+            return Err(bad(format!(
+                "friction coefficient must be ≥ 0, got {}",
+                self.coefficient
+            )));
         }
         if matches!(self.joint, FrictionJoint::Revolute(_)) && !(self.radius.is_finite() && self.radius > 0.0) {
             return Err(bad(format!("friction radius must be > 0 m, got {}", self.radius)));

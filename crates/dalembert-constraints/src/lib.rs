@@ -28,8 +28,8 @@ pub mod system;
 
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
-pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use friction::{Friction, FrictionJoint, STICK_SPEED};
+pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use model::Model;
 pub use reactions::Reaction;
 pub use system::ConstraintSystem;

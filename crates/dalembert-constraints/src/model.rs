@@ -3,10 +3,10 @@
 
 use crate::system::PLANAR_LABELS;
 use crate::{Constraint, ConstraintSystem, Friction};
-use dalembert_system::{JointFriction, SlipRow};
 use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 use dalembert_system::{ConstraintError, ConstraintSet};
+use dalembert_system::{JointFriction, SlipRow};
 
 /// Bodies, applied force elements and the assembled constraint system of one mechanism.
 #[derive(Debug)]

@@ -320,7 +320,13 @@ impl Formulation for Embedding {
 
     /// The last evaluation's solve with `g` for `Q_e` and no `γ_i`: `Δq̈ = B_i M_i⁻¹ B_iᵀ g`
     /// (or the elimination matrix's factors) and the multipliers from the dependent columns.
-    fn force_response(&mut self, t: f64, g: &[f64], dqdd: &mut [f64], dlambda: &mut [f64]) -> Result<bool, DynamicsError> {
+    fn force_response(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
         let Embedding {
             tracker,
             work,
@@ -360,7 +366,15 @@ impl Formulation for Embedding {
             vt.solve_dependent_transpose(&mut work.lam_r);
         }
         let sys = model.constraints();
-        scatter_minimum_norm(minimum_norm, sys, t, &data.values, &partition.rows, &work.lam_r, dlambda)?;
+        scatter_minimum_norm(
+            minimum_norm,
+            sys,
+            t,
+            &data.values,
+            &partition.rows,
+            &work.lam_r,
+            dlambda,
+        )?;
         Ok(dqdd.iter().chain(dlambda.iter()).all(|v| v.is_finite()))
     }
 }

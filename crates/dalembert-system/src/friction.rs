@@ -214,11 +214,22 @@ impl FrictionWork {
 
 /// The normal load `μ |L λ|` of `spec` and its gradient `μ (Lλ)ᵀ L / |Lλ|` dotted with `dl`.
 fn load(spec: &JointFriction, lambda: &[f64]) -> f64 {
-    spec.coefficient * spec.load_rows.iter().map(|&r| lambda[r] * lambda[r]).sum::<f64>().sqrt()
+    spec.coefficient
+        * spec
+            .load_rows
+            .iter()
+            .map(|&r| lambda[r] * lambda[r])
+            .sum::<f64>()
+            .sqrt()
 }
 
 fn load_change(spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
-    let norm = spec.load_rows.iter().map(|&r| lambda[r] * lambda[r]).sum::<f64>().sqrt();
+    let norm = spec
+        .load_rows
+        .iter()
+        .map(|&r| lambda[r] * lambda[r])
+        .sum::<f64>()
+        .sqrt();
     if norm == 0.0 {
         return 0.0;
     }
@@ -269,17 +280,17 @@ pub fn solve_friction(
         // λ(F) and the residuals and Newton matrix at F.
         work.lambda.copy_from_slice(lambda);
         for term in terms.iter() {
-            work.lambda.iter_mut().zip(&term.dlambda).for_each(|(l, d)| *l += d * term.force);
+            work.lambda
+                .iter_mut()
+                .zip(&term.dlambda)
+                .for_each(|(l, d)| *l += d * term.force);
         }
         let mut changed = false;
         let mut scale = 0.0f64;
         for k in 0..k_len {
             let (spec, term) = (&frictions[k], &terms[k]);
             let row = k * k_len;
-            let alpha: f64 = work.alpha0[k]
-                + (0..k_len)
-                    .map(|j| work.coupling[row + j] * terms[j].force)
-                    .sum::<f64>();
+            let alpha: f64 = work.alpha0[k] + (0..k_len).map(|j| work.coupling[row + j] * terms[j].force).sum::<f64>();
             let w = term.row.dot(v);
             let bound = load(spec, &work.lambda);
             let sign = match term.mode {
@@ -362,7 +373,10 @@ pub fn solve_friction(
             _ => 0.0,
         };
         a.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * term.force);
-        lambda.iter_mut().zip(&term.dlambda).for_each(|(x, r)| *x += r * term.force);
+        lambda
+            .iter_mut()
+            .zip(&term.dlambda)
+            .for_each(|(x, r)| *x += r * term.force);
     }
     Ok(())
 }
@@ -376,7 +390,8 @@ fn solve_dense(a: &mut [f64], pivots: &mut [usize], b: &mut [f64], n: usize) -> 
             .max_by(|&i, &j| a[i * n + c].abs().total_cmp(&a[j * n + c].abs()))
             .unwrap_or(c);
         pivots[c] = p;
-        if !(a[p * n + c].abs() > 1e-14 * largest) {
+        let pivot = a[p * n + c].abs();
+        if pivot.is_nan() || pivot <= 1e-14 * largest {
             return false;
         }
         if p != c {

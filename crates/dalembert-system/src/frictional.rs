@@ -99,7 +99,10 @@ impl Formulation for Frictional {
             self.inner.system().slip_row(k, t, q, qd, &mut self.terms[k].row);
             self.terms[k].row.write_dense(&mut self.dense);
             let term = &mut self.terms[k];
-            if self.inner.force_response(t, &self.dense, &mut term.dv, &mut term.dlambda)? {
+            if self
+                .inner
+                .force_response(t, &self.dense, &mut term.dv, &mut term.dlambda)?
+            {
                 continue;
             }
             self.dense.iter_mut().for_each(|g| *g *= scale);
@@ -117,7 +120,14 @@ impl Formulation for Frictional {
                 *r = (l - l0) / scale;
             }
         }
-        solve_friction(self.inner.system(), t, qd, (qdd, lambda), &mut self.terms, &mut self.work)?;
+        solve_friction(
+            self.inner.system(),
+            t,
+            qd,
+            (qdd, lambda),
+            &mut self.terms,
+            &mut self.work,
+        )?;
         for (f, k) in self.forces.iter_mut().zip(&self.terms) {
             *f = k.force;
         }

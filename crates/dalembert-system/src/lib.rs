@@ -51,12 +51,12 @@ pub use data::{Data, Stage};
 pub use error::{ConstraintError, EquationRef};
 pub use evaluated_at::EvaluatedAt;
 pub use finite::all_finite;
-pub use friction::{solve_friction, FrictionTerms, FrictionWork, JointFriction, Mode, SlipRow};
-pub use frictional::Frictional;
 pub use formulation::{
     Baumgarte, DynamicsError, Energy, Formulation, FormulationEntry, FormulationSettings, FormulationStats,
     RedundancyTreatment,
 };
+pub use friction::{solve_friction, FrictionTerms, FrictionWork, JointFriction, Mode, SlipRow};
+pub use frictional::Frictional;
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use layout::{BodyBlock, Layout};
 pub use model_error::ModelError;

@@ -11,8 +11,8 @@
 //! is accepted without another check, so that a root found slightly past the crossing cannot
 //! shorten it again.
 
-use crate::stepper::Stepper;
 use crate::methods::first_order::derivative;
+use crate::stepper::Stepper;
 use dalembert_system::{Baumgarte, DynamicsError, Formulation};
 
 /// Bisection steps on `θ ∈ [0, 1]`: `2⁻⁴⁰ ≈ 10⁻¹²` of the step.
@@ -83,7 +83,13 @@ impl Events {
     /// state kept by [`Events::mark`]). Where the formulation changed the state or its law, `y`
     /// is that state, its functions start the step again, and the result is true (the step is
     /// to be taken again); otherwise `y` is left as the step ended.
-    pub fn settle_at_start(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64], n_q: usize) -> Result<bool, DynamicsError> {
+    pub fn settle_at_start(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        y: &mut [f64],
+        n_q: usize,
+    ) -> Result<bool, DynamicsError> {
         let mut start = std::mem::take(&mut self.start);
         let settled = self.settle(f, t, &mut start, n_q);
         self.start = start;
@@ -169,7 +175,13 @@ impl Events {
     /// After a step shortened to end at an event, ending at `y` at `t`: the formulation does what
     /// the events that changed sign over it ask of the state
     /// ([`Formulation::at_event`], a slip that stopped made to stick). True when it changed `y`.
-    pub fn settle(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64], n_q: usize) -> Result<bool, DynamicsError> {
+    pub fn settle(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        y: &mut [f64],
+        n_q: usize,
+    ) -> Result<bool, DynamicsError> {
         if self.is_empty() {
             return Ok(false);
         }
