@@ -105,6 +105,10 @@ impl SlipRow {
     }
 }
 
+/// The fraction of the stick speed by which a slip's rate passes zero at its event
+/// ([`Mode::event`]).
+pub const SLIP_END: f64 = 1e-3;
+
 /// What a friction element does over a step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Mode {
@@ -125,13 +129,13 @@ impl Mode {
     }
 
     /// The event function of the mode at slip rate `w`: positive while the mode holds, so that a
-    /// sign change ends it: `σ w + w_s` for a slip (its rate passes zero by the stick speed, so
-    /// that a slip that begins at rest starts clear of its event), `w_s − |w|` for a stuck joint
-    /// (its rate leaves the stick speed).
+    /// sign change ends it: `σ w + 10⁻³ w_s` for a slip (its rate passes zero by a thousandth of
+    /// the stick speed, so that a slip that begins at rest, its rate zero to round-off, starts
+    /// clear of its event), `w_s − |w|` for a stuck joint (its rate leaves the stick speed).
     pub fn event(self, w: f64, stick_speed: f64) -> f64 {
         match self {
             Mode::Stick => stick_speed - w.abs(),
-            Mode::Slip(sign) => sign * w + stick_speed,
+            Mode::Slip(sign) => sign * w + SLIP_END * stick_speed,
         }
     }
 }
