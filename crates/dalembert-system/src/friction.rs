@@ -185,9 +185,8 @@ const SETTLING: usize = 12;
 pub struct FrictionWork {
     /// `W_kj = g_k·A_j` (row-major, `K × K`).
     coupling: Vec<f64>,
-    /// Newton matrix (row-major, `K × K`) and its row permutation.
+    /// Newton matrix (row-major, `K × K`).
     jacobian: Vec<f64>,
-    pivots: Vec<usize>,
     /// Residuals, then the Newton step.
     residual: Vec<f64>,
     /// `ẇ₀ = g·v̇₀ + b` without friction.
@@ -206,7 +205,6 @@ impl FrictionWork {
         FrictionWork {
             coupling: vec![0.0; k * k],
             jacobian: vec![0.0; k * k],
-            pivots: vec![0; k],
             residual: vec![0.0; k],
             alpha0: vec![0.0; k],
             lambda: vec![0.0; m],
@@ -344,7 +342,7 @@ pub fn solve_friction(
                 }
             }
         }
-        if !solve_dense(&mut work.jacobian, &mut work.pivots, &mut work.residual, k_len) {
+        if !solve_dense(&mut work.jacobian, &mut work.residual, k_len) {
             let names: Vec<&str> = frictions.iter().map(|f| f.name.as_str()).collect();
             return Err(fail(
                 &names.join("', '"),
@@ -387,13 +385,12 @@ pub fn solve_friction(
 
 /// Solves `A x = b` in place (`A` row-major `n × n`, overwritten by its LU factors; `b` by `x`)
 /// by Gaussian elimination with partial pivoting. False when `A` is singular.
-fn solve_dense(a: &mut [f64], pivots: &mut [usize], b: &mut [f64], n: usize) -> bool {
+fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
     let largest = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     for c in 0..n {
         let p = (c..n)
             .max_by(|&i, &j| a[i * n + c].abs().total_cmp(&a[j * n + c].abs()))
             .unwrap_or(c);
-        pivots[c] = p;
         let pivot = a[p * n + c].abs();
         if pivot.is_nan() || pivot <= 1e-14 * largest {
             return false;
