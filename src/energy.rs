@@ -8,7 +8,8 @@ use dalembert_system::{ConstraintValues, MultibodySystem, SlipRow};
 
 /// `E(t) − W(t)` along a run, from its output samples: `W = ∫ P dt` with `P` the power of the
 /// non-conservative applied forces ([`MultibodySystem::nonconservative_power`]) and of the
-/// constraint forces `−λᵀ C_q v` (drivers; the joints' is zero on the constraints). The integral
+/// constraint forces `−λᵀ C_q v` (drivers; the joints' is zero on the constraints), less the
+/// kinetic energy impacts at joint limits took (`docs/limits.md`). The integral
 /// is taken over each interval on the parabola through the last three samples (third order in
 /// the sample interval; `docs/energy.md`, eq. E4).
 #[derive(Debug, Clone)]
@@ -21,6 +22,8 @@ pub struct EnergyBalance {
     samples: u64,
     /// `W` up to the last sample.
     work: f64,
+    /// The kinetic energy impacts took up to the last sample (`docs/limits.md`, (L4)).
+    impacts: f64,
     /// `E − W` at the first sample.
     first: Option<f64>,
     /// The largest `|E − W − (E₀ − W₀)|` so far.
@@ -37,6 +40,7 @@ impl EnergyBalance {
             points: Vec::with_capacity(3),
             samples: 0,
             work: 0.0,
+            impacts: 0.0,
             first: None,
             largest_drift: 0.0,
         }
@@ -81,15 +85,17 @@ impl EnergyBalance {
             }
             _ => {}
         }
-        let balance = s.energy - self.work;
+        self.impacts = s.impact_loss;
+        let balance = s.energy - self.work();
         let first = *self.first.get_or_insert(balance);
         self.largest_drift = self.largest_drift.max((balance - first).abs());
         balance
     }
 
-    /// `W`: the work of the non-conservative forces and drivers up to the last sample (J).
+    /// `W`: the work of the non-conservative forces and drivers up to the last sample, less the
+    /// kinetic energy impacts took (J).
     pub fn work(&self) -> f64 {
-        self.work
+        self.work - self.impacts
     }
 
     /// The largest change of `E − W` from its first value (J).

@@ -126,6 +126,12 @@ impl Scene {
     /// or finds none, from the position where the scene's motion with kinetic damping comes to
     /// rest ([`crate::relaxation`]).
     pub fn equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
+        if let Some(l) = self.model.system().limits().first() {
+            return Err(EquilibriumError::Model(format!(
+                "joint '{}' has limits: an equilibrium against a bound is not built yet (docs/limits.md)",
+                l.name
+            )));
+        }
         let first = self.equilibrium_from(&self.q);
         let settled = match &first {
             Ok(eq) if eq.unstable_directions.is_empty() => return first,
@@ -373,6 +379,8 @@ impl Scene {
                 qdd: &zero,
                 lambda,
                 friction: &[],
+                limit: &[],
+                impact_loss: 0.0,
                 constraint_violation: 0.0,
                 velocity_violation: 0.0,
                 energy: 0.0,

@@ -103,6 +103,8 @@ impl JointMap {
             qdd: &self.qdd,
             lambda: &self.lambda,
             friction: &[],
+            limit: &[],
+            impact_loss: 0.0,
             constraint_violation: max(&self.c),
             velocity_violation: max(&self.cdot),
             energy: s.energy,

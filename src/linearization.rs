@@ -139,6 +139,12 @@ impl Scene {
                 f.name
             )));
         }
+        if let Some(l) = self.model.system().limits().first() {
+            return Err(LinearizationError::Model(format!(
+                "joint '{}' has limits, whose impacts have no linearization",
+                l.name
+            )));
+        }
         let input_of = options
             .inputs
             .iter()
@@ -595,6 +601,8 @@ impl<'a> Reduced<'a> {
                 qdd: &self.qdd,
                 lambda: &self.lambda,
                 friction: &[],
+                limit: &[],
+                impact_loss: 0.0,
                 constraint_violation: largest(&self.c),
                 velocity_violation: largest(&self.cdot),
                 energy,

@@ -189,6 +189,12 @@ impl Scene {
                 f.name
             ));
         }
+        if let Some(l) = self.model.system().limits().first() {
+            return bad(format!(
+                "joint '{}' has limits, whose impacts switch at events: a run with limits has no sensitivities yet",
+                l.name
+            ));
+        }
         if !(request.relative_change.is_finite() && request.relative_change > 0.0 && request.relative_change < 0.1) {
             return bad(format!(
                 "the relative change of a parameter must be in (0, 0.1), got {}",
@@ -323,6 +329,8 @@ impl Scene {
                             qdd: &qdd,
                             lambda: &lambda,
                             friction: &friction,
+                            limit: &[],
+                            impact_loss: 0.0,
                             constraint_violation: last[1],
                             velocity_violation: last[2],
                             energy: last[3],

@@ -344,26 +344,25 @@ impl Simulation {
             independent,
         };
         let model = self.model.system();
-        let frictions = model.frictions();
-        if frictions.is_empty() {
+        let Some((joint, kind)) = switching_joint(model.as_ref()) else {
             return Ok((entry.build)(system, &settings)?);
-        }
+        };
         let refuse = |what: String| {
             SimulationError::Setup(DynamicsError::Friction {
                 time: self.start,
-                joint: frictions[0].name.clone(),
+                joint: joint.clone(),
                 what,
             })
         };
-        if system.frictions().len() != frictions.len() {
-            return Err(refuse(
-                "joint friction is solved in absolute coordinates only: use coordinates = \"absolute\"".into(),
-            ));
+        if system.frictions().len() != model.frictions().len() || system.limits().len() != model.limits().len() {
+            return Err(refuse(format!(
+                "joint {kind} is solved in absolute coordinates only: use coordinates = \"absolute\""
+            )));
         }
         let method = self.integrator.method.entry();
         if method.applies == dalembert_integrators::Applies::AugmentedIndex3 {
             return Err(refuse(format!(
-                "{} integrates the frictionless index-3 equations: use rk4 or dopri5 with joint friction",
+                "{} integrates the index-3 equations without joint {kind}: use rk4 or dopri5",
                 method.name
             )));
         }
@@ -501,4 +500,13 @@ mod formulation_names {
         assert_eq!(FormulationKind::parse("Augmented"), None);
         assert_eq!(FormulationKind::parse(""), None);
     }
+}
+
+/// The first joint of `system` with friction or limits, and which (`"friction"` or `"limits"`):
+/// a model whose law switches at events (`docs/friction.md`, `docs/limits.md`).
+pub(crate) fn switching_joint(system: &dyn dalembert_system::MultibodySystem) -> Option<(String, &'static str)> {
+    if let Some(f) = system.frictions().first() {
+        return Some((f.name.clone(), "friction"));
+    }
+    system.limits().first().map(|l| (l.name.clone(), "limits"))
 }

@@ -110,6 +110,13 @@ impl ColumnWriter for PlanarColumns {
         // Joint friction: its force (N) or torque (N·m) on the second body, also in the joint's
         // reaction above (`docs/friction.md`).
         names.extend(self.model.frictions().iter().map(|f| format!("{}.friction", f.name())));
+        // Joint limits: the joint's coordinate (zero in the file's configuration) and the
+        // limit's force or torque on the second body while it rests on a bound, also in the
+        // joint's reaction (`docs/limits.md`).
+        for l in self.model.limits() {
+            names.push(format!("{}.q", l.name()));
+            names.push(format!("{}.limit", l.name()));
+        }
         names
     }
 
@@ -119,6 +126,9 @@ impl ColumnWriter for PlanarColumns {
         sys.reactions(s.q, &self.values, s.lambda, &mut self.reactions);
         for (f, force) in self.model.frictions().iter().zip(s.friction) {
             f.add_to_reaction(s.q, *force, &mut self.reactions[f.constraint]);
+        }
+        for (l, force) in self.model.limits().iter().zip(s.limit) {
+            l.add_to_reaction(s.q, *force, &mut self.reactions[l.constraint]);
         }
         for i in 0..s.q.len() / 3 {
             row.extend_from_slice(&s.q[3 * i..3 * i + 3]);
@@ -140,6 +150,10 @@ impl ColumnWriter for PlanarColumns {
             row.extend_from_slice(s.friction);
         } else {
             row.extend(std::iter::repeat_n(0.0, frictions));
+        }
+        for (k, l) in self.model.limits().iter().enumerate() {
+            row.push(l.coordinate(s.q));
+            row.push(s.limit.get(k).copied().unwrap_or(0.0));
         }
     }
 

@@ -11,7 +11,7 @@ use crate::mechanism::Mechanism;
 use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
-    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear, JointAngle,
+    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Limit, Gear, JointAngle,
     JointDisplacement, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
@@ -19,7 +19,7 @@ use dalembert_kinematics::{
     Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, PointForce,
     RotationalSpringDamper, SpringDamper, Torque, Vec2,
 };
-use dalembert_system::TimeFunction;
+use dalembert_system::{TimeFunction, REST_SPEED};
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -198,6 +198,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     let mut constraints: Vec<Box<dyn Constraint>> = Vec::new();
     let mut joints: HashMap<String, JointInfo> = HashMap::new();
     let mut frictions = Vec::new();
+    let mut limits = Vec::new();
     for sj in &file.joints {
         let span = sj.span();
         let d = sj.get_ref();
@@ -300,6 +301,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         if let Some(def) = &d.friction {
             frictions.push(friction(&b, d, def, &info, constraints.len())?);
         }
+        if let Some(l) = limit(&b, d, &info, constraints.len())? {
+            limits.push(l);
+        }
         constraints.push(c);
         joints.insert(d.name.clone(), info);
     }
@@ -330,6 +334,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     }
     let model = Model::new(bodies, forces, constraints)
         .and_then(|m| m.with_frictions(frictions))
+        .and_then(|m| m.with_limits(limits))
         .map_err(|e| b.ctx.err(None, e.to_string()))?;
     let mechanism: Mechanism = Arc::new(model).into();
     let settings = settings(
@@ -408,6 +413,55 @@ fn friction(
     };
     friction.validate().map_err(|e| b.ctx.err(span, e.to_string()))?;
     Ok(friction)
+}
+
+/// The limit of joint `d` (`constraint`: its index in the model's constraint list), if it has
+/// one, checked against the joint's type (`docs/limits.md`); errors are placed at the key at
+/// fault.
+fn limit(b: &Builder<'_>, d: &JointDef, info: &JointInfo, constraint: usize) -> Result<Option<Limit>, SceneError> {
+    let owner = format!("joint '{}'", d.name);
+    let Some(bounds) = &d.limits else {
+        let stray = [("restitution", d.restitution.as_ref()), ("rest_speed", d.rest_speed.as_ref())];
+        if let Some((key, value)) = stray.into_iter().find_map(|(k, v)| v.map(|v| (k, v))) {
+            return Err(b.ctx.err(
+                Some(value.span()),
+                format!("{owner}: '{key}' belongs to a joint with 'limits = [lower, upper]'"),
+            ));
+        }
+        return Ok(None);
+    };
+    let span = Some(bounds.span());
+    let joint = match info {
+        JointInfo::Revolute(r) => FrictionJoint::Revolute(r.clone()),
+        JointInfo::Prismatic(p) => FrictionJoint::Prismatic(p.clone()),
+        JointInfo::Other(_) => {
+            return Err(b.ctx.err(
+                span,
+                format!("{owner}: limits are for revolute and prismatic joints, this one is '{}'", d.kind),
+            ))
+        }
+    };
+    let &[lower, upper] = bounds.get_ref().as_slice() else {
+        return Err(b.ctx.err(
+            span,
+            format!("{owner}: limits must be [lower, upper], got {} values", bounds.get_ref().len()),
+        ));
+    };
+    let restitution = d.restitution.as_ref().map_or(0.0, |r| *r.get_ref());
+    let rest_speed = d.rest_speed.as_ref().map_or(REST_SPEED, |r| *r.get_ref());
+    let limit = Limit::new(joint, constraint, &b.q, [lower, upper], restitution, rest_speed);
+    limit.validate().map_err(|e| {
+        let message = e.to_string();
+        let at = if message.contains("restitution") {
+            d.restitution.as_ref().map(|r| r.span())
+        } else if message.contains("rest_speed") {
+            d.rest_speed.as_ref().map(|r| r.span())
+        } else {
+            None
+        };
+        b.ctx.err(at.or(span), message)
+    })?;
+    Ok(Some(limit))
 }
 
 /// `Ok` unless `settings` ask for joint coordinates that `mechanism` cannot take (a planar model,

@@ -72,6 +72,12 @@ pub(crate) struct JointDef {
     pub ratio: Option<f64>,
     pub radius: Option<f64>,
     pub friction: Option<Spanned<FrictionDef>>,
+    /// `limits = [lower, upper]` on a revolute or prismatic joint (`docs/limits.md`).
+    pub limits: Option<Spanned<Vec<f64>>>,
+    /// Newton's coefficient of restitution at the limits (default 0).
+    pub restitution: Option<Spanned<f64>>,
+    /// The rebound speed below which the joint rests on a limit (default 1e-3).
+    pub rest_speed: Option<Spanned<f64>>,
 }
 
 /// `friction = { coefficient = μ, radius = r, viscous = c, stick_speed = w }` on a revolute or

@@ -168,12 +168,12 @@ impl Scene {
     /// augmented one): for settings changed after loading, by the command line or Python, checked
     /// before a run writes anything.
     pub fn check_settings(&self, spelling: Spelling) -> Result<(), String> {
-        if let Some(f) = self.model.system().frictions().first() {
+        if let Some((joint, kind)) = crate::simulation::switching_joint(self.model.system().as_ref()) {
             let method = self.settings.method.entry();
             if method.applies == dalembert_integrators::Applies::AugmentedIndex3 {
                 return Err(format!(
-                    "invalid integrator options: {} integrates the frictionless index-3 equations: use rk4 or dopri5 with the friction of joint '{}'",
-                    method.name, f.name
+                    "invalid integrator options: {} integrates the index-3 equations without joint {kind}: use rk4 or dopri5 with the {kind} of joint '{joint}'",
+                    method.name
                 ));
             }
             if self.settings.coordinates == crate::Coordinates::Joint {
@@ -182,8 +182,7 @@ impl Scene {
                     Spelling::Keywords => "coordinates=\"joint\"",
                 };
                 return Err(format!(
-                    "{setting}: joint '{}' has friction, which is solved in absolute coordinates only",
-                    f.name
+                    "{setting}: joint '{joint}' has {kind}, solved in absolute coordinates only"
                 ));
             }
         }

@@ -301,7 +301,7 @@ pub fn run(a: Args) -> Result<(), String> {
         },
         match stats.events {
             0 => String::new(),
-            k => format!(", {k} steps ended at a contact's beginning or end"),
+            k => format!(", {k} steps ended at an event (a contact, a stick or slip, an impact)"),
         }
     );
     outln!(

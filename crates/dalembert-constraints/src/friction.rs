@@ -16,7 +16,8 @@ use dalembert_kinematics::rotation::cross;
 use dalembert_kinematics::{BodyRef, BodyState, Vec2};
 use dalembert_system::{JointFriction, ModelError, SlipRow};
 
-/// Which joint carries the friction, with its geometry.
+/// A joint of one relative coordinate (an angle or a displacement) that carries friction or a
+/// limit, with its geometry.
 #[derive(Debug, Clone, PartialEq)]
 pub enum FrictionJoint {
     /// A pin; the friction torque is `μ r |F|`.
@@ -46,13 +47,81 @@ pub struct Friction {
 /// (`docs/friction.md`, "Stick speed").
 pub const STICK_SPEED: f64 = 1e-6;
 
-impl Friction {
+impl FrictionJoint {
     /// The joint's name.
     pub fn name(&self) -> &str {
-        match &self.joint {
+        match self {
             FrictionJoint::Revolute(r) => &r.name,
             FrictionJoint::Prismatic(p) => &p.name,
         }
+    }
+
+    /// The joint's bodies.
+    pub fn bodies(&self) -> [BodyRef; 2] {
+        match self {
+            FrictionJoint::Revolute(r) => r.bodies,
+            FrictionJoint::Prismatic(p) => p.bodies,
+        }
+    }
+
+    /// The row of the joint's coordinate (relative angle, or displacement along the axis) at
+    /// `(q, v)` (`v` empty: at rest): its Jacobian blocks are the generalized force of a unit
+    /// force along the joint on each body.
+    pub fn row(&self, q: &[f64], v: &[f64]) -> Row {
+        let bodies = self.bodies();
+        let first = BodyState::of(bodies[0], q, v);
+        let second = BodyState::of(bodies[1], q, v);
+        match self {
+            FrictionJoint::Revolute(_) => relative_angle(&first, &second, 1.0),
+            FrictionJoint::Prismatic(p) => {
+                let a = unit(p.axis).unwrap_or(Vec2::x());
+                line_coordinate(&first, p.points[0], a, &second, p.points[1])
+            }
+        }
+    }
+
+    /// Adds a force `force` along the joint (on the second body, its opposite on the first) to
+    /// the joint's reaction (the force on the first body from the second, its torque about the
+    /// reaction point; [`crate::reactions`]).
+    pub fn add_to_reaction(&self, q: &[f64], force: f64, reaction: &mut Reaction) {
+        let bodies = self.bodies();
+        let row = self.row(q, &[]);
+        let (side, block, sign) = if bodies[0] != BodyRef::Ground {
+            (bodies[0], row.first, 1.0)
+        } else {
+            (bodies[1], row.second, -1.0)
+        };
+        let s = BodyState::of(side, q, &[]);
+        let f = Vec2::new(block[0], block[1]) * force;
+        reaction.force += sign * f;
+        reaction.torque += sign * (block[2] * force - cross(reaction.point - s.position, f));
+    }
+
+    /// The joint's row at `(q, v)` for the seam (its rate and the bias of its acceleration), and
+    /// its coordinate.
+    pub fn slip_row(&self, q: &[f64], v: &[f64], out: &mut SlipRow) -> f64 {
+        let bodies = self.bodies();
+        let row = self.row(q, v);
+        out.clear();
+        for (body, block) in bodies.iter().zip([row.first, row.second]) {
+            if let BodyRef::Body(id) = body {
+                for (c, g) in block.iter().enumerate() {
+                    if *g != 0.0 {
+                        out.push(id.offset() + c, *g);
+                    }
+                }
+            }
+        }
+        // C_q q̈ = Q_d: the slip acceleration is g·q̈ − Q_d.
+        out.bias = -row.gamma;
+        row.c
+    }
+}
+
+impl Friction {
+    /// The joint's name.
+    pub fn name(&self) -> &str {
+        self.joint.name()
     }
 
     /// Checks the coefficients, naming the joint.
@@ -96,58 +165,21 @@ impl Friction {
 
     /// The joint's bodies.
     pub fn bodies(&self) -> [BodyRef; 2] {
-        match &self.joint {
-            FrictionJoint::Revolute(r) => r.bodies,
-            FrictionJoint::Prismatic(p) => p.bodies,
-        }
+        self.joint.bodies()
     }
 
-    /// The slip coordinate's row at `(q, v)` (`v` empty: at rest): its Jacobian blocks are the
-    /// generalized force of a unit friction force on each body.
+    /// The slip coordinate's row at `(q, v)` ([`FrictionJoint::row`]).
     pub fn row(&self, q: &[f64], v: &[f64]) -> Row {
-        let bodies = self.bodies();
-        let first = BodyState::of(bodies[0], q, v);
-        let second = BodyState::of(bodies[1], q, v);
-        match &self.joint {
-            FrictionJoint::Revolute(_) => relative_angle(&first, &second, 1.0),
-            FrictionJoint::Prismatic(p) => {
-                let a = unit(p.axis).unwrap_or(Vec2::x());
-                line_coordinate(&first, p.points[0], a, &second, p.points[1])
-            }
-        }
+        self.joint.row(q, v)
     }
 
-    /// Adds the friction force `force` to the joint's reaction (the force on the first body from
-    /// the second, its torque about the reaction point; [`crate::reactions`]).
+    /// Adds the friction force `force` to the joint's reaction ([`FrictionJoint::add_to_reaction`]).
     pub fn add_to_reaction(&self, q: &[f64], force: f64, reaction: &mut Reaction) {
-        let bodies = self.bodies();
-        let row = self.row(q, &[]);
-        let (side, block, sign) = if bodies[0] != BodyRef::Ground {
-            (bodies[0], row.first, 1.0)
-        } else {
-            (bodies[1], row.second, -1.0)
-        };
-        let s = BodyState::of(side, q, &[]);
-        let f = Vec2::new(block[0], block[1]) * force;
-        reaction.force += sign * f;
-        reaction.torque += sign * (block[2] * force - cross(reaction.point - s.position, f));
+        self.joint.add_to_reaction(q, force, reaction);
     }
 
     /// The slip row at `(q, v)`.
     pub fn slip_row(&self, q: &[f64], v: &[f64], out: &mut SlipRow) {
-        let bodies = self.bodies();
-        let row = self.row(q, v);
-        out.clear();
-        for (body, block) in bodies.iter().zip([row.first, row.second]) {
-            if let BodyRef::Body(id) = body {
-                for (c, g) in block.iter().enumerate() {
-                    if *g != 0.0 {
-                        out.push(id.offset() + c, *g);
-                    }
-                }
-            }
-        }
-        // C_q q̈ = Q_d: the slip acceleration is g·q̈ − Q_d.
-        out.bias = -row.gamma;
+        self.joint.slip_row(q, v, out);
     }
 }

@@ -20,6 +20,7 @@
 pub mod constraint;
 pub mod drivers;
 pub mod friction;
+pub mod limit;
 pub mod joints;
 pub mod model;
 pub mod primitives;
@@ -29,6 +30,7 @@ pub mod system;
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
 pub use drivers::{BodyCoordinate, Coordinate, DistanceDriver, JointAngle, JointDisplacement};
 pub use friction::{Friction, FrictionJoint, STICK_SPEED};
+pub use limit::Limit;
 pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, Rigid};
 pub use model::Model;
 pub use reactions::Reaction;

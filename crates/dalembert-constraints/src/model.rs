@@ -2,11 +2,11 @@
 //! implementation of the system seam ([`MultibodySystem`]).
 
 use crate::system::PLANAR_LABELS;
-use crate::{Constraint, ConstraintSystem, Friction};
+use crate::{Constraint, ConstraintSystem, Friction, Limit};
 use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 use dalembert_system::{ConstraintError, ConstraintSet};
-use dalembert_system::{JointFriction, SlipRow};
+use dalembert_system::{JointFriction, JointLimit, SlipRow};
 
 /// Bodies, applied force elements and the assembled constraint system of one mechanism.
 #[derive(Debug)]
@@ -18,6 +18,8 @@ pub struct Model {
     mass_is_constant: bool,
     frictions: Vec<Friction>,
     friction_specs: Vec<JointFriction>,
+    limits: Vec<Limit>,
+    limit_specs: Vec<JointLimit>,
 }
 
 impl Model {
@@ -43,6 +45,8 @@ impl Model {
             mass_is_constant,
             frictions: Vec::new(),
             friction_specs: Vec::new(),
+            limits: Vec::new(),
+            limit_specs: Vec::new(),
         })
     }
 
@@ -72,6 +76,31 @@ impl Model {
     /// The joints with friction.
     pub fn frictions(&self) -> &[Friction] {
         &self.frictions
+    }
+
+    /// The model with limits on some of its revolute and prismatic joints (`docs/limits.md`).
+    /// Errors name the joint.
+    pub fn with_limits(mut self, limits: Vec<Limit>) -> Result<Self, ConstraintError> {
+        for l in &limits {
+            l.validate()?;
+            if l.constraint >= self.constraints.constraints().len()
+                || self.constraints.constraints()[l.constraint].name() != l.name()
+            {
+                return Err(dalembert_system::ModelError::InvalidParameter {
+                    element: format!("joint '{}'", l.name()),
+                    what: "a limit refers to a joint the model does not hold".to_string(),
+                }
+                .into());
+            }
+        }
+        self.limit_specs = limits.iter().map(Limit::spec).collect();
+        self.limits = limits;
+        Ok(self)
+    }
+
+    /// The joints with limits.
+    pub fn limits(&self) -> &[Limit] {
+        &self.limits
     }
 
     /// The moving bodies, in coordinate order.
@@ -132,6 +161,14 @@ impl MultibodySystem for Model {
 
     fn slip_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut SlipRow) {
         self.frictions[k].slip_row(q, v, row);
+    }
+
+    fn limits(&self) -> &[JointLimit] {
+        &self.limit_specs
+    }
+
+    fn limit_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
+        self.limits[k].limit_row(q, v, row)
     }
 
     /// The moving bodies of each force element ([`ForceElement::bodies`]); `None` when an element
@@ -249,11 +286,12 @@ impl MultibodySystem for Model {
             .sum()
     }
 
-    /// The friction elements, then the contact elements (an element is one or not whatever the
-    /// state: asked at zero).
+    /// The friction elements, the limits, then the contact elements (an element is one or not
+    /// whatever the state: asked at zero).
     fn num_events(&self) -> usize {
         let q = vec![0.0; 3 * self.bodies.len()];
         self.frictions.len()
+            + self.limits.len()
             + self
                 .forces
                 .iter()
@@ -261,11 +299,15 @@ impl MultibodySystem for Model {
                 .count()
     }
 
-    /// Each friction element's slip rate (0 within its stick speed), then each contact element's
-    /// gap, in the order of the force elements.
+    /// Each friction element's slip rate (0 within its stick speed), then each limit's distance
+    /// to its nearer bound, then each contact element's gap, in the order of the force elements.
     fn events(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         let mut row = SlipRow::default();
-        let (slips, gaps) = out.split_at_mut(self.frictions.len().min(out.len()));
+        let (slips, rest) = out.split_at_mut(self.frictions.len().min(out.len()));
+        let (stops, gaps) = rest.split_at_mut(self.limits.len().min(rest.len()));
+        for ((slot, l), spec) in stops.iter_mut().zip(&self.limits).zip(&self.limit_specs) {
+            *slot = spec.free_event(l.coordinate(q));
+        }
         for ((slot, f), spec) in slips.iter_mut().zip(&self.frictions).zip(&self.friction_specs) {
             f.slip_row(q, v, &mut row);
             let w = row.dot(v);
@@ -300,10 +342,11 @@ impl MultibodySystem for Model {
         applied + dalembert_system::system::potential_rate(self, t, q, qd)
     }
 
-    /// Every force element is conservative, no joint has friction and no constraint is driven (a
-    /// driver does work).
+    /// Every force element is conservative, no joint has friction or limits (an impact takes
+    /// energy) and no constraint is driven (a driver does work).
     fn is_conservative(&self) -> bool {
         self.frictions.is_empty()
+            && self.limits.is_empty()
             && self.forces.iter().all(|f| f.is_conservative())
             && self
                 .constraints

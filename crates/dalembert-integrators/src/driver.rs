@@ -34,6 +34,11 @@ pub struct Sample<'a> {
     /// The friction force of each friction element of the system at this state
     /// ([`dalembert_system::MultibodySystem::frictions`]; empty without friction).
     pub friction: &'a [f64],
+    /// The force of each joint limit of the system at this state
+    /// ([`dalembert_system::MultibodySystem::limits`]; empty without limits, zero where free).
+    pub limit: &'a [f64],
+    /// The kinetic energy impacts at joint limits took from the motion since the run began (J).
+    pub impact_loss: f64,
     /// `‖C‖∞` at this state.
     pub constraint_violation: f64,
     /// `‖Ċ‖∞` at this state.

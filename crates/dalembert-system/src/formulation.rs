@@ -189,6 +189,16 @@ pub enum DynamicsError {
         /// The solver's message.
         what: String,
     },
+    /// A joint limit could not be kept (`docs/limits.md`).
+    #[error("t = {t}: limit of joint '{joint}': {what}", t = crate::Shortest(*.time))]
+    Limit {
+        /// Time.
+        time: f64,
+        /// The joint.
+        joint: String,
+        /// What happened.
+        what: String,
+    },
     /// Joint friction could not be solved (`docs/friction.md`).
     #[error("t = {t}: friction in joint '{joint}': {what}", t = crate::Shortest(*.time))]
     Friction {
@@ -212,7 +222,8 @@ impl DynamicsError {
             | DynamicsError::NonFinite { time, .. }
             | DynamicsError::ForceElement { time, .. }
             | DynamicsError::Factorization { time, .. }
-            | DynamicsError::Friction { time, .. } => Some(*time),
+            | DynamicsError::Friction { time, .. }
+            | DynamicsError::Limit { time, .. } => Some(*time),
             DynamicsError::Kinematics(_) | DynamicsError::WrongLength { .. } => None,
         }
     }
@@ -331,5 +342,18 @@ pub trait Formulation: Send {
     /// at the last evaluation (N or N·m; empty without friction).
     fn friction_forces(&self) -> &[f64] {
         &[]
+    }
+
+    /// The force of each joint limit of the system ([`MultibodySystem::limits`]) at the last
+    /// evaluation: its generalized force along the joint's coordinate (N or N·m; zero where the
+    /// joint is free; empty without limits, `docs/limits.md`).
+    fn limit_forces(&self) -> &[f64] {
+        &[]
+    }
+
+    /// The kinetic energy the impacts at joint limits took from the motion since the run began
+    /// (J; `docs/limits.md`, (L4)). Default 0.
+    fn impact_loss(&self) -> f64 {
+        0.0
     }
 }

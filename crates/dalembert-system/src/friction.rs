@@ -116,6 +116,11 @@ pub enum Mode {
     Stick,
     /// Slipping in the direction of the sign (±1): (F1).
     Slip(f64),
+    /// A joint limit's element away from its bounds: no force (`docs/limits.md`, (L1)).
+    Free,
+    /// A joint limit's element held at a bound, its force `F` with `σ F ≥ 0` for the sign `σ`
+    /// (`+1` at the lower bound, `−1` at the upper): (L2), or no force where holding would pull.
+    Held(f64),
 }
 
 impl Mode {
@@ -136,6 +141,8 @@ impl Mode {
         match self {
             Mode::Stick => stick_speed - w.abs(),
             Mode::Slip(sign) => sign * w + SLIP_END * stick_speed,
+            // A limit's events are the switching formulation's ([`crate::Frictional`]).
+            Mode::Free | Mode::Held(_) => 1.0,
         }
     }
 }
@@ -157,6 +164,8 @@ pub struct FrictionTerms {
     pub mode: Mode,
     /// The direction (±1) a stuck element that (F2) cannot hold begins to slip in (0 otherwise).
     pub direction: f64,
+    /// The force that would hold a stuck or held element (`ẇ = 0`) at the last evaluation.
+    pub hold: f64,
 }
 
 impl FrictionTerms {
@@ -170,6 +179,7 @@ impl FrictionTerms {
             sticks: false,
             mode: Mode::Stick,
             direction: 0.0,
+            hold: 0.0,
         }
     }
 }
@@ -238,16 +248,19 @@ fn load_change(spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
     spec.coefficient * spec.load_rows.iter().map(|&r| lambda[r] * dl[r]).sum::<f64>() / norm
 }
 
-/// Solves (F1)–(F3) for every element in its mode: on entry `a`, `lambda` are the frictionless
-/// `v̇₀`, `λ₀` and `terms[k]` hold the rows, responses and modes; on exit `a`, `lambda` include
-/// the friction forces, and `terms[k].force`, `terms[k].sticks` say what each element does.
+/// Solves (F1)–(F3) for every friction element in its mode, and (L1)–(L2) of
+/// `docs/limits.md` for every joint limit after them: on entry `a`, `lambda` are the
+/// frictionless `v̇₀`, `λ₀` and `terms[k]` hold the rows, responses and modes (the friction
+/// elements of [`MultibodySystem::frictions`] first, then the limits of
+/// [`MultibodySystem::limits`]; a free limit's response is not read); on exit `a`, `lambda`
+/// include the forces, and `terms[k].force`, `terms[k].sticks` say what each element does.
 ///
 /// The forces couple through the accelerations (`ẇ = ẇ₀ + W F`, `W_kj = g_k·A_j`) and the loads
 /// (`λ = λ₀ + Σ Λ_j F_j`), so the equations are solved together by Newton's method: a held
-/// element's row is `ẇ_k = 0`, a slipping one's `F_k + c_k w_k + σ N_k(F) = 0`, and which law a
-/// stuck element follows (F2 or F3) is decided at each iterate by whether its holding force is
-/// within `N_k`; the iteration ends when the laws stop changing and the step is at round-off.
-/// Allocates nothing.
+/// element's row is `ẇ_k = 0`, a slipping one's `F_k + c_k w_k + σ N_k(F) = 0`, a free limit's
+/// `F_k = 0`; which law a stuck element follows (F2 or F3), and whether a held limit holds or
+/// lets go (its force would pull), is decided at each iterate by its holding force; the
+/// iteration ends when the laws stop changing and the step is at round-off. Allocates nothing.
 pub fn solve_friction(
     system: &dyn MultibodySystem,
     t: f64,
@@ -257,22 +270,58 @@ pub fn solve_friction(
     work: &mut FrictionWork,
 ) -> Result<(), DynamicsError> {
     let frictions = system.frictions();
+    let limits = system.limits();
     let k_len = terms.len();
-    let fail = |joint: &str, what: String| DynamicsError::Friction {
+    let name = |k: usize| -> &str {
+        if k < frictions.len() {
+            &frictions[k].name
+        } else {
+            limits.get(k - frictions.len()).map_or("?", |l| l.name.as_str())
+        }
+    };
+    let fail = |k: usize, what: String| {
+        if k < frictions.len() {
+            DynamicsError::Friction {
+                time: t,
+                joint: name(k).to_string(),
+                what,
+            }
+        } else {
+            DynamicsError::Limit {
+                time: t,
+                joint: name(k).to_string(),
+                what,
+            }
+        }
+    };
+    let all = |what: String| DynamicsError::Friction {
         time: t,
-        joint: joint.to_string(),
+        joint: (0..k_len).map(name).collect::<Vec<_>>().join("', '"),
         what,
     };
     for (k, term) in terms.iter().enumerate() {
+        if term.mode == Mode::Free {
+            // No force and no response: the element couples with nothing.
+            work.alpha0[k] = 0.0;
+            for j in 0..k_len {
+                work.coupling[k * k_len + j] = 0.0;
+                work.coupling[j * k_len + k] = 0.0;
+            }
+            continue;
+        }
         work.alpha0[k] = term.row.dot(a) + term.row.bias;
         for (j, other) in terms.iter().enumerate() {
-            work.coupling[k * k_len + j] = term.row.dot(&other.dv);
+            work.coupling[k * k_len + j] = if other.mode == Mode::Free {
+                0.0
+            } else {
+                term.row.dot(&other.dv)
+            };
         }
         let d = work.coupling[k * k_len + k];
         if !(d > 0.0 && d.is_finite()) {
             return Err(fail(
-                &frictions[k].name,
-                format!("a friction force does not move the joint (its response is {d:e})"),
+                k,
+                format!("a force along the joint does not move it (its response is {d:e})"),
             ));
         }
     }
@@ -290,39 +339,61 @@ pub fn solve_friction(
         let mut changed = false;
         let mut scale = 0.0f64;
         for k in 0..k_len {
-            let (spec, term) = (&frictions[k], &terms[k]);
+            let term = &terms[k];
             let row = k * k_len;
             let alpha: f64 = work.alpha0[k] + (0..k_len).map(|j| work.coupling[row + j] * terms[j].force).sum::<f64>();
-            let w = term.row.dot(v);
-            let bound = load(spec, &work.lambda);
-            let sign = match term.mode {
-                Mode::Slip(sign) => Some(sign),
-                Mode::Stick => {
-                    let hold = term.force - alpha / work.coupling[row + k];
-                    // After `SETTLING` iterations a joint found unable to hold stays so: the
-                    // laws then change only one way and the iteration ends (a joint grazing
-                    // the limit of its friction can make the laws cycle).
-                    let stays_slipping = iteration >= SETTLING && !work.holding[k];
-                    if hold.abs() <= bound && !stays_slipping {
-                        None
-                    } else if stays_slipping && work.direction[k] != 0.0 {
-                        Some(work.direction[k])
+            let hold = if term.mode == Mode::Free {
+                0.0
+            } else {
+                term.force - alpha / work.coupling[row + k]
+            };
+            // After `SETTLING` iterations an element found unable to hold stays so: the laws
+            // then change only one way and the iteration ends (a joint grazing the limit of its
+            // friction can make the laws cycle).
+            let stays_loose = iteration >= SETTLING && !work.holding[k];
+            let law = match term.mode {
+                Mode::Free => Law::Zero,
+                Mode::Held(sign) => {
+                    if sign * hold >= 0.0 && !stays_loose {
+                        Law::Hold
                     } else {
-                        Some(-hold.signum())
+                        Law::Zero
+                    }
+                }
+                Mode::Slip(sign) => Law::Slip(sign),
+                Mode::Stick => {
+                    let bound = load(&frictions[k], &work.lambda);
+                    if hold.abs() <= bound && !stays_loose {
+                        Law::Hold
+                    } else if stays_loose && work.direction[k] != 0.0 {
+                        Law::Slip(work.direction[k])
+                    } else {
+                        Law::Slip(-hold.signum())
                     }
                 }
             };
-            let holding = sign.is_none();
-            work.direction[k] = sign.unwrap_or(0.0);
+            let holding = law == Law::Hold;
+            work.direction[k] = if let Law::Slip(sign) = law { sign } else { 0.0 };
             changed |= holding != work.holding[k];
             work.holding[k] = holding;
-            match sign {
-                None => {
+            terms[k].hold = hold;
+            let term = &terms[k];
+            match law {
+                Law::Hold => {
                     work.residual[k] = alpha;
                     work.jacobian[row..row + k_len].copy_from_slice(&work.coupling[row..row + k_len]);
                     scale = scale.max(term.force.abs());
                 }
-                Some(sign) => {
+                Law::Zero => {
+                    work.residual[k] = term.force;
+                    for j in 0..k_len {
+                        work.jacobian[row + j] = if j == k { 1.0 } else { 0.0 };
+                    }
+                }
+                Law::Slip(sign) => {
+                    let spec = &frictions[k];
+                    let bound = load(spec, &work.lambda);
+                    let w = term.row.dot(v);
                     work.residual[k] = term.force + spec.viscous * w + sign * bound;
                     for j in 0..k_len {
                         let e = if j == k { 1.0 } else { 0.0 };
@@ -332,7 +403,7 @@ pub fn solve_friction(
                     let slope = load_change(spec, &work.lambda, &term.dlambda).abs();
                     if slope >= 1.0 {
                         return Err(fail(
-                            &spec.name,
+                            k,
                             format!(
                                 "the friction force is not determined by Coulomb's law (Painlevé): μ × the load's \
                                  change per unit friction force is {slope:.3} ≥ 1"
@@ -343,10 +414,8 @@ pub fn solve_friction(
             }
         }
         if !solve_dense(&mut work.jacobian, &mut work.residual, k_len) {
-            let names: Vec<&str> = frictions.iter().map(|f| f.name.as_str()).collect();
-            return Err(fail(
-                &names.join("', '"),
-                "the friction forces of these joints are not determined (their joints move together)".into(),
+            return Err(all(
+                "the friction and limit forces of these joints are not determined (their joints move together)".into(),
             ));
         }
         let mut step = 0.0f64;
@@ -358,22 +427,23 @@ pub fn solve_friction(
             break;
         }
         if iteration + 1 == MAX_ITERATIONS {
-            let names: Vec<&str> = frictions.iter().map(|f| f.name.as_str()).collect();
-            return Err(fail(
-                &names.join("', '"),
-                format!("the friction forces did not settle in {MAX_ITERATIONS} iterations"),
-            ));
+            return Err(all(format!(
+                "the friction and limit forces did not settle in {MAX_ITERATIONS} iterations"
+            )));
         }
     }
     for (k, term) in terms.iter_mut().enumerate() {
         if !term.force.is_finite() {
-            return Err(fail(&frictions[k].name, "the friction force is not finite".into()));
+            return Err(fail(k, "the force along the joint is not finite".into()));
         }
         term.sticks = work.holding[k];
         term.direction = match (term.mode, term.sticks) {
             (Mode::Stick, false) => work.direction[k],
             _ => 0.0,
         };
+        if term.force == 0.0 {
+            continue;
+        }
         a.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * term.force);
         lambda
             .iter_mut()
@@ -381,6 +451,17 @@ pub fn solve_friction(
             .for_each(|(x, r)| *x += r * term.force);
     }
     Ok(())
+}
+
+/// The law an element follows at one Newton iterate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Law {
+    /// `ẇ = 0`.
+    Hold,
+    /// `F = 0`.
+    Zero,
+    /// (F1) in the direction of the sign.
+    Slip(f64),
 }
 
 /// Solves `A x = b` in place (`A` row-major `n × n`, overwritten by its LU factors; `b` by `x`)

@@ -1,15 +1,19 @@
-//! Any formulation with joint friction ([`Frictional`], `docs/friction.md`): the formulation's
-//! frictionless accelerations, its response to a unit force in each friction element, and the
-//! stick–slip law of [`crate::friction`] on top. One code for every formulation.
+//! Any formulation with joint friction or joint limits ([`Frictional`], `docs/friction.md`,
+//! `docs/limits.md`): the formulation's frictionless accelerations, its response to a unit force
+//! along each friction element and each held limit, and the stick–slip law of
+//! [`crate::friction`] and the impact law of [`crate::limit`] on top. One code for every
+//! formulation.
 
 use crate::friction::{solve_friction, FrictionTerms, FrictionWork, Mode};
+use crate::limit::{impact_impulse, impact_loss, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
-/// A formulation whose system has joint friction ([`MultibodySystem::frictions`]).
+/// A formulation whose system has joint friction ([`MultibodySystem::frictions`]) or joint
+/// limits ([`MultibodySystem::limits`]).
 ///
-/// Each evaluation costs one evaluation of the inner formulation plus, per friction element, a
-/// solve with its factorization (its response to a unit friction force); nothing is allocated
-/// after setup.
+/// Each evaluation costs one evaluation of the inner formulation plus, per friction element and
+/// per held limit, a solve with its factorization (its response to a unit force along the
+/// joint); a free limit costs nothing but its event function. Nothing is allocated after setup.
 pub struct Frictional {
     inner: Box<dyn Formulation>,
     terms: Vec<FrictionTerms>,
@@ -23,6 +27,10 @@ pub struct Frictional {
     event_lambda: Vec<f64>,
     /// True once the modes were set ([`Formulation::start_events`]).
     started: bool,
+    /// The number of friction elements (the limits follow them in `terms`).
+    frictions: usize,
+    /// The kinetic energy the impacts took so far (J).
+    impact_loss: f64,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -35,14 +43,20 @@ impl Frictional {
     /// `inner` with the friction of its system's joints; an error when the formulation cannot
     /// take an added force (a tree solved outright by the articulated-body algorithm).
     pub fn new(mut inner: Box<dyn Formulation>) -> Result<Self, DynamicsError> {
-        let (n, m, count) = {
+        let (n, m, frictions, count) = {
             let s = inner.system();
-            (s.layout().n_v(), s.num_equations(), s.frictions().len())
+            let f = s.frictions().len();
+            (s.layout().n_v(), s.num_equations(), f, f + s.limits().len())
         };
         if count > 0 && !inner.set_extra_force(None) {
+            let s = inner.system();
+            let joint = match s.frictions().first() {
+                Some(f) => f.name.clone(),
+                None => s.limits()[0].name.clone(),
+            };
             return Err(DynamicsError::Friction {
                 time: 0.0,
-                joint: inner.system().frictions()[0].name.clone(),
+                joint,
                 what: format!(
                     "the {} formulation solves this model without forces added to it (a tree in joint \
                      coordinates): use absolute coordinates",
@@ -61,7 +75,94 @@ impl Frictional {
             event_qdd: vec![0.0; n],
             event_lambda: vec![0.0; m],
             started: false,
+            frictions,
+            impact_loss: 0.0,
         })
+    }
+
+    /// Fills element `k`'s row at `(t, q, v)`; for a limit, returns its coordinate.
+    fn fill_row(&mut self, k: usize, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let system = self.inner.system();
+        if k < self.frictions {
+            system.slip_row(k, t, q, v, &mut self.terms[k].row);
+            0.0
+        } else {
+            system.limit_row(k - self.frictions, t, q, v, &mut self.terms[k].row)
+        }
+    }
+
+    /// Element `k`'s response `A_k`, `Λ_k` to a unit force along its row (filled), after the
+    /// inner formulation's evaluation at the same state gave `qdd0`, `lambda0`: from the
+    /// formulation's factorization ([`Formulation::force_response`]), or else from a second
+    /// evaluation with a force `s g_k` added (`s` the largest multiplier or 1, so that the
+    /// difference keeps its digits), divided by `s`.
+    fn response(
+        &mut self,
+        k: usize,
+        (t, q, v): (f64, &[f64], &[f64]),
+        baumgarte: Option<Baumgarte>,
+        (qdd0, lambda0): (&[f64], &[f64]),
+    ) -> Result<(), DynamicsError> {
+        self.terms[k].row.write_dense(&mut self.dense);
+        let term = &mut self.terms[k];
+        if self
+            .inner
+            .force_response(t, &self.dense, &mut term.dv, &mut term.dlambda)?
+        {
+            return Ok(());
+        }
+        let scale = lambda0.iter().fold(1.0f64, |a, l| a.max(l.abs()));
+        self.dense.iter_mut().for_each(|g| *g *= scale);
+        self.inner.set_extra_force(Some(&self.dense));
+        let solved = self
+            .inner
+            .accelerations(t, q, v, baumgarte, &mut self.qdd, &mut self.lambda);
+        self.inner.set_extra_force(None);
+        solved?;
+        let term = &mut self.terms[k];
+        for ((r, a), a0) in term.dv.iter_mut().zip(&self.qdd).zip(qdd0) {
+            *r = (a - a0) / scale;
+        }
+        for ((r, l), l0) in term.dlambda.iter_mut().zip(&self.lambda).zip(lambda0) {
+            *r = (l - l0) / scale;
+        }
+        Ok(())
+    }
+
+    /// An impact of limit `k` (its index among the elements) at `(t, q, v)`, by (L3) of
+    /// `docs/limits.md`: `v` changes by the impulse along the limit's row, and the joint is held
+    /// at the bound when its rebound is below its rest speed (its rate then set to zero) and
+    /// free otherwise. Nothing happens where the joint moves away from its nearer bound.
+    fn impact(&mut self, k: usize, t: f64, q: &[f64], v: &mut [f64]) -> Result<bool, DynamicsError> {
+        let limit = self.inner.system().limits()[k - self.frictions].clone();
+        let s = self.fill_row(k, t, q, v);
+        let sign = limit.nearer_bound(s);
+        let before = self.terms[k].row.dot(v);
+        if sign * before >= 0.0 {
+            return Ok(false);
+        }
+        let mut qdd = std::mem::take(&mut self.event_qdd);
+        let mut lambda = std::mem::take(&mut self.event_lambda);
+        let result = self.inner.accelerations(t, q, v, None, &mut qdd, &mut lambda).and_then(|()| {
+            self.response(k, (t, q, v), None, (&qdd, &lambda))
+        });
+        self.event_qdd = qdd;
+        self.event_lambda = lambda;
+        result?;
+        let term = &mut self.terms[k];
+        let response = term.row.dot(&term.dv);
+        let mut impulse = impact_impulse(&limit, before, response, t)?;
+        let mut after = before + response * impulse;
+        let held = after.abs() < limit.rest_speed;
+        if held {
+            // The rebound is too small to leave: the joint rests on its bound, its rate zero.
+            impulse -= after / response;
+            after = 0.0;
+        }
+        v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
+        self.impact_loss += impact_loss(impulse, before, after);
+        term.mode = if held { Mode::Held(sign) } else { Mode::Free };
+        Ok(true)
     }
 }
 
@@ -74,10 +175,9 @@ impl Formulation for Frictional {
         self.inner.system()
     }
 
-    /// `v̇₀`, `λ₀` without friction; the response `A_k`, `Λ_k` to a unit force along `g_k` from
-    /// the formulation's factorization ([`Formulation::force_response`]), or else from a second
-    /// evaluation with a force `s g_k` added (`s` the largest multiplier or 1, so that the
-    /// difference keeps its digits), divided by `s`; then (F1)–(F3) of `docs/friction.md`.
+    /// `v̇₀`, `λ₀` without friction and limits; each element's response to a unit force along
+    /// it (not a free limit's: it has no force); then (F1)–(F3) of `docs/friction.md` and
+    /// (L1)–(L2) of `docs/limits.md`.
     fn accelerations(
         &mut self,
         t: f64,
@@ -94,30 +194,10 @@ impl Formulation for Frictional {
         if !self.started {
             self.start_events(t, q, qd);
         }
-        let scale = lambda.iter().fold(1.0f64, |a, l| a.max(l.abs()));
         for k in 0..self.terms.len() {
-            self.inner.system().slip_row(k, t, q, qd, &mut self.terms[k].row);
-            self.terms[k].row.write_dense(&mut self.dense);
-            let term = &mut self.terms[k];
-            if self
-                .inner
-                .force_response(t, &self.dense, &mut term.dv, &mut term.dlambda)?
-            {
-                continue;
-            }
-            self.dense.iter_mut().for_each(|g| *g *= scale);
-            self.inner.set_extra_force(Some(&self.dense));
-            let solved = self
-                .inner
-                .accelerations(t, q, qd, baumgarte, &mut self.qdd, &mut self.lambda);
-            self.inner.set_extra_force(None);
-            solved?;
-            let term = &mut self.terms[k];
-            for ((r, a), a0) in term.dv.iter_mut().zip(&self.qdd).zip(qdd.iter()) {
-                *r = (a - a0) / scale;
-            }
-            for ((r, l), l0) in term.dlambda.iter_mut().zip(&self.lambda).zip(lambda.iter()) {
-                *r = (l - l0) / scale;
+            self.fill_row(k, t, q, qd);
+            if self.terms[k].mode != Mode::Free {
+                self.response(k, (t, q, qd), baumgarte, (qdd, lambda))?;
             }
         }
         solve_friction(
@@ -156,18 +236,32 @@ impl Formulation for Frictional {
         self.inner.set_extra_force(extra)
     }
 
-    /// Each element's mode from its slip rate at `(q, v)`: stuck within its stick speed,
-    /// otherwise slipping in the rate's direction.
+    /// Each friction element's mode from its slip rate at `(q, v)`: stuck within its stick
+    /// speed, otherwise slipping in the rate's direction. Each limit is free, or held where it
+    /// starts at a bound (within [`LIMIT_SLACK`]) not moving away from it.
     fn start_events(&mut self, t: f64, q: &[f64], v: &[f64]) {
         let system = self.inner.system();
         for (k, (term, spec)) in self.terms.iter_mut().zip(system.frictions()).enumerate() {
             system.slip_row(k, t, q, v, &mut term.row);
             term.mode = Mode::at(term.row.dot(v), spec.stick_speed);
         }
+        let limits = &mut self.terms[self.frictions..];
+        for (k, (term, limit)) in limits.iter_mut().zip(system.limits()).enumerate() {
+            let s = system.limit_row(k, t, q, v, &mut term.row);
+            let sign = limit.nearer_bound(s);
+            let at_bound = limit.free_event(s) <= 2.0 * LIMIT_SLACK;
+            term.mode = if at_bound && sign * term.row.dot(v) <= 0.0 {
+                Mode::Held(sign)
+            } else {
+                Mode::Free
+            };
+        }
         self.started = true;
     }
 
-    /// The system's event functions, with each friction element's [`Mode::event`] first.
+    /// The system's event functions, with each friction element's [`Mode::event`] first, then
+    /// each limit's: a free limit's distance to its nearer bound ([`crate::JointLimit::free_event`]),
+    /// a held one's force `σ F` (one evaluation of the formulation).
     fn events(&mut self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         if !self.started {
             self.start_events(t, q, v);
@@ -178,6 +272,29 @@ impl Formulation for Frictional {
             if let Some(slot) = out.get_mut(k) {
                 system.slip_row(k, t, q, v, &mut term.row);
                 *slot = term.mode.event(term.row.dot(v), spec.stick_speed);
+            }
+        }
+        let held = self.terms[self.frictions..].iter().any(|t| matches!(t.mode, Mode::Held(_)));
+        if held {
+            let mut qdd = std::mem::take(&mut self.event_qdd);
+            let mut lambda = std::mem::take(&mut self.event_lambda);
+            // An evaluation that fails leaves the held limits' functions as they were; the
+            // step's own evaluation reports the failure.
+            let solved = self.accelerations(t, q, v, None, &mut qdd, &mut lambda).is_ok();
+            self.event_qdd = qdd;
+            self.event_lambda = lambda;
+            if !solved {
+                return;
+            }
+        }
+        let system = self.inner.system();
+        let first = self.frictions;
+        for (k, limit) in system.limits().iter().enumerate() {
+            let term = &mut self.terms[first + k];
+            let Some(slot) = out.get_mut(first + k) else { break };
+            match term.mode {
+                Mode::Held(sign) => *slot = sign * term.hold,
+                _ => *slot = limit.free_event(system.limit_row(k, t, q, v, &mut term.row)),
             }
         }
     }
@@ -195,7 +312,19 @@ impl Formulation for Frictional {
             if !crossed[k] {
                 continue;
             }
-            changed = true;
+            match self.terms[k].mode {
+                Mode::Free => {
+                    changed |= self.impact(k, t, q, v)?;
+                    continue;
+                }
+                Mode::Held(_) => {
+                    // Its force reached zero: the joint leaves the bound.
+                    self.terms[k].mode = Mode::Free;
+                    changed = true;
+                    continue;
+                }
+                Mode::Stick | Mode::Slip(_) => changed = true,
+            }
             let sign = match self.terms[k].mode {
                 Mode::Stick => {
                     self.inner.system().slip_row(k, t, q, v, &mut self.terms[k].row);
@@ -203,6 +332,7 @@ impl Formulation for Frictional {
                     continue;
                 }
                 Mode::Slip(sign) => sign,
+                Mode::Free | Mode::Held(_) => continue,
             };
             let mut qdd = std::mem::take(&mut self.event_qdd);
             let mut lambda = std::mem::take(&mut self.event_lambda);
@@ -227,6 +357,14 @@ impl Formulation for Frictional {
     }
 
     fn friction_forces(&self) -> &[f64] {
-        &self.forces
+        &self.forces[..self.frictions]
+    }
+
+    fn limit_forces(&self) -> &[f64] {
+        &self.forces[self.frictions..]
+    }
+
+    fn impact_loss(&self) -> f64 {
+        self.impact_loss
     }
 }

@@ -31,6 +31,7 @@ pub mod inputs;
 pub mod inverse;
 pub mod kinematics;
 pub mod layout;
+pub mod limit;
 pub mod linalg;
 pub mod minimum_norm;
 pub mod model_error;
@@ -59,6 +60,7 @@ pub use friction::{solve_friction, FrictionTerms, FrictionWork, JointFriction, M
 pub use frictional::Frictional;
 pub use kinematics::{KinematicOptions, KinematicReport};
 pub use layout::{BodyBlock, Layout};
+pub use limit::{JointLimit, LIMIT_SLACK, REST_SPEED};
 pub use model_error::ModelError;
 pub use number::Shortest;
 pub use partition::{Partition, PartitionTracker, Repartition, VelocityTransform};

@@ -75,7 +75,8 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     fn normalize(&self, _q: &mut [f64]) {}
 
     /// The number of event functions ([`MultibodySystem::events`]): one per friction element
-    /// ([`MultibodySystem::frictions`], first) and one per contact element. Default 0.
+    /// ([`MultibodySystem::frictions`], first), one per joint limit
+    /// ([`MultibodySystem::limits`], next) and one per contact element. Default 0.
     fn num_events(&self) -> usize {
         0
     }
@@ -83,7 +84,7 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// The event functions at `(t, q, v)` into `out` (length [`MultibodySystem::num_events`]):
     /// first each friction element's slip rate `w` (0 while `|w|` is within its stick speed, so
     /// that a sign change is a slip that stops or reverses, `docs/friction.md`), then each
-    /// contact's gap, positive apart and negative in contact, so that a sign change within a
+    /// limit's distance to its nearer bound (`docs/limits.md`), then each contact's gap, positive apart and negative in contact, so that a sign change within a
     /// step is a contact beginning or ending there. The integration loop ends a step there
     /// (`docs/contact.md`, "Events"). Allocates nothing.
     fn events(&self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}
@@ -97,6 +98,19 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// Allocates nothing. Default: an empty row.
     fn slip_row(&self, _k: usize, _t: f64, _q: &[f64], _v: &[f64], row: &mut crate::SlipRow) {
         row.clear();
+    }
+
+    /// The joint limits (`docs/limits.md`), in a fixed order. Default none.
+    fn limits(&self) -> &[crate::JointLimit] {
+        &[]
+    }
+
+    /// The row of limited joint `k` ([`MultibodySystem::limits`]) at `(t, q, v)` into `row`
+    /// (its rate `w = g·v` and the bias of `ẇ`), and its coordinate `s` (zero in the file's
+    /// configuration) as the result. Allocates nothing. Default: an empty row at 0.
+    fn limit_row(&self, _k: usize, _t: f64, _q: &[f64], _v: &[f64], row: &mut crate::SlipRow) -> f64 {
+        row.clear();
+        0.0
     }
 
     /// The bodies (layout indices) whose coordinates each applied-force element reads and whose

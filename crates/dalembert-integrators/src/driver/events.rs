@@ -40,6 +40,8 @@ pub(super) struct Events {
     ahead: Vec<f64>,
     /// True while the step in progress was shortened to end at an event.
     pub located: bool,
+    /// True when a step ended at an event that is not yet settled ([`Events::defer`]).
+    pending: bool,
 }
 
 impl Events {
@@ -63,6 +65,7 @@ impl Events {
             rate: vec![0.0; y0.len()],
             ahead: vec![0.0; m],
             located: false,
+            pending: false,
         }
     }
 
@@ -230,8 +233,37 @@ impl Events {
         Ok(first.map(|(_, theta)| theta))
     }
 
+    /// The run accepted a step that ended at an event: the event is settled
+    /// ([`Events::settle_pending`]) when the run goes on from it, not now, so that the states
+    /// shown within the step (output samples, on its dense output) are evaluated with the law
+    /// that held over it (a slip's friction before it stopped, the kinetic energy before an
+    /// impact).
+    pub fn defer(&mut self) {
+        self.pending = true;
+    }
+
+    /// The run goes on from `y` at `t`: an event a step ended at ([`Events::defer`]) is settled
+    /// there ([`Events::settle`]) and its functions start the next step. True when the state or
+    /// the law changed.
+    pub fn settle_pending(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        y: &mut [f64],
+        n_q: usize,
+    ) -> Result<bool, DynamicsError> {
+        if !self.pending {
+            return Ok(false);
+        }
+        self.pending = false;
+        let changed = self.settle(f, t, y, n_q)?;
+        self.accepted(f, t, y, n_q);
+        Ok(changed)
+    }
+
     /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.
     pub fn accepted(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64], n_q: usize) {
+        self.pending = false;
         if self.is_empty() {
             return;
         }

@@ -116,6 +116,10 @@ fn evaluated<'a>(
     if forces.len() == mon.friction.len() {
         mon.friction.copy_from_slice(forces);
     }
+    let forces = f.limit_forces();
+    if forces.len() == mon.limit.len() {
+        mon.limit.copy_from_slice(forces);
+    }
     Ok(Sample {
         t,
         q,
@@ -123,6 +127,8 @@ fn evaluated<'a>(
         qdd: &mon.qdd,
         lambda: &mon.lambda,
         friction: &mon.friction,
+        limit: &mon.limit,
+        impact_loss: f.impact_loss(),
         constraint_violation: inf_norm(&mon.c),
         velocity_violation: inf_norm(&mon.cdot),
         energy,
@@ -178,6 +184,7 @@ impl Integration {
             qdd: vec![0.0; n_v],
             lambda: vec![0.0; m],
             friction: vec![0.0; f.system().frictions().len()],
+            limit: vec![0.0; f.system().limits().len()],
             energy0,
             scale0: 1.0 + inf_norm(&y),
             divergence_factor: opts.divergence_factor,
@@ -360,6 +367,11 @@ impl Integration {
     fn advance(&mut self, f: &mut dyn Formulation, t: f64, cancel: &AtomicBool) -> Result<(), IntegrationError> {
         let tol = tolerance(t);
         while self.t < t - tol {
+            // An event the last step ended at, settled as the run goes on from it.
+            let n_q = self.mon.n;
+            if self.events.settle_pending(f, self.t, &mut self.y, n_q)? {
+                self.stepper.state_changed();
+            }
             let across = match &self.control {
                 Control::Fixed(_) => self.next_end() > t + tol,
                 Control::Adaptive(_) => false,
@@ -537,6 +549,10 @@ impl Integration {
 
     /// One step of the run (a fixed step, an accepted adaptive step, or half of a bridge).
     fn unit(&mut self, f: &mut dyn Formulation, cancel: &AtomicBool) -> Result<(), IntegrationError> {
+        let n_q = self.mon.n;
+        if self.events.settle_pending(f, self.t, &mut self.y, n_q)? {
+            self.stepper.state_changed();
+        }
         let result = match self.control {
             Control::Fixed(_) => self.fixed_unit(f, cancel),
             Control::Adaptive(_) => self.adaptive_unit(f, cancel),
@@ -643,12 +659,13 @@ impl Integration {
             };
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
-            if located && events.settle(f, t_after, y, mon.n)? {
-                stepper.state_changed();
-            }
             // The loop does not tell a fixed-step method that its state was projected.
             tangents.follow(ts, h, mon.n, false)?;
-            events.accepted(f, t_after, y, mon.n);
+            if located {
+                events.defer();
+            } else {
+                events.accepted(f, t_after, y, mon.n);
+            }
             *t = t_after;
             mon.monitor(f, t_after, y, h, cancel)?;
             if located {
@@ -783,18 +800,17 @@ impl Integration {
                 let t_new = if last { t_end } else { *t + a.h };
                 a.dense = Some((*t, a.h));
                 normalize(f, y, n_q);
-                let mut projected = mon.project_step(f, t_new, y, stab)?;
-                if events.located && events.settle(f, t_new, y, n_q)? {
-                    projected = true;
-                }
+                let projected = mon.project_step(f, t_new, y, stab)?;
                 if projected {
                     stepper.state_changed();
                 }
                 tangents.follow(*t, a.h, n_q, projected)?;
                 if events.located {
                     mon.stats.events += 1;
+                    events.defer();
+                } else {
+                    events.accepted(f, t_new, y, n_q);
                 }
-                events.accepted(f, t_new, y, n_q);
                 let h = a.h;
                 *t = t_new;
                 a.guard.accepted(h);

@@ -21,6 +21,8 @@ pub(super) struct Monitors {
     pub lambda: Vec<f64>,
     /// The friction forces of the joints at the last sample (`Formulation::friction_forces`).
     pub friction: Vec<f64>,
+    /// The joint limits' forces at the last sample (`Formulation::limit_forces`).
+    pub limit: Vec<f64>,
     pub energy0: f64,
     pub scale0: f64,
     pub divergence_factor: f64,
