@@ -42,6 +42,11 @@ pub(super) struct Events {
     pub located: bool,
     /// True when a step ended at an event that is not yet settled ([`Events::defer`]).
     pending: bool,
+    /// The fractions of a fixed step around the aimed function's zero, with its values there
+    /// ([`Events::refine`]).
+    bracket: ((f64, f64), (f64, f64)),
+    /// Which end of the bracket the last refinement moved (true: the far one).
+    last_side: Option<bool>,
 }
 
 impl Events {
@@ -66,6 +71,8 @@ impl Events {
             ahead: vec![0.0; m],
             located: false,
             pending: false,
+            bracket: ((0.0, 0.0), (1.0, 0.0)),
+            last_side: None,
         }
     }
 
@@ -171,8 +178,45 @@ impl Events {
             .min_by(|x, y| x.1.total_cmp(&y.1));
         if let Some((i, _)) = first {
             self.aimed = Some(i);
+            self.bracket = ((0.0, self.g0[i]), (1.0, self.g[i]));
+            self.last_side = None;
         }
         first.map(|(_, theta)| theta)
+    }
+
+    /// After a fixed step shortened to the fraction `theta` of the step `chord` located (from its
+    /// start `t`, ending at `y`): the next fraction to try for the aimed function's zero, by
+    /// regula falsi with the Illinois rule on the bracket of fractions tried so far (the chord's
+    /// fixed end stalls on a curved function: a body falling onto a stop), or `None` when the
+    /// step ends at the zero (within 10⁻¹⁴ or a bracket of 10⁻¹² of the step).
+    pub fn refine(&mut self, f: &mut dyn Formulation, t: f64, theta: f64, y: &[f64], n_q: usize) -> Option<f64> {
+        let i = self.aimed?;
+        let (q, v) = y.split_at(n_q);
+        f.events(t, q, v, &mut self.g);
+        let (a, g) = (self.g0[i], self.g[i]);
+        if g.abs() <= 1e-14 || !g.is_finite() {
+            return None;
+        }
+        let ((lo, glo), (hi, ghi)) = (&mut self.bracket.0, &mut self.bracket.1);
+        if (g > 0.0) == (a > 0.0) {
+            *lo = theta;
+            *glo = g;
+            if self.last_side == Some(false) {
+                *ghi *= 0.5;
+            }
+            self.last_side = Some(false);
+        } else {
+            *hi = theta;
+            *ghi = g;
+            if self.last_side == Some(true) {
+                *glo *= 0.5;
+            }
+            self.last_side = Some(true);
+        }
+        if *hi - *lo <= 1e-12 {
+            return None;
+        }
+        Some(*lo + (*hi - *lo) * *glo / (*glo - *ghi))
     }
 
     /// After a step shortened to end at an event, ending at `y` at `t`: the formulation does what

@@ -136,7 +136,7 @@ fn evaluated<'a>(
 }
 
 /// How many times a fixed step is shortened to end at an event.
-const RELOCATIONS: usize = 4;
+const RELOCATIONS: usize = 8;
 
 fn tolerance(t: f64) -> f64 {
     1e-12 * (1.0 + t.abs())
@@ -599,41 +599,49 @@ impl Integration {
             events.mark(y);
             let mut h = g.hh;
             let mut outcome = stepper.step(f, ts, h, y)?;
-            // An event inside the step (a contact beginning or ending, a slip stopping): the
-            // step again, to end there (the rest of the output interval is then spanned anew from
-            // it), first where the event's tangent at the step's start says, then, while the
-            // step still crosses, on the chord of its own end (at most `RELOCATIONS` times).
+            // An event inside the step (a contact beginning or ending, a slip stopping, an
+            // impact): the step again, to end there (the rest of the output interval is then
+            // spanned anew from it), first where the event's tangent at the step's start says,
+            // then by regula falsi on the fractions tried ([`Events::refine`], at most
+            // `RELOCATIONS` times).
             let mut located = false;
-            if outcome.accepted && !events.located {
+            let mut restarted = false;
+            'locate: while outcome.accepted && !events.located {
+                let Some(chord) = events.chord(f, ts, h, y, mon.n) else {
+                    break;
+                };
+                let full = h;
+                let at = (ts, h, mon.n);
+                let tangent = events.tangent(f, at, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
+                let mut theta = tangent.unwrap_or(chord);
                 let mut tries = 0;
-                while let Some(chord) = events.chord(f, ts, h, y, mon.n) {
-                    if tries == RELOCATIONS || !outcome.accepted {
-                        break;
-                    }
-                    let theta = if tries == 0 {
-                        let at = (ts, h, mon.n);
-                        let tangent = events.tangent(f, at, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
-                        tangent.unwrap_or(chord)
-                    } else {
-                        chord
-                    };
-                    if theta * h <= opts.min_step {
-                        if tries == 0 && events.settle_at_start(f, ts, y, mon.n)? {
-                            // The event at the step's start changed the law: the step again.
+                while tries < RELOCATIONS {
+                    if theta * full <= opts.min_step {
+                        if tries == 0 && !restarted && events.settle_at_start(f, ts, y, mon.n)? {
+                            // The event at the step's start changed the law: the step again,
+                            // and its events looked for anew.
                             stepper.state_changed();
                             outcome = stepper.step(f, ts, h, y)?;
-                            tries += 1;
-                            continue;
+                            restarted = true;
+                            continue 'locate;
                         }
                         break;
                     }
                     events.restore(y);
                     stepper.state_changed();
-                    h *= theta;
+                    h = theta * full;
                     outcome = stepper.step(f, ts, h, y)?;
                     located = true;
                     tries += 1;
+                    if !outcome.accepted {
+                        break;
+                    }
+                    match events.refine(f, ts + h, theta, y, mon.n) {
+                        Some(next) => theta = next,
+                        None => break,
+                    }
                 }
+                break;
             }
             if !outcome.accepted {
                 g.successes = 0;
