@@ -565,3 +565,43 @@ fn a_run_with_joint_friction_allocates_nothing_per_step() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// A run with a joint limit (impacts located, the joint held on its stop and released, its
+/// events; `docs/limits.md`) allocates nothing per step, every formulation × every method that
+/// takes limits: a rod swinging against stops on both sides of its pin with e = 0.5, through
+/// twice the impacts, costs no more allocations.
+#[test]
+fn a_run_with_joint_limits_allocates_nothing_per_step() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let text = "[scene]\ngravity = [0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\nshape = { rod = 1.0 }\nposition = [0.5, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
+        limits = [-2.0, 0.0]\nrestitution = 0.5\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    let base = dalembert::Scene::from_toml(text, "pin limits").unwrap();
+    let mut failures = Vec::new();
+    for formulation in ["augmented", "embedding", "amalgamated"] {
+        for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {
+            let mut scene = base.clone();
+            scene.settings.method = Method::of(entry);
+            scene.settings.formulation = dalembert::FormulationKind::parse(formulation).unwrap();
+            let count = |end: f64| {
+                let mut sim = scene.simulation();
+                sim.end = end;
+                let before = ALLOCATIONS.load(Ordering::Relaxed);
+                let stats = sim.run(&mut |_| {}).unwrap();
+                (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
+            };
+            let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
+            assert!(events_long > events_short, "{formulation}, {}: no impact", entry.name);
+            if long > short {
+                failures.push(format!(
+                    "{formulation}, {}: {short} allocations for 1.5 s, {long} for 3 s",
+                    entry.name
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}

@@ -134,9 +134,9 @@ impl Frictional {
     /// at the bound when its rebound is below its rest speed (its rate then set to zero) and
     /// free otherwise. Nothing happens where the joint moves away from its nearer bound.
     fn impact(&mut self, k: usize, t: f64, q: &[f64], v: &mut [f64]) -> Result<bool, DynamicsError> {
-        let limit = self.inner.system().limits()[k - self.frictions].clone();
         let s = self.fill_row(k, t, q, v);
-        let sign = limit.nearer_bound(s);
+        let limit = &self.inner.system().limits()[k - self.frictions];
+        let (sign, rest_speed) = (limit.nearer_bound(s), limit.rest_speed);
         let before = self.terms[k].row.dot(v);
         if sign * before >= 0.0 {
             return Ok(false);
@@ -151,9 +151,10 @@ impl Frictional {
         result?;
         let term = &mut self.terms[k];
         let response = term.row.dot(&term.dv);
-        let mut impulse = impact_impulse(&limit, before, response, t)?;
+        let limit = &self.inner.system().limits()[k - self.frictions];
+        let mut impulse = impact_impulse(limit, before, response, t)?;
         let mut after = before + response * impulse;
-        let held = after.abs() < limit.rest_speed;
+        let held = after.abs() < rest_speed;
         if held {
             // The rebound is too small to leave: the joint rests on its bound, its rate zero.
             impulse -= after / response;
