@@ -485,6 +485,15 @@ pub(crate) fn assemble(
     sys.solve_velocities_weighted(t, q, qd, weights, &opts)
 }
 
+/// The first joint of `system` with friction or limits, and which (`"friction"` or `"limits"`):
+/// a model whose law switches at events (`docs/friction.md`, `docs/limits.md`).
+pub(crate) fn switching_joint(system: &dyn dalembert_system::MultibodySystem) -> Option<(String, &'static str)> {
+    if let Some(f) = system.frictions().first() {
+        return Some((f.name.clone(), "friction"));
+    }
+    system.limits().first().map(|l| (l.name.clone(), "limits"))
+}
+
 #[cfg(test)]
 mod formulation_names {
     use super::FormulationKind;
@@ -500,13 +509,4 @@ mod formulation_names {
         assert_eq!(FormulationKind::parse("Augmented"), None);
         assert_eq!(FormulationKind::parse(""), None);
     }
-}
-
-/// The first joint of `system` with friction or limits, and which (`"friction"` or `"limits"`):
-/// a model whose law switches at events (`docs/friction.md`, `docs/limits.md`).
-pub(crate) fn switching_joint(system: &dyn dalembert_system::MultibodySystem) -> Option<(String, &'static str)> {
-    if let Some(f) = system.frictions().first() {
-        return Some((f.name.clone(), "friction"));
-    }
-    system.limits().first().map(|l| (l.name.clone(), "limits"))
 }

@@ -79,7 +79,10 @@ fn a_slider_dropped_on_its_stop_rebounds_to_e_squared_its_height() {
             for k in 0..t.len() {
                 worst = worst.max((q[k] + d - bouncing_height(d, e, t[k])).abs());
             }
-            assert!(worst < 1e-8, "{formulation} {integrator}: off the bounces by {worst:e} m");
+            assert!(
+                worst < 1e-8,
+                "{formulation} {integrator}: off the bounces by {worst:e} m"
+            );
             // The energy after n impacts is e²ⁿ of what it had above the stop (a conservation
             // law between impacts): m g d e² after the first, at t = 1 s.
             let k = t.iter().position(|&x| (x - 1.0).abs() < 1e-9).unwrap();
@@ -108,11 +111,22 @@ fn a_plastic_stop_holds_the_slider_with_its_weight() {
             let impact = (2.0 * d / G).sqrt();
             for k in 0..t.len() {
                 if t[k] < impact + 1e-3 {
-                    assert!(force[k] == 0.0, "{formulation} {integrator}: a free slider has no stop force");
+                    assert!(
+                        force[k] == 0.0,
+                        "{formulation} {integrator}: a free slider has no stop force"
+                    );
                     continue;
                 }
-                assert!((q[k] + d).abs() < bar, "{formulation} {integrator}: {} m off the stop", q[k] + d);
-                assert!(vy[k].abs() < 1e-12, "{formulation} {integrator}: moves at {} m/s", vy[k]);
+                assert!(
+                    (q[k] + d).abs() < bar,
+                    "{formulation} {integrator}: {} m off the stop",
+                    q[k] + d
+                );
+                assert!(
+                    vy[k].abs() < 1e-12,
+                    "{formulation} {integrator}: moves at {} m/s",
+                    vy[k]
+                );
                 assert!(
                     (force[k] - 2.0 * G).abs() < 1e-10 * 2.0 * G,
                     "{formulation} {integrator}: the stop holds {} N, expected m g",
@@ -137,7 +151,11 @@ fn a_slider_leaves_its_stop_when_the_force_on_it_passes_zero() {
         for integrator in METHODS {
             let scene = slider([0.0, 1.0], 0.0, 0.0, force, (formulation, integrator, 1.0));
             let table = run(&scene);
-            let (t, q, held) = (column(&table, "t"), column(&table, "guide.q"), column(&table, "guide.limit"));
+            let (t, q, held) = (
+                column(&table, "t"),
+                column(&table, "guide.q"),
+                column(&table, "guide.limit"),
+            );
             for k in 0..t.len() {
                 let s = (t[k] - 0.5).max(0.0);
                 let expected = 20.0 * s * s * s / (6.0 * m);
@@ -207,7 +225,10 @@ fn a_rod_swinging_onto_a_stop_on_its_pin_keeps_e_squared_of_its_kinetic_energy()
         // within 1e-4 rad of it).
         let highest = q[hit..].iter().cloned().fold(f64::NEG_INFINITY, f64::max);
         let apex = (e * e - 1.0).asin();
-        assert!((highest - apex).abs() < 1e-4, "{formulation}: swings back to {highest}, expected {apex}");
+        assert!(
+            (highest - apex).abs() < 1e-4,
+            "{formulation}: swings back to {highest}, expected {apex}"
+        );
     }
 }
 
@@ -243,7 +264,10 @@ fn the_slider_crank_striking_its_stop_keeps_its_energy_with_e_one_and_every_form
         let drift = energy.iter().map(|e| (e - energy[0]).abs()).fold(0.0, f64::max);
         assert!(drift < 1e-7, "{formulation}: energy drifts {drift:e} J with e = 1");
         let cdot = column(&table, "velocity_violation");
-        assert!(cdot.iter().all(|&c| c < 1e-12), "{formulation}: an impulse broke a joint's velocity");
+        assert!(
+            cdot.iter().all(|&c| c < 1e-12),
+            "{formulation}: an impulse broke a joint's velocity"
+        );
     }
     let reference = run(&slider_crank_stop("augmented", &[]));
     let x0 = column(&reference, "slider.x");

@@ -11,8 +11,8 @@ use crate::mechanism::Mechanism;
 use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
-    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Limit, Gear, JointAngle,
-    JointDisplacement, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, STICK_SPEED,
+    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear, JointAngle,
+    JointDisplacement, Limit, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
@@ -421,7 +421,10 @@ fn friction(
 fn limit(b: &Builder<'_>, d: &JointDef, info: &JointInfo, constraint: usize) -> Result<Option<Limit>, SceneError> {
     let owner = format!("joint '{}'", d.name);
     let Some(bounds) = &d.limits else {
-        let stray = [("restitution", d.restitution.as_ref()), ("rest_speed", d.rest_speed.as_ref())];
+        let stray = [
+            ("restitution", d.restitution.as_ref()),
+            ("rest_speed", d.rest_speed.as_ref()),
+        ];
         if let Some((key, value)) = stray.into_iter().find_map(|(k, v)| v.map(|v| (k, v))) {
             return Err(b.ctx.err(
                 Some(value.span()),
@@ -437,14 +440,20 @@ fn limit(b: &Builder<'_>, d: &JointDef, info: &JointInfo, constraint: usize) -> 
         JointInfo::Other(_) => {
             return Err(b.ctx.err(
                 span,
-                format!("{owner}: limits are for revolute and prismatic joints, this one is '{}'", d.kind),
+                format!(
+                    "{owner}: limits are for revolute and prismatic joints, this one is '{}'",
+                    d.kind
+                ),
             ))
         }
     };
     let &[lower, upper] = bounds.get_ref().as_slice() else {
         return Err(b.ctx.err(
             span,
-            format!("{owner}: limits must be [lower, upper], got {} values", bounds.get_ref().len()),
+            format!(
+                "{owner}: limits must be [lower, upper], got {} values",
+                bounds.get_ref().len()
+            ),
         ));
     };
     let restitution = d.restitution.as_ref().map_or(0.0, |r| *r.get_ref());

@@ -34,7 +34,14 @@ pub struct Limit {
 
 impl Limit {
     /// A limit on `joint` whose coordinate is zero at `q0` (the file's configuration).
-    pub fn new(joint: FrictionJoint, constraint: usize, q0: &[f64], bounds: [f64; 2], restitution: f64, rest_speed: f64) -> Self {
+    pub fn new(
+        joint: FrictionJoint,
+        constraint: usize,
+        q0: &[f64],
+        bounds: [f64; 2],
+        restitution: f64,
+        rest_speed: f64,
+    ) -> Self {
         let origin = joint.row(q0, &[]).c;
         Limit {
             joint,

@@ -143,9 +143,10 @@ impl Frictional {
         }
         let mut qdd = std::mem::take(&mut self.event_qdd);
         let mut lambda = std::mem::take(&mut self.event_lambda);
-        let result = self.inner.accelerations(t, q, v, None, &mut qdd, &mut lambda).and_then(|()| {
-            self.response(k, (t, q, v), None, (&qdd, &lambda))
-        });
+        let result = self
+            .inner
+            .accelerations(t, q, v, None, &mut qdd, &mut lambda)
+            .and_then(|()| self.response(k, (t, q, v), None, (&qdd, &lambda)));
         self.event_qdd = qdd;
         self.event_lambda = lambda;
         result?;
@@ -275,7 +276,9 @@ impl Formulation for Frictional {
                 *slot = term.mode.event(term.row.dot(v), spec.stick_speed);
             }
         }
-        let held = self.terms[self.frictions..].iter().any(|t| matches!(t.mode, Mode::Held(_)));
+        let held = self.terms[self.frictions..]
+            .iter()
+            .any(|t| matches!(t.mode, Mode::Held(_)));
         if held {
             let mut qdd = std::mem::take(&mut self.event_qdd);
             let mut lambda = std::mem::take(&mut self.event_lambda);
