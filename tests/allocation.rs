@@ -579,9 +579,18 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
         [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
         limits = [-2.0, 0.0]\nrestitution = 0.5\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
-    let base = dalembert::Scene::from_toml(text, "pin limits").unwrap();
+    // The same rod as a spatial body (its limit's row written for spatial bodies).
+    let spatial = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08, 0.08]\nposition = [0.5, 0.0, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
+        axis = [0.0, -1.0, 0.0]\nlimits = [-2.0, 0.0]\nrestitution = 0.5\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
     let mut failures = Vec::new();
-    for formulation in ["augmented", "embedding", "amalgamated"] {
+    for (formulation, base) in ["augmented", "embedding", "amalgamated"]
+        .into_iter()
+        .flat_map(|f| [(f, text), (f, spatial)])
+    {
+        let base = dalembert::Scene::from_toml(base, "pin limits").unwrap();
         for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {
             let mut scene = base.clone();
             scene.settings.method = Method::of(entry);

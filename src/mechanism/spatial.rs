@@ -118,6 +118,9 @@ impl ColumnWriter for SpatialColumns {
             .flat_map(|j| SPATIAL_JOINT_COLUMNS.iter().map(move |c| format!("{j}.{c}")))
             .collect();
         names.extend(self.model.driver_names().map(|d| format!("{d}.effort")));
+        // Joint limits: the stop's torque or force on the second body along the joint
+        // (`docs/limits.md`); not in the joint's reaction columns.
+        names.extend(self.model.limit_specs().iter().map(|l| format!("{}.limit", l.name)));
         names
     }
 
@@ -145,6 +148,12 @@ impl ColumnWriter for SpatialColumns {
         }
         let first = s.lambda.len() - self.drivers;
         row.extend(s.lambda[first..].iter().map(|l| -l));
+        let limits = self.model.limit_specs().len();
+        if s.limit.len() == limits {
+            row.extend_from_slice(s.limit);
+        } else {
+            row.extend(std::iter::repeat_n(0.0, limits));
+        }
     }
 
     fn boxed_clone(&self) -> Box<dyn ColumnWriter> {

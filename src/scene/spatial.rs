@@ -19,9 +19,11 @@ use crate::animation::{Drawing, Solid, SpatialDrawing};
 use dalembert_spatial::body;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
 use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
+use dalembert_system::{JointLimit, MultibodySystem, SlipRow, REST_SPEED};
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 use std::collections::HashMap;
+use std::ops::Range;
 use std::sync::Arc;
 use toml::Spanned;
 
@@ -156,6 +158,12 @@ pub(crate) struct JointDef {
     pub axis: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "strict::two_axes_opt")]
     pub axes: Option<[[f64; 3]; 2]>,
+    /// `limits = [lower, upper]` on a revolute or prismatic joint (`docs/limits.md`).
+    pub limits: Option<Spanned<Vec<f64>>>,
+    /// Newton's coefficient of restitution at the limits (default 0).
+    pub restitution: Option<Spanned<f64>>,
+    /// The rebound speed below which the joint rests on a limit (default 1e-3).
+    pub rest_speed: Option<Spanned<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -439,6 +447,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         names.add_body(&d.name, r);
     }
     let mut joint_kinds = HashMap::new();
+    let (mut limits, mut limit_spans) = (Vec::new(), Vec::new());
     for sj in &file.joints {
         let span = sj.span();
         let d = sj.get_ref();
@@ -457,6 +466,10 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let joint = joint(d, pair).map_err(|m| ctx.err(Some(span.clone()), format!("{owner}: {m}")))?;
         joint_kinds.insert(d.name.clone(), joint.kind);
         model.joint(joint);
+        if let Some((limit, at)) = limit(&ctx, d)? {
+            limits.push(limit);
+            limit_spans.push(at);
+        }
     }
     for sd in &file.drivers {
         let span = sd.span();
@@ -524,13 +537,34 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         model.force(f);
     }
     let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
+    let model = model.with_limits(limits.clone()).map_err(|e| {
+        let message = e.to_string();
+        let at = limits
+            .iter()
+            .zip(&limit_spans)
+            .find(|(l, _)| message.contains(&format!("'{}'", l.name)));
+        ctx.err(at.map(|(_, s)| s.clone()), message)
+    })?;
     let (mut q, mut qd) = model.initial_state();
     if let Some(initial) = &file.initial {
         let span = Some(initial.span());
         let moves = initial_moves(initial.get_ref(), &file.drivers).map_err(|m| ctx.err(span.clone(), m))?;
         model
             .move_joints(&mut q, &mut qd, &moves)
-            .map_err(|e| ctx.err(span, format!("[initial]: {e}")))?;
+            .map_err(|e| ctx.err(span.clone(), format!("[initial]: {e}")))?;
+        let mut row = SlipRow::default();
+        for (k, l) in model.limit_specs().iter().enumerate() {
+            let value = model.limit_row(k, 0.0, &q, &[], &mut row);
+            if value < l.lower || value > l.upper {
+                return Err(ctx.err(
+                    span.clone(),
+                    format!(
+                        "[initial]: joint '{}' starts at {value}, outside its limits [{}, {}]",
+                        l.name, l.lower, l.upper
+                    ),
+                ));
+            }
+        }
     }
     let shapes: Vec<Option<Solid>> = file.bodies.iter().map(|b| solid(b.get_ref())).collect();
     let visuals = file
@@ -609,6 +643,52 @@ fn initial_moves(
 }
 
 /// The joint a `[[joints]]` table describes.
+/// The limit of joint `d`, if it has one, with the span of its `limits` key (`docs/limits.md`);
+/// `restitution` or `rest_speed` without `limits` is refused at the key.
+fn limit(ctx: &Ctx<'_>, d: &JointDef) -> Result<Option<(JointLimit, Range<usize>)>, SceneError> {
+    let owner = format!("joint '{}'", d.name);
+    let Some(bounds) = &d.limits else {
+        let stray = [
+            ("restitution", d.restitution.as_ref()),
+            ("rest_speed", d.rest_speed.as_ref()),
+        ];
+        if let Some((key, value)) = stray.into_iter().find_map(|(k, v)| v.map(|v| (k, v))) {
+            return Err(ctx.err(
+                Some(value.span()),
+                format!("{owner}: '{key}' belongs to a joint with 'limits = [lower, upper]'"),
+            ));
+        }
+        return Ok(None);
+    };
+    let &[lower, upper] = bounds.get_ref().as_slice() else {
+        return Err(ctx.err(
+            Some(bounds.span()),
+            format!(
+                "{owner}: limits must be [lower, upper], got {} values",
+                bounds.get_ref().len()
+            ),
+        ));
+    };
+    let limit = JointLimit {
+        name: d.name.clone(),
+        lower,
+        upper,
+        restitution: d.restitution.as_ref().map_or(0.0, |r| *r.get_ref()),
+        rest_speed: d.rest_speed.as_ref().map_or(REST_SPEED, |r| *r.get_ref()),
+    };
+    if let Err(what) = limit.check() {
+        let at = if what.contains("restitution") {
+            d.restitution.as_ref().map(|r| r.span())
+        } else if what.contains("rest_speed") {
+            d.rest_speed.as_ref().map(|r| r.span())
+        } else {
+            None
+        };
+        return Err(ctx.err(at.or(Some(bounds.span())), format!("{owner}: {what}")));
+    }
+    Ok(Some((limit, bounds.span())))
+}
+
 fn joint(d: &JointDef, [bi, bj]: [BodyRef; 2]) -> Result<Joint, String> {
     let kind = JointKind::ALL.into_iter().find(|k| k.name() == d.kind).ok_or_else(|| {
         let names: Vec<&str> = JointKind::ALL.iter().map(|k| k.name()).collect();

@@ -36,6 +36,7 @@ pub mod geometry;
 pub mod joint_coordinates;
 pub mod joint_values;
 pub mod joints;
+pub mod limits;
 pub mod model;
 pub mod reactions;
 

@@ -148,6 +148,8 @@ impl ModelBuilder {
             layout,
             pattern,
             equations,
+            limits: Vec::new(),
+            limited_joints: Vec::new(),
         })
     }
 }
@@ -167,6 +169,9 @@ pub struct Model {
     pattern: ConstraintPattern,
     /// `(joint or driver, equation within it)` of every row (drivers numbered after the joints).
     equations: Vec<(usize, usize)>,
+    /// Joint limits (`docs/limits.md`), and the index of each one's joint.
+    pub(crate) limits: Vec<dalembert_system::JointLimit>,
+    pub(crate) limited_joints: Vec<usize>,
 }
 
 /// Most rows a joint primitive has.
@@ -539,16 +544,31 @@ impl MultibodySystem for Model {
             .sum()
     }
 
+    /// The limits, then the contact elements.
     fn num_events(&self) -> usize {
-        self.forces.iter().filter(|f| f.is_contact()).count()
+        self.limits.len() + self.forces.iter().filter(|f| f.is_contact()).count()
     }
 
-    /// Each contact element's gap, in the order of the force elements.
+    /// Each limit's distance to its nearer bound, then each contact element's gap, in the order
+    /// of the force elements.
     fn events(&self, _t: f64, q: &[f64], _v: &[f64], out: &mut [f64]) {
+        let (stops, gaps) = out.split_at_mut(self.limits.len().min(out.len()));
+        let mut row = dalembert_system::SlipRow::default();
+        for (k, slot) in stops.iter_mut().enumerate() {
+            *slot = self.limits[k].free_event(self.limit_row_into(k, q, &[], &mut row));
+        }
         let frame = |b: Option<usize>| self.frame(b, q, &[]);
-        for (slot, gap) in out.iter_mut().zip(self.forces.iter().filter_map(|f| f.gap(&frame))) {
+        for (slot, gap) in gaps.iter_mut().zip(self.forces.iter().filter_map(|f| f.gap(&frame))) {
             *slot = gap;
         }
+    }
+
+    fn limits(&self) -> &[dalembert_system::JointLimit] {
+        &self.limits
+    }
+
+    fn limit_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut dalembert_system::SlipRow) -> f64 {
+        self.limit_row_into(k, q, v, row)
     }
 
     fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
@@ -562,9 +582,10 @@ impl MultibodySystem for Model {
         gravity + self.forces.iter().map(|f| f.potential(t, &frame)).sum::<f64>()
     }
 
-    /// Every force element is conservative and nothing is driven (a driver does work).
+    /// Every force element is conservative, nothing is driven (a driver does work) and no joint
+    /// has limits (an impact takes energy).
     fn is_conservative(&self) -> bool {
-        self.forces.iter().all(ForceData::is_conservative) && self.drivers.is_empty()
+        self.forces.iter().all(ForceData::is_conservative) && self.drivers.is_empty() && self.limits.is_empty()
     }
 
     fn bodies_without_inertia(&self) -> Vec<String> {

@@ -1,0 +1,109 @@
+//! Limits on spatial revolute and prismatic joints (`docs/limits.md`): each limited joint's
+//! coordinate (its joint value, [`crate::joint_values`]), the row of its rate and the bias of its
+//! acceleration, for the seam's impact and resting law ([`dalembert_system::limit`]).
+//!
+//! With the joint frame's axes `x_i, y_i, z_i` on body `i`, `x_j` on body `j`, its points'
+//! global arms `s_i`, `s_j` from the centres of mass, and `d = r_j + s_j − r_i − s_i`:
+//!
+//! ```text
+//! revolute:  θ = atan2(x_j·y_i, x_j·x_i),  w = z_i·(ω_j − ω_i)
+//!            g: ω'_j ↦ A_jᵀ z_i,  ω'_i ↦ −A_iᵀ z_i;            b = ż_i·(ω_j − ω_i)
+//! prismatic: s = z_i·d,  w = ż_i·d + z_i·ḋ
+//!            g: ṙ_j ↦ z_i,  ṙ_i ↦ −z_i,  ω'_j ↦ A_jᵀ (s_j × z_i),  ω'_i ↦ A_iᵀ (z_i × (d + s_i))
+//!            b = (ω_i × ż_i)·d + 2 ż_i·ḋ + z_i·(ω_j × (ω_j × s_j) − ω_i × (ω_i × s_i))
+//! ```
+//!
+//! with `ż_i = ω_i × z_i` (`b` is `ẅ` at zero accelerations). The angle is measured within a
+//! turn, so a revolute joint's bounds lie within `(−π, π)`.
+
+use crate::frame::NV;
+use crate::joints::JointKind;
+use crate::Model;
+use dalembert_system::{JointLimit, ModelError, SlipRow};
+use nalgebra::Vector3;
+
+impl Model {
+    /// The model with limits on some of its revolute and prismatic joints (each limit names its
+    /// joint). Errors name the joint.
+    pub fn with_limits(mut self, limits: Vec<JointLimit>) -> Result<Self, ModelError> {
+        let mut joints = Vec::with_capacity(limits.len());
+        for l in &limits {
+            let bad = |what: String| ModelError::InvalidParameter {
+                element: format!("joint '{}'", l.name),
+                what,
+            };
+            l.check().map_err(bad)?;
+            let index = self
+                .joints()
+                .iter()
+                .position(|j| j.name == l.name)
+                .ok_or_else(|| bad("a limit refers to a joint the model does not hold".into()))?;
+            match self.joints()[index].kind {
+                Some(JointKind::Revolute) => {
+                    let pi = std::f64::consts::PI;
+                    if l.lower <= -pi || l.upper >= pi {
+                        return Err(bad(format!(
+                            "a spatial revolute joint's limits must lie within (−π, π) (its angle is measured within a turn), got [{}, {}]",
+                            l.lower, l.upper
+                        )));
+                    }
+                }
+                Some(JointKind::Prismatic) => {}
+                _ => return Err(bad("limits are for revolute and prismatic joints".into())),
+            }
+            if l.lower > 0.0 || l.upper < 0.0 {
+                return Err(bad(format!(
+                    "the joint starts outside its limits [{}, {}] (its value is 0 in the file's configuration)",
+                    l.lower, l.upper
+                )));
+            }
+            joints.push(index);
+        }
+        self.limits = limits;
+        self.limited_joints = joints;
+        Ok(self)
+    }
+
+    /// The joint limits, in order.
+    pub fn limit_specs(&self) -> &[JointLimit] {
+        &self.limits
+    }
+
+    /// The row of limit `k` at `(q, v)` into `row`, and the joint's value.
+    pub(crate) fn limit_row_into(&self, k: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
+        let j = &self.joints()[self.limited_joints[k]];
+        let fi = self.frame(j.body_i, q, v);
+        let fj = self.frame(j.body_j, q, v);
+        let axis = |k: usize| -> Vector3<f64> { fi.a * j.axes_i.column(k) };
+        let zi = axis(2);
+        let zi_dot = fi.w.cross(&zi);
+        row.clear();
+        let mut push = |body: Option<usize>, offset: usize, g: Vector3<f64>| {
+            if let Some(b) = body {
+                for (c, x) in g.iter().enumerate() {
+                    if *x != 0.0 {
+                        row.push(NV * b + offset + c, *x);
+                    }
+                }
+            }
+        };
+        if j.kind == Some(JointKind::Revolute) {
+            push(j.body_j, 3, fj.a.transpose() * zi);
+            push(j.body_i, 3, -(fi.a.transpose() * zi));
+            row.bias = zi_dot.dot(&(fj.w - fi.w));
+            let xj = fj.a * j.axes_j.column(0);
+            xj.dot(&axis(1)).atan2(xj.dot(&axis(0)))
+        } else {
+            let (si, sj) = (fi.a * j.point_i, fj.a * j.point_j);
+            let d = fj.r + sj - fi.r - si;
+            push(j.body_j, 0, zi);
+            push(j.body_i, 0, -zi);
+            push(j.body_j, 3, fj.a.transpose() * sj.cross(&zi));
+            push(j.body_i, 3, fi.a.transpose() * zi.cross(&(d + si)));
+            let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
+            let centripetal = fj.centripetal(&sj) - fi.centripetal(&si);
+            row.bias = fi.w.cross(&zi_dot).dot(&d) + 2.0 * zi_dot.dot(&d_dot) + zi.dot(&centripetal);
+            zi.dot(&d)
+        }
+    }
+}
