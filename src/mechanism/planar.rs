@@ -117,6 +117,11 @@ impl ColumnWriter for PlanarColumns {
             names.push(format!("{}.q", l.name()));
             names.push(format!("{}.limit", l.name()));
         }
+        // Rigid contacts: the gap (m) and the normal force on the body (N).
+        for c in self.model.rigid_contacts() {
+            names.push(format!("{}.gap", c.name));
+            names.push(format!("{}.normal", c.name));
+        }
         names
     }
 
@@ -154,6 +159,11 @@ impl ColumnWriter for PlanarColumns {
         for (k, l) in self.model.limits().iter().enumerate() {
             row.push(l.coordinate(s.q));
             row.push(s.limit.get(k).copied().unwrap_or(0.0));
+        }
+        let first = self.model.limits().len();
+        for (k, c) in self.model.rigid_contacts().iter().enumerate() {
+            row.push(c.gap(s.q));
+            row.push(s.limit.get(first + k).copied().unwrap_or(0.0));
         }
     }
 

@@ -120,7 +120,15 @@ impl ColumnWriter for SpatialColumns {
         names.extend(self.model.driver_names().map(|d| format!("{d}.effort")));
         // Joint limits: the stop's torque or force on the second body along the joint
         // (`docs/limits.md`); not in the joint's reaction columns.
-        names.extend(self.model.limit_specs().iter().map(|l| format!("{}.limit", l.name)));
+        // Rigid contacts: the gap (m) and the normal force on the body (N).
+        for l in self.model.limit_specs() {
+            if l.element == "contact" {
+                names.push(format!("{}.gap", l.name));
+                names.push(format!("{}.normal", l.name));
+            } else {
+                names.push(format!("{}.limit", l.name));
+            }
+        }
         names
     }
 
@@ -148,11 +156,19 @@ impl ColumnWriter for SpatialColumns {
         }
         let first = s.lambda.len() - self.drivers;
         row.extend(s.lambda[first..].iter().map(|l| -l));
-        let limits = self.model.limit_specs().len();
-        if s.limit.len() == limits {
-            row.extend_from_slice(s.limit);
-        } else {
-            row.extend(std::iter::repeat_n(0.0, limits));
+        let mut gap_row = dalembert_system::SlipRow::default();
+        for (k, l) in self.model.limit_specs().iter().enumerate() {
+            if l.element == "contact" {
+                row.push(dalembert_system::MultibodySystem::limit_row(
+                    self.model.as_ref(),
+                    k,
+                    s.t,
+                    s.q,
+                    &[],
+                    &mut gap_row,
+                ));
+            }
+            row.push(s.limit.get(k).copied().unwrap_or(0.0));
         }
     }
 

@@ -12,7 +12,7 @@ use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
     BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear, JointAngle,
-    JointDisplacement, Limit, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, STICK_SPEED,
+    JointDisplacement, Limit, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, RigidContact, STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
@@ -322,10 +322,15 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         }
         forces.push(Box::new(Gravity::new(v2(g))));
     }
+    let mut rigid_contacts = Vec::new();
     for sf in &file.forces {
         let span = sf.span();
         let d = sf.get_ref();
         b.unique(&d.name, &span, "force")?;
+        if d.rigid == Some(true) {
+            rigid_contacts.push(rigid_contact(&b, d, &span)?);
+            continue;
+        }
         let (element, mark) = force(&b, d, &span, &joints)?;
         if let Some(mark) = mark {
             drawing.add(mark);
@@ -335,6 +340,7 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
     let model = Model::new(bodies, forces, constraints)
         .and_then(|m| m.with_frictions(frictions))
         .and_then(|m| m.with_limits(limits))
+        .and_then(|m| m.with_rigid_contacts(rigid_contacts, &b.q))
         .map_err(|e| b.ctx.err(None, e.to_string()))?;
     let mechanism: Mechanism = Arc::new(model).into();
     let settings = settings(
@@ -471,6 +477,54 @@ fn limit(b: &Builder<'_>, d: &JointDef, info: &JointInfo, constraint: usize) -> 
         b.ctx.err(at.or(span), message)
     })?;
     Ok(Some(limit))
+}
+
+/// A `circle-line` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the circle
+/// and line as for the compliant element, `restitution` (0) and `rest_speed` (1e-3); the
+/// compliant law's keys are refused.
+fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<RigidContact, SceneError> {
+    let owner = format!("force '{}'", d.name);
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    if d.kind != "circle-line" {
+        return Err(err(format!(
+            "'rigid' is for circle-line contacts, this element is '{}'",
+            d.kind
+        )));
+    }
+    const KEYS: [&str; 7] = ["body", "at", "radius", "line", "rigid", "restitution", "rest_speed"];
+    if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
+        return Err(err(format!(
+            "'{key}' does not belong to a rigid contact (it has no compliant law)"
+        )));
+    }
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+    let body = b.body(name, span, &owner)?;
+    let centre = match d.at {
+        Some(Points::One(p)) => local_point_of(body, &b.q, v2(p)),
+        None => Vec2::zeros(),
+        Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)".into())),
+    };
+    let line = d.line.as_ref().ok_or_else(|| {
+        err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
+    })?;
+    let normal = v2(line.normal);
+    if normal.norm().is_nan() || normal.norm() == 0.0 {
+        return Err(err("the line's normal must not be zero".into()));
+    }
+    let contact = RigidContact {
+        name: d.name.clone(),
+        body,
+        centre,
+        radius: d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?,
+        point: v2(line.point),
+        normal: normal / normal.norm(),
+        restitution: d.restitution.unwrap_or(0.0),
+        rest_speed: d.rest_speed.unwrap_or(REST_SPEED),
+    };
+    contact
+        .validate(&b.q)
+        .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
+    Ok(contact)
 }
 
 /// `Ok` unless `settings` ask for joint coordinates that `mechanism` cannot take (a planar model,

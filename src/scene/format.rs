@@ -159,6 +159,11 @@ pub(crate) struct ForceDef {
     pub dissipation: Option<f64>,
     pub friction: Option<f64>,
     pub smoothing_velocity: Option<f64>,
+    /// `rigid = true`: a unilateral contact kept by impacts, not a compliant force
+    /// (`docs/limits.md`, "Rigid contact").
+    pub rigid: Option<bool>,
+    pub restitution: Option<f64>,
+    pub rest_speed: Option<f64>,
 }
 
 impl ForceDef {
@@ -185,6 +190,9 @@ impl ForceDef {
             ("dissipation", self.dissipation.is_some()),
             ("friction", self.friction.is_some()),
             ("smoothing_velocity", self.smoothing_velocity.is_some()),
+            ("rigid", self.rigid.is_some()),
+            ("restitution", self.restitution.is_some()),
+            ("rest_speed", self.rest_speed.is_some()),
         ]
         .into_iter()
         .filter_map(|(k, given)| given.then_some(k))

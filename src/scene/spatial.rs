@@ -525,11 +525,18 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     }
     // A plane a contact rolls on is drawn as a square of the ground.
     let mut floors = Vec::new();
+    let mut rigid = Vec::new();
     for sf in &file.forces {
         let span = sf.span();
         let d = sf.get_ref();
         names.unique(&ctx, &d.name, &span, "force")?;
         let owner = format!("force '{}'", d.name);
+        if d.rigid == Some(true) {
+            let contact = spatial_forces::rigid_sphere_plane(d, &names, &ctx, &span, &owner, &positions)?;
+            floors.push(spatial_forces::floor_visual(&contact.point, &contact.normal, &owner));
+            rigid.push((contact, span.clone()));
+            continue;
+        }
         let f = spatial_forces::force(d, &names, &ctx, &span, &owner, &positions)?;
         if let dalembert_spatial::Force::SpherePlane { point, normal, .. } = &f {
             floors.push(spatial_forces::floor_visual(point, normal, &owner));
@@ -545,6 +552,20 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             .find(|(l, _)| message.contains(&format!("'{}'", l.name)));
         ctx.err(at.map(|(_, s)| s.clone()), message)
     })?;
+    let spans: Vec<(String, Range<usize>)> = rigid
+        .iter()
+        .map(|(c, s): &(_, Range<usize>)| (format!("'{}'", c.name), s.clone()))
+        .collect();
+    let model = model
+        .with_rigid_contacts(rigid.into_iter().map(|(c, _)| c).collect())
+        .map_err(|e| {
+            let message = e.to_string();
+            let at = spans
+                .iter()
+                .find(|(n, _)| message.contains(n.as_str()))
+                .map(|(_, s)| s.clone());
+            ctx.err(at, message)
+        })?;
     let (mut q, mut qd) = model.initial_state();
     if let Some(initial) = &file.initial {
         let span = Some(initial.span());
@@ -559,8 +580,8 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
                 return Err(ctx.err(
                     span.clone(),
                     format!(
-                        "[initial]: joint '{}' starts at {value}, outside its limits [{}, {}]",
-                        l.name, l.lower, l.upper
+                        "[initial]: {} '{}' starts at {value}, outside its limits [{}, {}]",
+                        l.element, l.name, l.lower, l.upper
                     ),
                 ));
             }
@@ -670,6 +691,7 @@ fn limit(ctx: &Ctx<'_>, d: &JointDef) -> Result<Option<(JointLimit, Range<usize>
         ));
     };
     let limit = JointLimit {
+        element: "joint",
         name: d.name.clone(),
         lower,
         upper,

@@ -47,6 +47,10 @@ pub(crate) struct ForceDef {
     pub dissipation: Option<f64>,
     pub friction: Option<f64>,
     pub smoothing_velocity: Option<f64>,
+    /// `rigid = true`: a unilateral contact kept by impacts (`docs/limits.md`, "Rigid contact").
+    pub rigid: Option<bool>,
+    pub restitution: Option<f64>,
+    pub rest_speed: Option<f64>,
 }
 
 /// A plane of the ground: a point and the normal out of the solid.
@@ -183,6 +187,9 @@ impl ForceDef {
             ("dissipation", self.dissipation.is_some()),
             ("friction", self.friction.is_some()),
             ("smoothing_velocity", self.smoothing_velocity.is_some()),
+            ("rigid", self.rigid.is_some()),
+            ("restitution", self.restitution.is_some()),
+            ("rest_speed", self.rest_speed.is_some()),
         ];
         match present.iter().find(|(k, p)| *p && !allowed.contains(k)) {
             Some((k, _)) => Err(format!("'{k}' does not belong to a {} element", self.kind)),
@@ -367,5 +374,49 @@ pub(crate) fn force(
                 "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, sphere-sphere, code)"
             )))
         }
+    })
+}
+
+/// A `sphere-plane` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the sphere
+/// and plane as for the compliant element, `restitution` (0) and `rest_speed` (1e-3); the
+/// compliant law's keys are refused.
+pub(crate) fn rigid_sphere_plane(
+    d: &ForceDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+    positions: &[[f64; 3]],
+) -> Result<dalembert_spatial::limits::SpherePlaneContact, SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    if d.kind != "sphere-plane" {
+        return Err(err(&format!(
+            "'rigid' is for sphere-plane contacts, this element is '{}'",
+            d.kind
+        )));
+    }
+    d.only(&["body", "at", "radius", "plane", "rigid", "restitution", "rest_speed"])
+        .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+    let BodyRef::Body(body) = names.body(ctx, name, span, owner)? else {
+        return Err(err("the sphere must be on a moving body"));
+    };
+    let centre = match d.at {
+        Some(Points3::One(p)) => p,
+        None => positions[body],
+        Some(Points3::Two(_)) => return Err(err("'at' is the sphere's centre, one point [x, y, z] (global)")),
+    };
+    let plane = d.plane.as_ref().ok_or_else(|| {
+        err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
+    })?;
+    Ok(dalembert_spatial::limits::SpherePlaneContact {
+        name: d.name.clone(),
+        body,
+        centre,
+        radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+        point: plane.point,
+        normal: plane.normal,
+        restitution: d.restitution.unwrap_or(0.0),
+        rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
     })
 }

@@ -25,6 +25,7 @@ pub mod limit;
 pub mod model;
 pub mod primitives;
 pub mod reactions;
+pub mod rigid_contact;
 pub mod system;
 
 pub use constraint::{Constraint, ConstraintEval, ConstraintRole, MAX_EQUATIONS};
@@ -34,4 +35,5 @@ pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, R
 pub use limit::Limit;
 pub use model::Model;
 pub use reactions::Reaction;
+pub use rigid_contact::RigidContact;
 pub use system::ConstraintSystem;

@@ -62,6 +62,7 @@ impl Limit {
     /// What the seam sees.
     pub fn spec(&self) -> JointLimit {
         JointLimit {
+            element: "joint",
             name: self.name().to_string(),
             lower: self.lower,
             upper: self.upper,

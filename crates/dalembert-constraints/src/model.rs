@@ -2,7 +2,7 @@
 //! implementation of the system seam ([`MultibodySystem`]).
 
 use crate::system::PLANAR_LABELS;
-use crate::{Constraint, ConstraintSystem, Friction, Limit};
+use crate::{Constraint, ConstraintSystem, Friction, Limit, RigidContact};
 use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 use dalembert_system::{ConstraintError, ConstraintSet};
@@ -19,6 +19,8 @@ pub struct Model {
     frictions: Vec<Friction>,
     friction_specs: Vec<JointFriction>,
     limits: Vec<Limit>,
+    rigid_contacts: Vec<RigidContact>,
+    /// The joint limits' specs, then the rigid contacts'.
     limit_specs: Vec<JointLimit>,
 }
 
@@ -46,6 +48,7 @@ impl Model {
             frictions: Vec::new(),
             friction_specs: Vec::new(),
             limits: Vec::new(),
+            rigid_contacts: Vec::new(),
             limit_specs: Vec::new(),
         })
     }
@@ -93,9 +96,32 @@ impl Model {
                 .into());
             }
         }
-        self.limit_specs = limits.iter().map(Limit::spec).collect();
         self.limits = limits;
+        self.limit_specs = self.unilateral_specs();
         Ok(self)
+    }
+
+    /// The model with rigid circle–line contacts (`docs/limits.md`, "Rigid contact"), each
+    /// checked at the file's configuration `q0`. Errors name the contact.
+    pub fn with_rigid_contacts(mut self, contacts: Vec<RigidContact>, q0: &[f64]) -> Result<Self, ConstraintError> {
+        for c in &contacts {
+            c.validate(q0)?;
+        }
+        self.rigid_contacts = contacts;
+        self.limit_specs = self.unilateral_specs();
+        Ok(self)
+    }
+
+    /// The rigid contacts.
+    pub fn rigid_contacts(&self) -> &[RigidContact] {
+        &self.rigid_contacts
+    }
+
+    fn unilateral_specs(&self) -> Vec<JointLimit> {
+        let joints = self.limits.iter().map(Limit::spec);
+        joints
+            .chain(self.rigid_contacts.iter().map(RigidContact::spec))
+            .collect()
     }
 
     /// The joints with limits.
@@ -167,8 +193,12 @@ impl MultibodySystem for Model {
         &self.limit_specs
     }
 
+    /// A joint limit's row, or (after the joint limits) a rigid contact's gap row.
     fn limit_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
-        self.limits[k].limit_row(q, v, row)
+        match self.limits.get(k) {
+            Some(l) => l.limit_row(q, v, row),
+            None => self.rigid_contacts[k - self.limits.len()].gap_row(q, v, row),
+        }
     }
 
     /// The moving bodies of each force element ([`ForceElement::bodies`]); `None` when an element
@@ -291,7 +321,7 @@ impl MultibodySystem for Model {
     fn num_events(&self) -> usize {
         let q = vec![0.0; 3 * self.bodies.len()];
         self.frictions.len()
-            + self.limits.len()
+            + self.limit_specs.len()
             + self
                 .forces
                 .iter()
@@ -304,9 +334,9 @@ impl MultibodySystem for Model {
     fn events(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         let mut row = SlipRow::default();
         let (slips, rest) = out.split_at_mut(self.frictions.len().min(out.len()));
-        let (stops, gaps) = rest.split_at_mut(self.limits.len().min(rest.len()));
-        for ((slot, l), spec) in stops.iter_mut().zip(&self.limits).zip(&self.limit_specs) {
-            *slot = spec.free_event(l.coordinate(q));
+        let (stops, gaps) = rest.split_at_mut(self.limit_specs.len().min(rest.len()));
+        for (k, (slot, spec)) in stops.iter_mut().zip(&self.limit_specs).enumerate() {
+            *slot = spec.free_event(self.limit_row(k, 0.0, q, &[], &mut row));
         }
         for ((slot, f), spec) in slips.iter_mut().zip(&self.frictions).zip(&self.friction_specs) {
             f.slip_row(q, v, &mut row);
@@ -346,7 +376,7 @@ impl MultibodySystem for Model {
     /// energy) and no constraint is driven (a driver does work).
     fn is_conservative(&self) -> bool {
         self.frictions.is_empty()
-            && self.limits.is_empty()
+            && self.limit_specs.is_empty()
             && self.forces.iter().all(|f| f.is_conservative())
             && self
                 .constraints

@@ -61,6 +61,7 @@ impl Model {
         }
         self.limits = limits;
         self.limited_joints = joints;
+        self.contacts.clear();
         Ok(self)
     }
 
@@ -69,9 +70,13 @@ impl Model {
         &self.limits
     }
 
-    /// The row of limit `k` at `(q, v)` into `row`, and the joint's value.
+    /// The row of limit `k` at `(q, v)` into `row`, and the joint's value (or, after the joint
+    /// limits, a rigid contact's gap).
     pub(crate) fn limit_row_into(&self, k: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
-        let j = &self.joints()[self.limited_joints[k]];
+        let Some(&joint) = self.limited_joints.get(k) else {
+            return self.contact_row_into(k - self.limited_joints.len(), q, v, row);
+        };
+        let j = &self.joints()[joint];
         let fi = self.frame(j.body_i, q, v);
         let fj = self.frame(j.body_j, q, v);
         let axis = |k: usize| -> Vector3<f64> { fi.a * j.axes_i.column(k) };
@@ -105,5 +110,110 @@ impl Model {
             row.bias = fi.w.cross(&zi_dot).dot(&d) + 2.0 * zi_dot.dot(&d_dot) + zi.dot(&centripetal);
             zi.dot(&d)
         }
+    }
+}
+
+/// A sphere on a body in rigid (unilateral) contact with a plane of the ground, without friction
+/// (`docs/limits.md`, "Rigid contact"): a limit on the gap `s = n·(c − p₀) − R ≥ 0`, with
+///
+/// ```text
+/// w = n·(ṙ + ω × s_c),   g: ṙ ↦ n,  ω' ↦ Aᵀ (s_c × n),   b = n·(ω × (ω × s_c))
+/// ```
+///
+/// where `c = r + s_c` is the sphere's centre and `s_c` its global arm from the centre of mass.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpherePlaneContact {
+    /// The contact's name.
+    pub name: String,
+    /// The body carrying the sphere (its index).
+    pub body: usize,
+    /// The sphere's centre, global, in the file's configuration.
+    pub centre: [f64; 3],
+    /// The sphere's radius (m).
+    pub radius: f64,
+    /// A point of the plane (global).
+    pub point: [f64; 3],
+    /// The plane's normal out of the ground (global; any length but zero).
+    pub normal: [f64; 3],
+    /// Newton's coefficient of restitution `e ∈ [0, 1]`.
+    pub restitution: f64,
+    /// The rebound speed below which the sphere rests on the plane (m/s).
+    pub rest_speed: f64,
+}
+
+/// A rigid contact as the model keeps it: the centre in the body frame, the unit normal.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ContactData {
+    body: usize,
+    centre: Vector3<f64>,
+    radius: f64,
+    point: Vector3<f64>,
+    normal: Vector3<f64>,
+}
+
+impl Model {
+    /// The model with rigid sphere–plane contacts (after its joint limits, [`Model::with_limits`]).
+    /// Errors name the contact.
+    pub fn with_rigid_contacts(mut self, contacts: Vec<SpherePlaneContact>) -> Result<Self, ModelError> {
+        let (q0, _) = self.initial_state();
+        for c in contacts {
+            let bad = |what: String| ModelError::InvalidParameter {
+                element: format!("contact '{}'", c.name),
+                what,
+            };
+            if c.body >= self.bodies().len() {
+                return Err(bad("the sphere must be on a moving body".into()));
+            }
+            if !(c.radius.is_finite() && c.radius >= 0.0) {
+                return Err(bad(format!("radius must be finite and ≥ 0, got {}", c.radius)));
+            }
+            let normal = Vector3::from(c.normal);
+            let length = normal.norm();
+            if !(length.is_finite() && length > 0.0) || !c.point.iter().chain(&c.centre).all(|x| x.is_finite()) {
+                return Err(bad(
+                    "the plane's point and normal and the sphere's centre must be finite, the normal not zero".into(),
+                ));
+            }
+            let spec = JointLimit {
+                element: "contact",
+                name: c.name.clone(),
+                lower: 0.0,
+                upper: f64::INFINITY,
+                restitution: c.restitution,
+                rest_speed: c.rest_speed,
+            };
+            spec.check().map_err(bad)?;
+            let f = self.frame(Some(c.body), &q0, &[]);
+            let data = ContactData {
+                body: c.body,
+                centre: f.a.transpose() * (Vector3::from(c.centre) - f.r),
+                radius: c.radius,
+                point: Vector3::from(c.point),
+                normal: normal / length,
+            };
+            let gap = data.normal.dot(&(Vector3::from(c.centre) - data.point)) - data.radius;
+            if gap < -1e-12 {
+                return Err(bad(format!("the sphere starts {:e} m into the plane", -gap)));
+            }
+            self.limits.push(spec);
+            self.contacts.push(data);
+        }
+        Ok(self)
+    }
+
+    /// The gap row of rigid contact `k` (after the joint limits) at `(q, v)`, and the gap.
+    fn contact_row_into(&self, k: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
+        let c = &self.contacts[k];
+        let f = self.frame(Some(c.body), q, v);
+        let arm = f.a * c.centre;
+        let n = c.normal;
+        row.clear();
+        for (i, x) in n.iter().chain((f.a.transpose() * arm.cross(&n)).iter()).enumerate() {
+            if *x != 0.0 {
+                row.push(NV * c.body + i, *x);
+            }
+        }
+        row.bias = n.dot(&f.centripetal(&arm));
+        n.dot(&(f.r + arm - c.point)) - c.radius
     }
 }

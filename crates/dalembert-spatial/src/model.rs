@@ -150,6 +150,7 @@ impl ModelBuilder {
             equations,
             limits: Vec::new(),
             limited_joints: Vec::new(),
+            contacts: Vec::new(),
         })
     }
 }
@@ -172,6 +173,8 @@ pub struct Model {
     /// Joint limits (`docs/limits.md`), and the index of each one's joint.
     pub(crate) limits: Vec<dalembert_system::JointLimit>,
     pub(crate) limited_joints: Vec<usize>,
+    /// Rigid contacts (their limits follow the joints' in `limits`).
+    pub(crate) contacts: Vec<crate::limits::ContactData>,
 }
 
 /// Most rows a joint primitive has.

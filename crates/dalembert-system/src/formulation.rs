@@ -189,13 +189,13 @@ pub enum DynamicsError {
         /// The solver's message.
         what: String,
     },
-    /// A joint limit could not be kept (`docs/limits.md`).
-    #[error("t = {t}: limit of joint '{joint}': {what}", t = crate::Shortest(*.time))]
+    /// A joint limit or a rigid contact could not be kept (`docs/limits.md`).
+    #[error("t = {t}: the bound of {element}: {what}", t = crate::Shortest(*.time))]
     Limit {
         /// Time.
         time: f64,
-        /// The joint.
-        joint: String,
+        /// The element, as `joint 'NAME'` or `contact 'NAME'`.
+        element: String,
         /// What happened.
         what: String,
     },

@@ -287,9 +287,10 @@ pub fn solve_friction(
                 what,
             }
         } else {
+            let element = limits.get(k - frictions.len()).map_or("joint", |l| l.element);
             DynamicsError::Limit {
                 time: t,
-                joint: name(k).to_string(),
+                element: format!("{element} '{}'", name(k)),
                 what,
             }
         }

@@ -19,14 +19,17 @@
 
 use crate::{DynamicsError, Formulation};
 
-/// One joint limit of a system, as the system describes it once.
+/// One joint limit of a system, as the system describes it once; also a rigid contact, whose
+/// coordinate is its gap with the single bound `0 ≤ s` (`docs/limits.md`, "Rigid contact").
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointLimit {
-    /// The joint's name (in errors and outputs).
+    /// What the element is, in messages: `"joint"` or `"contact"`.
+    pub element: &'static str,
+    /// The joint's or contact's name (in errors and outputs).
     pub name: String,
-    /// The lower bound of the joint's coordinate (rad or m).
+    /// The lower bound of the joint's coordinate (rad or m; `−∞` for none).
     pub lower: f64,
-    /// The upper bound (rad or m).
+    /// The upper bound (rad or m; `+∞` for none).
     pub upper: f64,
     /// Newton's coefficient of restitution `e ∈ [0, 1]`.
     pub restitution: f64,
@@ -55,9 +58,10 @@ impl JointLimit {
 
     /// Checks the bounds and coefficients, naming the joint.
     pub fn check(&self) -> Result<(), String> {
-        if !(self.lower.is_finite() && self.upper.is_finite() && self.lower < self.upper) {
+        let one_finite = self.lower.is_finite() || self.upper.is_finite();
+        if !(self.lower < self.upper && one_finite && self.lower != f64::INFINITY && self.upper != f64::NEG_INFINITY) {
             return Err(format!(
-                "limits must be finite with lower < upper, got [{}, {}]",
+                "limits must have lower < upper and one of them finite, got [{}, {}]",
                 self.lower, self.upper
             ));
         }
@@ -81,8 +85,8 @@ pub fn impact_impulse(limit: &JointLimit, w: f64, response: f64, time: f64) -> R
     if !(response > 0.0 && response.is_finite()) {
         return Err(DynamicsError::Limit {
             time,
-            joint: limit.name.clone(),
-            what: format!("an impulse at the limit does not move the joint (its response is {response:e})"),
+            element: format!("{} '{}'", limit.element, limit.name),
+            what: format!("an impulse at its bound does not move it (its response is {response:e})"),
         });
     }
     Ok(-(1.0 + limit.restitution) * w / response)
