@@ -585,10 +585,16 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
         [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
         axis = [0.0, -1.0, 0.0]\nlimits = [-2.0, 0.0]\nrestitution = 0.5\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    // A ball bouncing on a rigid floor (a rigid contact's gap row), e = 0.8.
+    let ball = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"ball\"\nmass = 1.0\ninertia = [0.004, 0.004, 0.004]\nposition = [0.0, 0.0, 0.4]\n\
+        [[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\n\
+        plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\nrigid = true\nrestitution = 0.8\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
     let mut failures = Vec::new();
     for (formulation, base) in ["augmented", "embedding", "amalgamated"]
         .into_iter()
-        .flat_map(|f| [(f, text), (f, spatial)])
+        .flat_map(|f| [(f, text), (f, spatial), (f, ball)])
     {
         let base = dalembert::Scene::from_toml(base, "pin limits").unwrap();
         for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {

@@ -51,7 +51,7 @@ impl RigidContact {
     /// above the line (a gap of at least −1e-12 m).
     pub fn validate(&self, q0: &[f64]) -> Result<(), ModelError> {
         let bad = |what: String| ModelError::InvalidParameter {
-            element: format!("contact '{}'", self.name),
+            element: format!("force '{}'", self.name),
             what,
         };
         if self.body == BodyRef::Ground {
@@ -60,7 +60,8 @@ impl RigidContact {
         if !(self.radius.is_finite() && self.radius >= 0.0) {
             return Err(bad(format!("radius must be finite and ≥ 0, got {}", self.radius)));
         }
-        if !((self.normal.norm() - 1.0).abs() < 1e-12) {
+        let off_unit = (self.normal.norm() - 1.0).abs();
+        if off_unit.is_nan() || off_unit >= 1e-12 {
             return Err(bad("the line's normal must be a unit vector".into()));
         }
         self.spec().check().map_err(bad)?;

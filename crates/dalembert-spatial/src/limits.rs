@@ -158,7 +158,7 @@ impl Model {
         let (q0, _) = self.initial_state();
         for c in contacts {
             let bad = |what: String| ModelError::InvalidParameter {
-                element: format!("contact '{}'", c.name),
+                element: format!("force '{}'", c.name),
                 what,
             };
             if c.body >= self.bodies().len() {
@@ -169,7 +169,7 @@ impl Model {
             }
             let normal = Vector3::from(c.normal);
             let length = normal.norm();
-            if !(length.is_finite() && length > 0.0) || !c.point.iter().chain(&c.centre).all(|x| x.is_finite()) {
+            if !(length.is_finite() && length > 0.0 && c.point.iter().chain(&c.centre).all(|x| x.is_finite())) {
                 return Err(bad(
                     "the plane's point and normal and the sphere's centre must be finite, the normal not zero".into(),
                 ));
