@@ -270,3 +270,77 @@ fn a_pendulum_with_pin_friction_follows_its_equation_of_motion() {
         }
     }
 }
+
+#[test]
+fn a_spatial_pendulum_with_pin_friction_follows_the_same_equation_of_motion() {
+    // The rod of the test above as a spatial body on a revolute joint about −y (its fall in the
+    // x–z plane is a negative angle): the spatial joint's slip row (its value's rate on
+    // body-frame angular velocities) and its load (the pin's three force rows; the moment rows
+    // hold the axis and do not load the friction), against the same independent integration.
+    // The bar is the planar test's, 1e-8 rad.
+    let (mu, r, end) = (0.2, 0.05, 3.0);
+    let reference = pendulum_reference(mu, r, end);
+    for formulation in FORMULATIONS {
+        for integrator in ["dopri5", "rk4"] {
+            let text = format!(
+                "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+                 [[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08333333333333333, 0.08333333333333333]\n\
+                 position = [0.5, 0.0, 0.0]\n\
+                 [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
+                 axis = [0.0, -1.0, 0.0]\nfriction = {{ coefficient = {mu}, radius = {r} }}\n\
+                 [simulation]\nend = {end}\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                 step = 1e-3\nrtol = 1e-11\natol = 1e-11\noutput_every = 0.01\n"
+            );
+            let rec = Scene::from_toml(&text, "spatial pendulum")
+                .unwrap()
+                .record(&AtomicBool::new(false));
+            let stats = rec.outcome.unwrap();
+            let angle = rec.table.column("pin.q").unwrap();
+            assert_eq!(angle.len(), reference.len());
+            let worst = angle
+                .iter()
+                .zip(&reference)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(
+                worst < 1e-8,
+                "{formulation}, {integrator}: {worst:.2e} rad from the reference"
+            );
+            assert_eq!(stats.events, 4, "{formulation}, {integrator}: events");
+        }
+    }
+}
+
+#[test]
+fn a_spatial_block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_stays_when_it_can() {
+    // A box on a spatial prismatic joint along a slope of α in the x–z plane: the normal load is
+    // the guide's two lateral force rows (their norm, m g cos α), the closed forms of the planar
+    // tests: s = ½ g (sin α − μ cos α) t² when tan α > μ, at rest when tan α < μ, within 1e-12 m.
+    let alpha: f64 = 0.5;
+    let (c, s) = (alpha.cos(), alpha.sin());
+    for (mu, a) in [(0.3, G * (s - 0.3 * c)), (0.6, 0.0)] {
+        for formulation in FORMULATIONS {
+            for integrator in ["rk4", "dopri5"] {
+                let text = format!(
+                    "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+                     [[bodies]]\nname = \"block\"\nmass = 2.0\ninertia = [0.01, 0.02, 0.03]\nposition = [0.0, 0.0, 1.0]\n\
+                     [[joints]]\nname = \"guide\"\ntype = \"prismatic\"\nbodies = [\"ground\", \"block\"]\n\
+                     at = [0.0, 0.0, 1.0]\naxis = [{c}, 0.0, {}]\nfriction = {{ coefficient = {mu} }}\n\
+                     [simulation]\nend = 2.0\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                     step = 1e-3\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.05\n",
+                    -s
+                );
+                let table = run(&Scene::from_toml(&text, "spatial incline").unwrap());
+                let (t, q) = (table.column("t").unwrap(), table.column("guide.q").unwrap());
+                for k in 0..t.len() {
+                    let error = (q[k] - 0.5 * a * t[k] * t[k]).abs();
+                    assert!(
+                        error < 1e-12,
+                        "μ = {mu}, {formulation}, {integrator}: t = {}: off by {error:.2e} m",
+                        t[k]
+                    );
+                }
+            }
+        }
+    }
+}

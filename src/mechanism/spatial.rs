@@ -120,6 +120,14 @@ impl ColumnWriter for SpatialColumns {
         names.extend(self.model.driver_names().map(|d| format!("{d}.effort")));
         // Joint limits: the stop's torque or force on the second body along the joint
         // (`docs/limits.md`); not in the joint's reaction columns.
+        // Joint friction: its torque or force on the second body along the joint
+        // (`docs/friction.md`); not in the joint's reaction columns.
+        names.extend(
+            self.model
+                .friction_specs()
+                .iter()
+                .map(|f| format!("{}.friction", f.name)),
+        );
         // Rigid contacts: the gap (m) and the normal force on the body (N).
         for l in self.model.limit_specs() {
             if l.element == "contact" {
@@ -156,6 +164,12 @@ impl ColumnWriter for SpatialColumns {
         }
         let first = s.lambda.len() - self.drivers;
         row.extend(s.lambda[first..].iter().map(|l| -l));
+        let frictions = self.model.friction_specs().len();
+        if s.friction.len() == frictions {
+            row.extend_from_slice(s.friction);
+        } else {
+            row.extend(std::iter::repeat_n(0.0, frictions));
+        }
         let mut gap_row = dalembert_system::SlipRow::default();
         for (k, l) in self.model.limit_specs().iter().enumerate() {
             if l.element == "contact" {

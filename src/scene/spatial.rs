@@ -9,7 +9,7 @@
 //! configuration.
 
 use super::error::SceneError;
-use super::format::{FunctionDef, SimDef};
+use super::format::{FrictionDef, FunctionDef, SimDef};
 use super::functions::time_function;
 use super::names::{Ctx, Names};
 use super::spatial_forces::{self, ForceDef};
@@ -158,6 +158,9 @@ pub(crate) struct JointDef {
     pub axis: Option<[f64; 3]>,
     #[serde(default, deserialize_with = "strict::two_axes_opt")]
     pub axes: Option<[[f64; 3]; 2]>,
+    /// `friction = { coefficient, radius, viscous, stick_speed }` on a revolute or prismatic
+    /// joint (`docs/friction.md`).
+    pub friction: Option<Spanned<FrictionDef>>,
     /// `limits = [lower, upper]` on a revolute or prismatic joint (`docs/limits.md`).
     pub limits: Option<Spanned<Vec<f64>>>,
     /// Newton's coefficient of restitution at the limits (default 0).
@@ -448,6 +451,7 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     }
     let mut joint_kinds = HashMap::new();
     let (mut limits, mut limit_spans) = (Vec::new(), Vec::new());
+    let (mut frictions, mut friction_spans) = (Vec::new(), Vec::new());
     for sj in &file.joints {
         let span = sj.span();
         let d = sj.get_ref();
@@ -469,6 +473,31 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         if let Some((limit, at)) = limit(&ctx, d)? {
             limits.push(limit);
             limit_spans.push(at);
+        }
+        if let Some(def) = &d.friction {
+            let f = def.get_ref();
+            if f.radius.is_some() && d.kind == "prismatic" {
+                return Err(ctx.err(
+                    Some(def.span()),
+                    format!("{owner}: a prismatic joint's friction has no 'radius' (the friction force is μ N)"),
+                ));
+            }
+            if f.radius.is_none() && d.kind == "revolute" {
+                return Err(ctx.err(
+                    Some(def.span()),
+                    format!(
+                        "{owner}: a revolute joint's friction needs 'radius', the pin radius in m (torque μ r |F|)"
+                    ),
+                ));
+            }
+            frictions.push(dalembert_spatial::friction::SpatialFriction {
+                joint: d.name.clone(),
+                coefficient: f.coefficient,
+                radius: f.radius.unwrap_or(0.0),
+                viscous: f.viscous.unwrap_or(0.0),
+                stick_speed: f.stick_speed.unwrap_or(dalembert_constraints::STICK_SPEED),
+            });
+            friction_spans.push(def.span());
         }
     }
     for sd in &file.drivers {
@@ -544,6 +573,14 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         model.force(f);
     }
     let model = model.build().map_err(|e| model_err(&ctx, &names, e.to_string()))?;
+    let model = model.with_frictions(frictions.clone()).map_err(|e| {
+        let message = e.to_string();
+        let at = frictions
+            .iter()
+            .zip(&friction_spans)
+            .find(|(f, _)| message.contains(&format!("'{}'", f.joint)));
+        ctx.err(at.map(|(_, s)| s.clone()), message)
+    })?;
     let model = model.with_limits(limits.clone()).map_err(|e| {
         let message = e.to_string();
         let at = limits

@@ -32,6 +32,7 @@ pub mod drivers;
 pub mod euler_parameters;
 pub mod forces;
 pub mod frame;
+pub mod friction;
 pub mod geometry;
 pub mod joint_coordinates;
 pub mod joint_values;

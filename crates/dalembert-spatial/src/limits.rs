@@ -73,9 +73,15 @@ impl Model {
     /// The row of limit `k` at `(q, v)` into `row`, and the joint's value (or, after the joint
     /// limits, a rigid contact's gap).
     pub(crate) fn limit_row_into(&self, k: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
-        let Some(&joint) = self.limited_joints.get(k) else {
-            return self.contact_row_into(k - self.limited_joints.len(), q, v, row);
-        };
+        match self.limited_joints.get(k) {
+            Some(&joint) => self.joint_row_into(joint, q, v, row),
+            None => self.contact_row_into(k - self.limited_joints.len(), q, v, row),
+        }
+    }
+
+    /// The row of revolute or prismatic joint `joint`'s value at `(q, v)` into `row` (the
+    /// formulas above), and the value.
+    pub(crate) fn joint_row_into(&self, joint: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
         let j = &self.joints()[joint];
         let fi = self.frame(j.body_i, q, v);
         let fj = self.frame(j.body_j, q, v);

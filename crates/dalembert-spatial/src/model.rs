@@ -151,6 +151,8 @@ impl ModelBuilder {
             limits: Vec::new(),
             limited_joints: Vec::new(),
             contacts: Vec::new(),
+            frictions: Vec::new(),
+            friction_joints: Vec::new(),
         })
     }
 }
@@ -175,6 +177,9 @@ pub struct Model {
     pub(crate) limited_joints: Vec<usize>,
     /// Rigid contacts (their limits follow the joints' in `limits`).
     pub(crate) contacts: Vec<crate::limits::ContactData>,
+    /// Joint friction (`docs/friction.md`), and the index of each element's joint.
+    pub(crate) frictions: Vec<dalembert_system::JointFriction>,
+    pub(crate) friction_joints: Vec<usize>,
 }
 
 /// Most rows a joint primitive has.
@@ -547,16 +552,26 @@ impl MultibodySystem for Model {
             .sum()
     }
 
-    /// The limits, then the contact elements.
+    /// The friction elements, the limits, then the contact elements.
     fn num_events(&self) -> usize {
-        self.limits.len() + self.forces.iter().filter(|f| f.is_contact()).count()
+        self.frictions.len() + self.limits.len() + self.forces.iter().filter(|f| f.is_contact()).count()
     }
 
     /// Each limit's distance to its nearer bound, then each contact element's gap, in the order
     /// of the force elements.
-    fn events(&self, _t: f64, q: &[f64], _v: &[f64], out: &mut [f64]) {
-        let (stops, gaps) = out.split_at_mut(self.limits.len().min(out.len()));
+    fn events(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         let mut row = dalembert_system::SlipRow::default();
+        let (slips, rest) = out.split_at_mut(self.frictions.len().min(out.len()));
+        for (k, slot) in slips.iter_mut().enumerate() {
+            self.slip_row_into(k, q, v, &mut row);
+            let w = row.dot(v);
+            *slot = if w.abs() > self.frictions[k].stick_speed {
+                w
+            } else {
+                0.0
+            };
+        }
+        let (stops, gaps) = rest.split_at_mut(self.limits.len().min(rest.len()));
         for (k, slot) in stops.iter_mut().enumerate() {
             *slot = self.limits[k].free_event(self.limit_row_into(k, q, &[], &mut row));
         }
@@ -568,6 +583,14 @@ impl MultibodySystem for Model {
 
     fn limits(&self) -> &[dalembert_system::JointLimit] {
         &self.limits
+    }
+
+    fn frictions(&self) -> &[dalembert_system::JointFriction] {
+        &self.frictions
+    }
+
+    fn slip_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut dalembert_system::SlipRow) {
+        self.slip_row_into(k, q, v, row);
     }
 
     fn limit_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut dalembert_system::SlipRow) -> f64 {
@@ -588,7 +611,10 @@ impl MultibodySystem for Model {
     /// Every force element is conservative, nothing is driven (a driver does work) and no joint
     /// has limits (an impact takes energy).
     fn is_conservative(&self) -> bool {
-        self.forces.iter().all(ForceData::is_conservative) && self.drivers.is_empty() && self.limits.is_empty()
+        self.forces.iter().all(ForceData::is_conservative)
+            && self.drivers.is_empty()
+            && self.limits.is_empty()
+            && self.frictions.is_empty()
     }
 
     fn bodies_without_inertia(&self) -> Vec<String> {
