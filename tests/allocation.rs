@@ -539,31 +539,41 @@ fn a_run_with_joint_friction_allocates_nothing_per_step() {
         [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
         friction = { coefficient = 0.2, radius = 0.05 }\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
-    let base = dalembert::Scene::from_toml(text, "pin friction").unwrap();
+    let failures = switching_runs_growing(&[text], "reversal");
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Each scene of `texts` in every formulation × every method that takes any formulation, run for
+/// 1.5 s and 3 s: the longer run must cross more events (`what`) and allocate no more. The
+/// failures, one line each.
+fn switching_runs_growing(texts: &[&str], what: &str) -> Vec<String> {
     let mut failures = Vec::new();
-    for formulation in ["augmented", "embedding", "amalgamated"] {
-        for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {
-            let mut scene = base.clone();
-            scene.settings.method = Method::of(entry);
-            scene.settings.formulation = dalembert::FormulationKind::parse(formulation).unwrap();
-            let count = |end: f64| {
-                let mut sim = scene.simulation();
-                sim.end = end;
-                let before = ALLOCATIONS.load(Ordering::Relaxed);
-                let stats = sim.run(&mut |_| {}).unwrap();
-                (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
-            };
-            let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
-            assert!(events_long > events_short, "{formulation}, {}: no reversal", entry.name);
-            if long > short {
-                failures.push(format!(
-                    "{formulation}, {}: {short} allocations for 1.5 s, {long} for 3 s",
-                    entry.name
-                ));
+    for text in texts {
+        let base = dalembert::Scene::from_toml(text, "switching").unwrap();
+        for formulation in ["augmented", "embedding", "amalgamated"] {
+            for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {
+                let mut scene = base.clone();
+                scene.settings.method = Method::of(entry);
+                scene.settings.formulation = dalembert::FormulationKind::parse(formulation).unwrap();
+                let count = |end: f64| {
+                    let mut sim = scene.simulation();
+                    sim.end = end;
+                    let before = ALLOCATIONS.load(Ordering::Relaxed);
+                    let stats = sim.run(&mut |_| {}).unwrap();
+                    (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
+                };
+                let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
+                assert!(events_long > events_short, "{formulation}, {}: no {what}", entry.name);
+                if long > short {
+                    failures.push(format!(
+                        "{formulation}, {}: {short} allocations for 1.5 s, {long} for 3 s",
+                        entry.name
+                    ));
+                }
             }
         }
     }
-    assert!(failures.is_empty(), "{failures:#?}");
+    failures
 }
 
 /// A run with a joint limit (impacts located, the joint held on its stop and released, its
@@ -591,32 +601,6 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
         [[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\n\
         plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\nrigid = true\nrestitution = 0.8\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
-    let mut failures = Vec::new();
-    for (formulation, base) in ["augmented", "embedding", "amalgamated"]
-        .into_iter()
-        .flat_map(|f| [(f, text), (f, spatial), (f, ball)])
-    {
-        let base = dalembert::Scene::from_toml(base, "pin limits").unwrap();
-        for entry in METHODS.iter().filter(|e| e.applies == Applies::AnyFormulation) {
-            let mut scene = base.clone();
-            scene.settings.method = Method::of(entry);
-            scene.settings.formulation = dalembert::FormulationKind::parse(formulation).unwrap();
-            let count = |end: f64| {
-                let mut sim = scene.simulation();
-                sim.end = end;
-                let before = ALLOCATIONS.load(Ordering::Relaxed);
-                let stats = sim.run(&mut |_| {}).unwrap();
-                (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
-            };
-            let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
-            assert!(events_long > events_short, "{formulation}, {}: no impact", entry.name);
-            if long > short {
-                failures.push(format!(
-                    "{formulation}, {}: {short} allocations for 1.5 s, {long} for 3 s",
-                    entry.name
-                ));
-            }
-        }
-    }
+    let failures = switching_runs_growing(&[text, spatial, ball], "impact");
     assert!(failures.is_empty(), "{failures:#?}");
 }

@@ -4,6 +4,7 @@ use super::error::SceneError;
 use super::format::SIM_KEYS;
 use super::format::{BodyDef, DriverDef, ForceDef, FrictionDef, JointDef, Points, SceneFile, SimDef, ValueDef};
 use super::functions::time_function;
+use super::limit_keys::{limit_keys, LimitKeys};
 use super::names::{Ctx, Names};
 use super::{method_parameter, parameter_keys, unknown_name, RunSettings, Scene};
 use crate::animation::{xy, BodyDrawing, DrawBody, Drawing, Mark, Shape};
@@ -422,60 +423,33 @@ fn friction(
 }
 
 /// The limit of joint `d` (`constraint`: its index in the model's constraint list), if it has
-/// one, checked against the joint's type (`docs/limits.md`); errors are placed at the key at
-/// fault.
+/// one ([`limit_keys`]), checked against the joint's type and its start (`docs/limits.md`);
+/// errors are placed at the `limits` key.
 fn limit(b: &Builder<'_>, d: &JointDef, info: &JointInfo, constraint: usize) -> Result<Option<Limit>, SceneError> {
-    let owner = format!("joint '{}'", d.name);
-    let Some(bounds) = &d.limits else {
-        let stray = [
-            ("restitution", d.restitution.as_ref()),
-            ("rest_speed", d.rest_speed.as_ref()),
-        ];
-        if let Some((key, value)) = stray.into_iter().find_map(|(k, v)| v.map(|v| (k, v))) {
-            return Err(b.ctx.err(
-                Some(value.span()),
-                format!("{owner}: '{key}' belongs to a joint with 'limits = [lower, upper]'"),
-            ));
-        }
+    let keys = LimitKeys {
+        limits: d.limits.as_ref(),
+        restitution: d.restitution.as_ref(),
+        rest_speed: d.rest_speed.as_ref(),
+    };
+    let Some((spec, span)) = limit_keys(&b.ctx, &d.name, keys)? else {
         return Ok(None);
     };
-    let span = Some(bounds.span());
     let joint = match info {
         JointInfo::Revolute(r) => FrictionJoint::Revolute(r.clone()),
         JointInfo::Prismatic(p) => FrictionJoint::Prismatic(p.clone()),
         JointInfo::Other(_) => {
             return Err(b.ctx.err(
-                span,
+                Some(span),
                 format!(
-                    "{owner}: limits are for revolute and prismatic joints, this one is '{}'",
-                    d.kind
+                    "joint '{}': limits are for revolute and prismatic joints, this one is '{}'",
+                    d.name, d.kind
                 ),
             ))
         }
     };
-    let &[lower, upper] = bounds.get_ref().as_slice() else {
-        return Err(b.ctx.err(
-            span,
-            format!(
-                "{owner}: limits must be [lower, upper], got {} values",
-                bounds.get_ref().len()
-            ),
-        ));
-    };
-    let restitution = d.restitution.as_ref().map_or(0.0, |r| *r.get_ref());
-    let rest_speed = d.rest_speed.as_ref().map_or(REST_SPEED, |r| *r.get_ref());
-    let limit = Limit::new(joint, constraint, &b.q, [lower, upper], restitution, rest_speed);
-    limit.validate().map_err(|e| {
-        let message = e.to_string();
-        let at = if message.contains("restitution") {
-            d.restitution.as_ref().map(|r| r.span())
-        } else if message.contains("rest_speed") {
-            d.rest_speed.as_ref().map(|r| r.span())
-        } else {
-            None
-        };
-        b.ctx.err(at.or(span), message)
-    })?;
+    let bounds = [spec.lower, spec.upper];
+    let limit = Limit::new(joint, constraint, &b.q, bounds, spec.restitution, spec.rest_speed);
+    limit.validate().map_err(|e| b.ctx.err(Some(span), e.to_string()))?;
     Ok(Some(limit))
 }
 
@@ -497,27 +471,14 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
             "'{key}' does not belong to a rigid contact (it has no compliant law)"
         )));
     }
-    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
-    let body = b.body(name, span, &owner)?;
-    let centre = match d.at {
-        Some(Points::One(p)) => local_point_of(body, &b.q, v2(p)),
-        None => Vec2::zeros(),
-        Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)".into())),
-    };
-    let line = d.line.as_ref().ok_or_else(|| {
-        err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
-    })?;
-    let normal = v2(line.normal);
-    if normal.norm().is_nan() || normal.norm() == 0.0 {
-        return Err(err("the line's normal must not be zero".into()));
-    }
+    let c = circle_on_line(b, d, span, &owner)?;
     let contact = RigidContact {
         name: d.name.clone(),
-        body,
-        centre,
-        radius: d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?,
-        point: v2(line.point),
-        normal: normal / normal.norm(),
+        body: c.body,
+        centre: c.centre,
+        radius: c.radius,
+        point: c.point,
+        normal: c.normal,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(REST_SPEED),
     };
@@ -525,6 +486,41 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         .validate(&b.q)
         .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
     Ok(contact)
+}
+
+/// The circle and line of a `circle-line` element, compliant or rigid: the circle's body, its
+/// centre (local), its radius, the line's point and unit normal (out of the ground).
+struct CircleOnLine {
+    body: BodyRef,
+    centre: Vec2,
+    radius: f64,
+    point: Vec2,
+    normal: Vec2,
+}
+
+fn circle_on_line(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>, owner: &str) -> Result<CircleOnLine, SceneError> {
+    let err = |m: &str| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+    let body = b.body(name, span, owner)?;
+    let centre = match d.at {
+        Some(Points::One(p)) => local_point_of(body, &b.q, v2(p)),
+        None => Vec2::zeros(),
+        Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)")),
+    };
+    let line = d.line.as_ref().ok_or_else(|| {
+        err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)")
+    })?;
+    let normal = v2(line.normal);
+    if normal.norm().is_nan() || normal.norm() == 0.0 {
+        return Err(err("the line's normal must not be zero"));
+    }
+    Ok(CircleOnLine {
+        body,
+        centre,
+        radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+        point: v2(line.point),
+        normal: normal / normal.norm(),
+    })
 }
 
 /// `Ok` unless `settings` ask for joint coordinates that `mechanism` cannot take (a planar model,
@@ -821,30 +817,17 @@ fn force(
             if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
                 return Err(err(format!("'{key}' does not belong to a circle-line element")));
             }
-            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
-            let body = b.body(name, span, &owner)?;
-            let centre = match d.at {
-                Some(Points::One(p)) => local_point_of(body, &b.q, v2(p)),
-                None => Vec2::zeros(),
-                Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)".into())),
-            };
-            let line = d.line.as_ref().ok_or_else(|| {
-                err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
-            })?;
-            let normal = v2(line.normal);
-            if normal.norm().is_nan() || normal.norm() == 0.0 {
-                return Err(err("the line's normal must not be zero".into()));
-            }
             if d.radii.is_some() {
                 return Err(err("'radii' belongs to a circle-circle element: give 'radius'".into()));
             }
+            let c = circle_on_line(b, d, span, &owner)?;
             Box::new(CircleLine {
                 name: d.name.clone(),
-                body,
-                centre,
-                radius: d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?,
-                point: v2(line.point),
-                normal: normal / normal.norm(),
+                body: c.body,
+                centre: c.centre,
+                radius: c.radius,
+                point: c.point,
+                normal: c.normal,
                 law: contact_law(d).map_err(err)?,
             })
         }

@@ -10,6 +10,7 @@ mod error;
 mod format;
 mod functions;
 mod initial;
+mod limit_keys;
 mod mjcf;
 mod names;
 mod overrides;

@@ -11,6 +11,7 @@
 use super::error::SceneError;
 use super::format::{FrictionDef, FunctionDef, SimDef};
 use super::functions::time_function;
+use super::limit_keys::{limit_keys, LimitKeys};
 use super::names::{Ctx, Names};
 use super::spatial_forces::{self, ForceDef};
 use super::strict::{self, Inertia3, Points3};
@@ -19,7 +20,7 @@ use crate::animation::{Drawing, Solid, SpatialDrawing};
 use dalembert_spatial::body;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
 use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
-use dalembert_system::{JointLimit, MultibodySystem, SlipRow, REST_SPEED};
+use dalembert_system::{MultibodySystem, SlipRow};
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 use std::collections::HashMap;
@@ -470,7 +471,12 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let joint = joint(d, pair).map_err(|m| ctx.err(Some(span.clone()), format!("{owner}: {m}")))?;
         joint_kinds.insert(d.name.clone(), joint.kind);
         model.joint(joint);
-        if let Some((limit, at)) = limit(&ctx, d)? {
+        let keys = LimitKeys {
+            limits: d.limits.as_ref(),
+            restitution: d.restitution.as_ref(),
+            rest_speed: d.rest_speed.as_ref(),
+        };
+        if let Some((limit, at)) = limit_keys(&ctx, &d.name, keys)? {
             limits.push(limit);
             limit_spans.push(at);
         }
@@ -701,53 +707,6 @@ fn initial_moves(
 }
 
 /// The joint a `[[joints]]` table describes.
-/// The limit of joint `d`, if it has one, with the span of its `limits` key (`docs/limits.md`);
-/// `restitution` or `rest_speed` without `limits` is refused at the key.
-fn limit(ctx: &Ctx<'_>, d: &JointDef) -> Result<Option<(JointLimit, Range<usize>)>, SceneError> {
-    let owner = format!("joint '{}'", d.name);
-    let Some(bounds) = &d.limits else {
-        let stray = [
-            ("restitution", d.restitution.as_ref()),
-            ("rest_speed", d.rest_speed.as_ref()),
-        ];
-        if let Some((key, value)) = stray.into_iter().find_map(|(k, v)| v.map(|v| (k, v))) {
-            return Err(ctx.err(
-                Some(value.span()),
-                format!("{owner}: '{key}' belongs to a joint with 'limits = [lower, upper]'"),
-            ));
-        }
-        return Ok(None);
-    };
-    let &[lower, upper] = bounds.get_ref().as_slice() else {
-        return Err(ctx.err(
-            Some(bounds.span()),
-            format!(
-                "{owner}: limits must be [lower, upper], got {} values",
-                bounds.get_ref().len()
-            ),
-        ));
-    };
-    let limit = JointLimit {
-        element: "joint",
-        name: d.name.clone(),
-        lower,
-        upper,
-        restitution: d.restitution.as_ref().map_or(0.0, |r| *r.get_ref()),
-        rest_speed: d.rest_speed.as_ref().map_or(REST_SPEED, |r| *r.get_ref()),
-    };
-    if let Err(what) = limit.check() {
-        let at = if what.contains("restitution") {
-            d.restitution.as_ref().map(|r| r.span())
-        } else if what.contains("rest_speed") {
-            d.rest_speed.as_ref().map(|r| r.span())
-        } else {
-            None
-        };
-        return Err(ctx.err(at.or(Some(bounds.span())), format!("{owner}: {what}")));
-    }
-    Ok(Some((limit, bounds.span())))
-}
-
 fn joint(d: &JointDef, [bi, bj]: [BodyRef; 2]) -> Result<Joint, String> {
     let kind = JointKind::ALL.into_iter().find(|k| k.name() == d.kind).ok_or_else(|| {
         let names: Vec<&str> = JointKind::ALL.iter().map(|k| k.name()).collect();

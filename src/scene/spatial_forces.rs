@@ -304,21 +304,12 @@ pub(crate) fn force(
                 "friction",
                 "smoothing_velocity",
             ]))?;
-            let body = body()?;
-            let centre = match (d.at, body) {
-                (Some(Points3::One(p)), _) => p,
-                (None, BodyRef::Body(i)) => positions[i],
-                (None, BodyRef::Ground) => [0.0; 3],
-                (Some(Points3::Two(_)), _) => return Err(err("'at' is the sphere's centre, one point [x, y, z] (global)")),
-            };
-            let plane = d.plane.as_ref().ok_or_else(|| {
-                err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
-            })?;
+            let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
             Force::SpherePlane {
                 name,
                 body,
                 centre,
-                radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+                radius,
                 point: plane.point,
                 normal: plane.normal,
                 law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
@@ -397,26 +388,43 @@ pub(crate) fn rigid_sphere_plane(
     }
     d.only(&["body", "at", "radius", "plane", "rigid", "restitution", "rest_speed"])
         .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
-    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
-    let BodyRef::Body(body) = names.body(ctx, name, span, owner)? else {
+    let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
+    let BodyRef::Body(body) = body else {
         return Err(err("the sphere must be on a moving body"));
     };
-    let centre = match d.at {
-        Some(Points3::One(p)) => p,
-        None => positions[body],
-        Some(Points3::Two(_)) => return Err(err("'at' is the sphere's centre, one point [x, y, z] (global)")),
-    };
-    let plane = d.plane.as_ref().ok_or_else(|| {
-        err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
-    })?;
     Ok(dalembert_spatial::limits::SpherePlaneContact {
         name: d.name.clone(),
         body,
         centre,
-        radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+        radius,
         point: plane.point,
         normal: plane.normal,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
     })
+}
+
+/// The sphere and plane of a `sphere-plane` element, compliant or rigid: the sphere's body, its
+/// centre (global; default the body's position), its radius, and the plane.
+fn sphere_on_plane<'a>(
+    d: &'a ForceDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+    positions: &[[f64; 3]],
+) -> Result<(BodyRef, [f64; 3], f64, &'a PlaneDef), SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+    let body = names.body(ctx, name, span, owner)?;
+    let centre = match (d.at, body) {
+        (Some(Points3::One(p)), _) => p,
+        (None, BodyRef::Body(i)) => positions[i],
+        (None, BodyRef::Ground) => [0.0; 3],
+        (Some(Points3::Two(_)), _) => return Err(err("'at' is the sphere's centre, one point [x, y, z] (global)")),
+    };
+    let plane = d.plane.as_ref().ok_or_else(|| {
+        err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
+    })?;
+    Ok((body, centre, d.radius.ok_or_else(|| err("needs 'radius' (m)"))?, plane))
 }
