@@ -477,6 +477,7 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         body: c.body,
         centre: c.centre,
         radius: c.radius,
+        line_body: c.line_body,
         point: c.point,
         normal: c.normal,
         restitution: d.restitution.unwrap_or(0.0),
@@ -489,11 +490,13 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
 }
 
 /// The circle and line of a `circle-line` element, compliant or rigid: the circle's body, its
-/// centre (local), its radius, the line's point and unit normal (out of the ground).
+/// centre (local), its radius, the line's body (the ground unless `line.body` names one), its
+/// point and unit normal (towards the circle), local to the line's body.
 struct CircleOnLine {
     body: BodyRef,
     centre: Vec2,
     radius: f64,
+    line_body: BodyRef,
     point: Vec2,
     normal: Vec2,
 }
@@ -514,12 +517,17 @@ fn circle_on_line(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>, owner: &st
     if normal.norm().is_nan() || normal.norm() == 0.0 {
         return Err(err("the line's normal must not be zero"));
     }
+    let line_body = match &line.body {
+        Some(name) => b.body(name, span, owner)?,
+        None => BodyRef::Ground,
+    };
     Ok(CircleOnLine {
         body,
         centre,
         radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
-        point: v2(line.point),
-        normal: normal / normal.norm(),
+        line_body,
+        point: local_point_of(line_body, &b.q, v2(line.point)),
+        normal: local_direction_of(line_body, &b.q, normal / normal.norm()),
     })
 }
 
@@ -821,6 +829,11 @@ fn force(
                 return Err(err("'radii' belongs to a circle-circle element: give 'radius'".into()));
             }
             let c = circle_on_line(b, d, span, &owner)?;
+            if c.line_body != BodyRef::Ground {
+                return Err(err(
+                    "a compliant circle-line's line is of the ground (a line on a body needs rigid = true)".into(),
+                ));
+            }
             Box::new(CircleLine {
                 name: d.name.clone(),
                 body: c.body,

@@ -203,6 +203,8 @@ impl ForceDef {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct LineDef {
+    /// The body the line is fixed in (default the ground; a rigid contact only).
+    pub body: Option<String>,
     #[serde(deserialize_with = "strict::xy")]
     pub point: [f64; 2],
     #[serde(deserialize_with = "strict::xy")]

@@ -1,19 +1,17 @@
-//! Rigid (unilateral) contact of a circle on a planar body with a line of the ground
-//! (`docs/limits.md`, "Rigid contact"): the gap `s = n·(c − p₀) − R ≥ 0`, kept by the same
-//! impact and resting law as a joint limit ([`dalembert_system::limit`]), with no friction.
+//! Rigid (unilateral) contact of a circle on a planar body with a line on another body or the
+//! ground (`docs/limits.md`, "Rigid contact"): the gap `s = n·(c − p) − R ≥ 0`, kept by the
+//! same impact and resting law as a joint limit ([`dalembert_system::limit`]), with no friction.
 //!
-//! ```text
-//! s = n·(c − p₀) − R,   w = n·ċ,   g = [n_x, n_y, n·perp(A u)],   b = n·(−θ̇² A u)
-//! ```
-//!
-//! with `c = R_b + A u` the circle's centre on the body. The normal impulse acts along `n` at
-//! the contact point `c − R n`, whose arm about the body's reference point gives the same moment
-//! as `A u` (the normal passes through the centre).
+//! With the line's point `p` and unit normal `n` fixed in its body and the circle's centre `c`
+//! fixed in its own, the gap plus `R` is the coordinate of `c` along `n` from `p`: the
+//! [`line_coordinate`] primitive (its row gives `w = ṡ` and the bias of `s̈`). The normal passes
+//! through the centre, so the impulse along it turns neither body about the centre.
 
-use dalembert_kinematics::{BodyRef, BodyState, PointState, Vec2};
+use crate::primitives::line_coordinate;
+use dalembert_kinematics::{BodyRef, BodyState, Vec2};
 use dalembert_system::{JointLimit, ModelError, SlipRow};
 
-/// A circle on a body in rigid contact with a line of the ground.
+/// A circle on a body in rigid contact with a line on another body or the ground.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigidContact {
     /// The contact's name.
@@ -24,9 +22,11 @@ pub struct RigidContact {
     pub centre: Vec2,
     /// The circle's radius (m).
     pub radius: f64,
-    /// A point of the line (global).
+    /// The body carrying the line (the ground: global point and normal).
+    pub line_body: BodyRef,
+    /// A point of the line, local to its body.
     pub point: Vec2,
-    /// The line's unit normal, out of the ground (global).
+    /// The line's unit normal, towards the circle's side, local to its body.
     pub normal: Vec2,
     /// Newton's coefficient of restitution `e ∈ [0, 1]`.
     pub restitution: f64,
@@ -54,8 +54,11 @@ impl RigidContact {
             element: format!("force '{}'", self.name),
             what,
         };
-        if self.body == BodyRef::Ground {
-            return Err(bad("the circle must be on a moving body".into()));
+        if self.body == BodyRef::Ground && self.line_body == BodyRef::Ground {
+            return Err(bad("the circle or the line must be on a moving body".into()));
+        }
+        if self.body == self.line_body {
+            return Err(bad("the circle and the line are on the same body".into()));
         }
         if !(self.radius.is_finite() && self.radius >= 0.0) {
             return Err(bad(format!("radius must be finite and ≥ 0, got {}", self.radius)));
@@ -74,23 +77,26 @@ impl RigidContact {
 
     /// The gap at `q`.
     pub fn gap(&self, q: &[f64]) -> f64 {
-        let c = PointState::new(&BodyState::of(self.body, q, &[]), self.centre);
-        self.normal.dot(&(c.position - self.point)) - self.radius
+        self.gap_row(q, &[], &mut SlipRow::default())
     }
 
-    /// The gap's row at `(q, v)` for the seam, and the gap.
+    /// The gap's row at `(q, v)` for the seam (`v` empty: at rest), and the gap.
     pub fn gap_row(&self, q: &[f64], v: &[f64], out: &mut SlipRow) -> f64 {
-        let c = PointState::new(&BodyState::of(self.body, q, v), self.centre);
+        let line = BodyState::of(self.line_body, q, v);
+        let circle = BodyState::of(self.body, q, v);
+        let row = line_coordinate(&line, self.point, self.normal, &circle, self.centre);
         out.clear();
-        if let BodyRef::Body(id) = self.body {
-            let g = [self.normal.x, self.normal.y, self.normal.dot(&c.d_theta())];
-            for (k, x) in g.iter().enumerate() {
-                if *x != 0.0 {
-                    out.push(id.offset() + k, *x);
+        for (body, block) in [(self.line_body, row.first), (self.body, row.second)] {
+            if let BodyRef::Body(id) = body {
+                for (k, x) in block.iter().enumerate() {
+                    if *x != 0.0 {
+                        out.push(id.offset() + k, *x);
+                    }
                 }
             }
         }
-        out.bias = self.normal.dot(&c.quadratic_acceleration);
-        self.normal.dot(&(c.position - self.point)) - self.radius
+        // C_q q̈ = Q_d: the gap's acceleration is g·q̈ − Q_d.
+        out.bias = -row.gamma;
+        row.c - self.radius
     }
 }
