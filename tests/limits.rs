@@ -485,3 +485,38 @@ fn the_cam_follower_lifts_as_its_cam_and_feels_the_force_of_its_free_body_diagra
         }
     }
 }
+
+#[test]
+fn two_rigid_disks_collide_by_newtons_law() {
+    // A disk of 1 kg at 1 m/s strikes one of 3 kg at rest, centres on the line of motion, their
+    // gap 0.3 m, no gravity, a rigid contact with e = 0.6: at t* = 0.3 s the velocities become
+    // (m₁ − e m₂) v / (m₁ + m₂) = −0.2 m/s and (1 + e) m₁ v / (m₁ + m₂) = 0.4 m/s (Newton's law
+    // with momentum conserved). The motion is linear in t on each side, so RK4 and dopri5 follow
+    // it to round-off once the impact is located: bar 1e-10 m.
+    for formulation in FORMULATIONS {
+        for integrator in METHODS {
+            let text = format!(
+                "[scene]\ngravity = [0.0, 0.0]\n\
+                 [[bodies]]\nname = \"a\"\nmass = 1.0\nshape = {{ disk = 0.1 }}\nposition = [0.0, 0.0]\nvelocity = [1.0, 0.0]\n\
+                 [[bodies]]\nname = \"b\"\nmass = 3.0\nshape = {{ disk = 0.1 }}\nposition = [0.5, 0.0]\n\
+                 [[forces]]\nname = \"touch\"\ntype = \"circle-circle\"\nbodies = [\"a\", \"b\"]\nradii = [0.1, 0.1]\n\
+                 rigid = true\nrestitution = 0.6\n\
+                 [simulation]\nend = 1.0\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                 step = 1e-3\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.01\n"
+            );
+            let table = run(&Scene::from_toml(&text, "two disks").unwrap());
+            let (t, xa, xb) = (column(&table, "t"), column(&table, "a.x"), column(&table, "b.x"));
+            for k in 0..t.len() {
+                let after = (t[k] - 0.3).max(0.0);
+                let (ea, eb) = (t[k].min(0.3) - 0.2 * after, 0.5 + 0.4 * after);
+                assert!(
+                    (xa[k] - ea).abs() < 1e-10 && (xb[k] - eb).abs() < 1e-10,
+                    "{formulation} {integrator}: at t = {} the disks are at {}, {}, expected {ea}, {eb}",
+                    t[k],
+                    xa[k],
+                    xb[k]
+                );
+            }
+        }
+    }
+}

@@ -12,8 +12,9 @@ use crate::mechanism::Mechanism;
 use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
-    BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear, JointAngle,
-    JointDisplacement, Limit, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, RigidContact, STICK_SPEED,
+    Against, BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear,
+    JointAngle, JointDisplacement, Limit, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, RigidContact,
+    STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
@@ -459,27 +460,43 @@ fn limit(b: &Builder<'_>, d: &JointDef, info: &JointInfo, constraint: usize) -> 
 fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<RigidContact, SceneError> {
     let owner = format!("force '{}'", d.name);
     let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
-    if d.kind != "circle-line" {
-        return Err(err(format!(
-            "'rigid' is for circle-line contacts, this element is '{}'",
-            d.kind
-        )));
-    }
-    const KEYS: [&str; 7] = ["body", "at", "radius", "line", "rigid", "restitution", "rest_speed"];
-    if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
+    let keys: &[&str] = match d.kind.as_str() {
+        "circle-line" => &["body", "at", "radius", "line", "rigid", "restitution", "rest_speed"],
+        "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed"],
+        other => {
+            return Err(err(format!(
+                "'rigid' is for circle-line and circle-circle contacts, this element is '{other}'"
+            )))
+        }
+    };
+    if let Some(key) = d.keys_given().find(|k| !keys.contains(k)) {
         return Err(err(format!(
             "'{key}' does not belong to a rigid contact (it has no compliant law)"
         )));
     }
-    let c = circle_on_line(b, d, span, &owner)?;
+    let (body, centre, radius, against) = if d.kind == "circle-line" {
+        let c = circle_on_line(b, d, span, &owner)?;
+        let line = Against::Line {
+            body: c.line_body,
+            point: c.point,
+            normal: c.normal,
+        };
+        (c.body, c.centre, c.radius, line)
+    } else {
+        let (bodies, centres, radii) = two_circles(b, d, span, &owner)?;
+        let first = Against::Circle {
+            body: bodies[0],
+            centre: centres[0],
+            radius: radii[0],
+        };
+        (bodies[1], centres[1], radii[1], first)
+    };
     let contact = RigidContact {
         name: d.name.clone(),
-        body: c.body,
-        centre: c.centre,
-        radius: c.radius,
-        line_body: c.line_body,
-        point: c.point,
-        normal: c.normal,
+        body,
+        centre,
+        radius,
+        against,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(REST_SPEED),
     };
@@ -487,6 +504,23 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         .validate(&b.q)
         .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
     Ok(contact)
+}
+
+/// The two circles of a `circle-circle` element, compliant or rigid: their bodies, their
+/// centres (local; default the bodies' reference points) and radii.
+type TwoCircles = ([BodyRef; 2], [Vec2; 2], [f64; 2]);
+
+fn two_circles(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>, owner: &str) -> Result<TwoCircles, SceneError> {
+    let err = |m: &str| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
+    let pr = [b.body(n0, span, owner)?, b.body(n1, span, owner)?];
+    let centres = match d.at {
+        Some(Points::Two([c0, c1])) => [local_point_of(pr[0], &b.q, v2(c0)), local_point_of(pr[1], &b.q, v2(c1))],
+        None => [Vec2::zeros(), Vec2::zeros()],
+        Some(Points::One(_)) => return Err(err("'at' is the two circles' centres, [[x1, y1], [x2, y2]] (global)")),
+    };
+    let radii = d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)"))?;
+    Ok((pr, centres, radii))
 }
 
 /// The circle and line of a `circle-line` element, compliant or rigid: the circle's body, its
@@ -849,19 +883,11 @@ fn force(
             if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
                 return Err(err(format!("'{key}' does not belong to a circle-circle element")));
             }
-            let pr = pair()?;
-            let centres = match d.at {
-                Some(Points::Two([c0, c1])) => (local_point_of(pr[0], &b.q, v2(c0)), local_point_of(pr[1], &b.q, v2(c1))),
-                None => (Vec2::zeros(), Vec2::zeros()),
-                Some(Points::One(_)) => {
-                    return Err(err("'at' is the two circles' centres, [[x1, y1], [x2, y2]] (global)".into()))
-                }
-            };
-            let [r0, r1] = d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)".into()))?;
+            let (pr, [c0, c1], [r0, r1]) = two_circles(b, d, span, &owner)?;
             Box::new(CircleCircle {
                 name: d.name.clone(),
                 bodies: (pr[0], pr[1]),
-                centres,
+                centres: (c0, c1),
                 radii: (r0, r1),
                 law: contact_law(d).map_err(err)?,
             })

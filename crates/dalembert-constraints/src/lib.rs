@@ -35,5 +35,5 @@ pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, R
 pub use limit::Limit;
 pub use model::Model;
 pub use reactions::Reaction;
-pub use rigid_contact::RigidContact;
+pub use rigid_contact::{Against, RigidContact};
 pub use system::ConstraintSystem;
