@@ -561,11 +561,17 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
     // A plane a contact rolls on is drawn as a square of the ground.
     let mut floors = Vec::new();
     let mut rigid = Vec::new();
+    let mut rigid_pairs = Vec::new();
     for sf in &file.forces {
         let span = sf.span();
         let d = sf.get_ref();
         names.unique(&ctx, &d.name, &span, "force")?;
         let owner = format!("force '{}'", d.name);
+        if d.rigid == Some(true) && d.kind == "sphere-sphere" {
+            let pair = spatial_forces::rigid_sphere_pair(d, &names, &ctx, &span, &owner, &positions)?;
+            rigid_pairs.push((pair, span.clone()));
+            continue;
+        }
         if d.rigid == Some(true) {
             let contact = spatial_forces::rigid_sphere_plane(d, &names, &ctx, &span, &owner, &positions)?;
             floors.push(spatial_forces::floor_visual(&contact.point, &contact.normal, &owner));
@@ -595,12 +601,22 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             .find(|(l, _)| message.contains(&format!("'{}'", l.name)));
         ctx.err(at.map(|(_, s)| s.clone()), message)
     })?;
-    let spans: Vec<(String, Range<usize>)> = rigid
+    let mut spans: Vec<(String, Range<usize>)> = rigid_pairs
         .iter()
-        .map(|(c, s): &(_, Range<usize>)| (format!("'{}'", c.name), s.clone()))
+        .map(
+            |(c, s): &(dalembert_spatial::limits::SphereSphereContact, Range<usize>)| {
+                (format!("'{}'", c.name), s.clone())
+            },
+        )
         .collect();
+    spans.extend(
+        rigid
+            .iter()
+            .map(|(c, s): &(_, Range<usize>)| (format!("'{}'", c.name), s.clone())),
+    );
     let model = model
         .with_rigid_contacts(rigid.into_iter().map(|(c, _)| c).collect())
+        .and_then(|m| m.with_rigid_sphere_pairs(rigid_pairs.into_iter().map(|(c, _)| c).collect()))
         .map_err(|e| {
             let message = e.to_string();
             let at = spans

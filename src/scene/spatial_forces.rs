@@ -327,24 +327,12 @@ pub(crate) fn force(
                 "friction",
                 "smoothing_velocity",
             ]))?;
-            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
-            let bodies = [names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?];
-            let position = |b: BodyRef| match b {
-                BodyRef::Body(i) => positions[i],
-                BodyRef::Ground => [0.0; 3],
-            };
-            let centres = match d.at {
-                Some(Points3::Two(c)) => c,
-                None => bodies.map(position),
-                Some(Points3::One(_)) => {
-                    return Err(err("'at' is the two spheres' centres, [[x1, y1, z1], [x2, y2, z2]] (global)"))
-                }
-            };
+            let (bodies, centres, radii) = two_spheres(d, names, ctx, span, owner, positions)?;
             Force::SphereSphere {
                 name,
                 bodies,
                 centres,
-                radii: d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)"))?,
+                radii,
                 law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
                     .map_err(|m| err(&m))?,
             }
@@ -427,4 +415,67 @@ fn sphere_on_plane<'a>(
         err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
     })?;
     Ok((body, centre, d.radius.ok_or_else(|| err("needs 'radius' (m)"))?, plane))
+}
+
+/// A `sphere-sphere` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the two
+/// spheres as for the compliant element, `restitution` (0) and `rest_speed` (1e-3).
+pub(crate) fn rigid_sphere_pair(
+    d: &ForceDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+    positions: &[[f64; 3]],
+) -> Result<dalembert_spatial::limits::SphereSphereContact, SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    d.only(&["bodies", "at", "radii", "rigid", "restitution", "rest_speed"])
+        .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
+    let (bodies, centres, radii) = two_spheres(d, names, ctx, span, owner, positions)?;
+    let index = |b: BodyRef| match b {
+        BodyRef::Body(i) => Some(i),
+        BodyRef::Ground => None,
+    };
+    Ok(dalembert_spatial::limits::SphereSphereContact {
+        name: d.name.clone(),
+        bodies: bodies.map(index),
+        centres,
+        radii,
+        restitution: d.restitution.unwrap_or(0.0),
+        rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
+    })
+}
+
+/// The two spheres of a `sphere-sphere` element, compliant or rigid: their bodies, centres
+/// (global; default the bodies' positions) and radii.
+type TwoSpheres = ([BodyRef; 2], [[f64; 3]; 2], [f64; 2]);
+
+fn two_spheres(
+    d: &ForceDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+    positions: &[[f64; 3]],
+) -> Result<TwoSpheres, SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
+    let bodies = [names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?];
+    let position = |b: BodyRef| match b {
+        BodyRef::Body(i) => positions[i],
+        BodyRef::Ground => [0.0; 3],
+    };
+    let centres = match d.at {
+        Some(Points3::Two(c)) => c,
+        None => bodies.map(position),
+        Some(Points3::One(_)) => {
+            return Err(err(
+                "'at' is the two spheres' centres, [[x1, y1, z1], [x2, y2, z2]] (global)",
+            ))
+        }
+    };
+    Ok((
+        bodies,
+        centres,
+        d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)"))?,
+    ))
 }

@@ -147,14 +147,45 @@ pub struct SpherePlaneContact {
     pub rest_speed: f64,
 }
 
-/// A rigid contact as the model keeps it: the centre in the body frame, the unit normal.
+/// Two spheres on two bodies (one may be the ground) in rigid (unilateral) contact, without
+/// friction (`docs/limits.md`, "Rigid contact"): a limit on the gap
+/// `s = |c_j − c_i| − R_i − R_j ≥ 0`, with `n = (c_j − c_i)/|c_j − c_i|`,
+///
+/// ```text
+/// w = n·(ċ_j − ċ_i),   g: ṙ_j ↦ n,  ω'_j ↦ A_jᵀ (s_j × n),  ṙ_i ↦ −n,  ω'_i ↦ −A_iᵀ (s_i × n)
+/// b = n·(ω_j × (ω_j × s_j) − ω_i × (ω_i × s_i)) + (|ḋ|² − (n·ḋ)²) / |d|
+/// ```
 #[derive(Debug, Clone, PartialEq)]
-pub(crate) struct ContactData {
-    body: usize,
-    centre: Vector3<f64>,
-    radius: f64,
-    point: Vector3<f64>,
-    normal: Vector3<f64>,
+pub struct SphereSphereContact {
+    /// The contact's name.
+    pub name: String,
+    /// The two bodies (`None`: the ground).
+    pub bodies: [Option<usize>; 2],
+    /// The spheres' centres, global, in the file's configuration.
+    pub centres: [[f64; 3]; 2],
+    /// Their radii (m).
+    pub radii: [f64; 2],
+    /// Newton's coefficient of restitution `e ∈ [0, 1]`.
+    pub restitution: f64,
+    /// The rebound speed below which the spheres rest on each other (m/s).
+    pub rest_speed: f64,
+}
+
+/// A rigid contact as the model keeps it: centres in their body frames, a unit normal.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum ContactData {
+    Plane {
+        body: usize,
+        centre: Vector3<f64>,
+        radius: f64,
+        point: Vector3<f64>,
+        normal: Vector3<f64>,
+    },
+    Spheres {
+        bodies: [Option<usize>; 2],
+        centres: [Vector3<f64>; 2],
+        reach: f64,
+    },
 }
 
 impl Model {
@@ -190,14 +221,15 @@ impl Model {
             };
             spec.check().map_err(bad)?;
             let f = self.frame(Some(c.body), &q0, &[]);
-            let data = ContactData {
+            let normal = normal / length;
+            let data = ContactData::Plane {
                 body: c.body,
                 centre: f.a.transpose() * (Vector3::from(c.centre) - f.r),
                 radius: c.radius,
                 point: Vector3::from(c.point),
-                normal: normal / length,
+                normal,
             };
-            let gap = data.normal.dot(&(Vector3::from(c.centre) - data.point)) - data.radius;
+            let gap = normal.dot(&(Vector3::from(c.centre) - Vector3::from(c.point))) - c.radius;
             if gap < -1e-12 {
                 return Err(bad(format!("the sphere starts {:e} m into the plane", -gap)));
             }
@@ -207,19 +239,101 @@ impl Model {
         Ok(self)
     }
 
+    /// The model with rigid sphere–sphere contacts too (after [`Model::with_rigid_contacts`]).
+    /// Errors name the contact.
+    pub fn with_rigid_sphere_pairs(mut self, contacts: Vec<SphereSphereContact>) -> Result<Self, ModelError> {
+        let (q0, _) = self.initial_state();
+        for c in contacts {
+            let bad = |what: String| ModelError::InvalidParameter {
+                element: format!("force '{}'", c.name),
+                what,
+            };
+            if c.bodies[0] == c.bodies[1] {
+                return Err(bad("the two spheres must be on two different bodies".into()));
+            }
+            if c.bodies.iter().any(|b| b.is_some_and(|b| b >= self.bodies().len())) {
+                return Err(bad("a sphere's body is not in the model".into()));
+            }
+            if !c.radii.iter().all(|r| r.is_finite() && *r >= 0.0) || !c.centres.iter().flatten().all(|x| x.is_finite())
+            {
+                return Err(bad(
+                    "the spheres' centres and radii must be finite, the radii ≥ 0".into()
+                ));
+            }
+            let spec = JointLimit {
+                element: "contact",
+                name: c.name.clone(),
+                lower: 0.0,
+                upper: f64::INFINITY,
+                restitution: c.restitution,
+                rest_speed: c.rest_speed,
+            };
+            spec.check().map_err(bad)?;
+            let local = |b: Option<usize>, p: [f64; 3]| {
+                let f = self.frame(b, &q0, &[]);
+                f.a.transpose() * (Vector3::from(p) - f.r)
+            };
+            let [ci, cj] = c.centres.map(Vector3::from);
+            let gap = (cj - ci).norm() - c.radii[0] - c.radii[1];
+            if gap < -1e-12 {
+                return Err(bad(format!("the spheres start {:e} m into each other", -gap)));
+            }
+            let data = ContactData::Spheres {
+                bodies: c.bodies,
+                centres: [local(c.bodies[0], c.centres[0]), local(c.bodies[1], c.centres[1])],
+                reach: c.radii[0] + c.radii[1],
+            };
+            self.limits.push(spec);
+            self.contacts.push(data);
+        }
+        Ok(self)
+    }
+
     /// The gap row of rigid contact `k` (after the joint limits) at `(q, v)`, and the gap.
     fn contact_row_into(&self, k: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
-        let c = &self.contacts[k];
-        let f = self.frame(Some(c.body), q, v);
-        let arm = f.a * c.centre;
-        let n = c.normal;
         row.clear();
-        for (i, x) in n.iter().chain((f.a.transpose() * arm.cross(&n)).iter()).enumerate() {
-            if *x != 0.0 {
-                row.push(NV * c.body + i, *x);
+        let mut push = |body: Option<usize>, lin: Vector3<f64>, ang: Vector3<f64>| {
+            if let Some(b) = body {
+                for (i, x) in lin.iter().chain(ang.iter()).enumerate() {
+                    if *x != 0.0 {
+                        row.push(NV * b + i, *x);
+                    }
+                }
+            }
+        };
+        match &self.contacts[k] {
+            ContactData::Plane {
+                body,
+                centre,
+                radius,
+                point,
+                normal: n,
+            } => {
+                let f = self.frame(Some(*body), q, v);
+                let arm = f.a * centre;
+                push(Some(*body), *n, f.a.transpose() * arm.cross(n));
+                row.bias = n.dot(&f.centripetal(&arm));
+                n.dot(&(f.r + arm - point)) - radius
+            }
+            ContactData::Spheres { bodies, centres, reach } => {
+                let fi = self.frame(bodies[0], q, v);
+                let fj = self.frame(bodies[1], q, v);
+                let (si, sj) = (fi.a * centres[0], fj.a * centres[1]);
+                let d = fj.r + sj - fi.r - si;
+                let length = d.norm();
+                if length <= f64::MIN_POSITIVE.sqrt() {
+                    // Concentric: no direction to part along.
+                    return -reach;
+                }
+                let n = d / length;
+                push(bodies[1], n, fj.a.transpose() * sj.cross(&n));
+                push(bodies[0], -n, -(fi.a.transpose() * si.cross(&n)));
+                let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
+                let along = n.dot(&d_dot);
+                row.bias = n.dot(&(fj.centripetal(&sj) - fi.centripetal(&si)))
+                    + (d_dot.norm_squared() - along * along) / length;
+                length - reach
             }
         }
-        row.bias = n.dot(&f.centripetal(&arm));
-        n.dot(&(f.r + arm - c.point)) - c.radius
     }
 }
