@@ -65,14 +65,7 @@ impl RigidContact {
 
     /// What the seam sees: a limit on the gap with the single bound `0 ≤ s`.
     pub fn spec(&self) -> JointLimit {
-        JointLimit {
-            element: "contact",
-            name: self.name.clone(),
-            lower: 0.0,
-            upper: f64::INFINITY,
-            restitution: self.restitution,
-            rest_speed: self.rest_speed,
-        }
+        JointLimit::contact(&self.name, self.restitution, self.rest_speed)
     }
 
     /// Checks the geometry and coefficients, naming the contact; the shapes must start apart or

@@ -211,14 +211,7 @@ impl Model {
                     "the plane's point and normal and the sphere's centre must be finite, the normal not zero".into(),
                 ));
             }
-            let spec = JointLimit {
-                element: "contact",
-                name: c.name.clone(),
-                lower: 0.0,
-                upper: f64::INFINITY,
-                restitution: c.restitution,
-                rest_speed: c.rest_speed,
-            };
+            let spec = JointLimit::contact(&c.name, c.restitution, c.rest_speed);
             spec.check().map_err(bad)?;
             let f = self.frame(Some(c.body), &q0, &[]);
             let normal = normal / length;
@@ -260,14 +253,7 @@ impl Model {
                     "the spheres' centres and radii must be finite, the radii ≥ 0".into()
                 ));
             }
-            let spec = JointLimit {
-                element: "contact",
-                name: c.name.clone(),
-                lower: 0.0,
-                upper: f64::INFINITY,
-                restitution: c.restitution,
-                rest_speed: c.rest_speed,
-            };
+            let spec = JointLimit::contact(&c.name, c.restitution, c.rest_speed);
             spec.check().map_err(bad)?;
             let local = |b: Option<usize>, p: [f64; 3]| {
                 let f = self.frame(b, &q0, &[]);

@@ -42,6 +42,18 @@ pub struct JointLimit {
 pub const LIMIT_SLACK: f64 = 1e-14;
 
 impl JointLimit {
+    /// A rigid contact's limit: its gap with the single bound `0 ≤ s`.
+    pub fn contact(name: &str, restitution: f64, rest_speed: f64) -> Self {
+        JointLimit {
+            element: "contact",
+            name: name.to_string(),
+            lower: 0.0,
+            upper: f64::INFINITY,
+            restitution,
+            rest_speed,
+        }
+    }
+
     /// The event function of a free joint at coordinate `s`: positive inside the bounds.
     pub fn free_event(&self, s: f64) -> f64 {
         (s - self.lower).min(self.upper - s) + LIMIT_SLACK
