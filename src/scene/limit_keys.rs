@@ -52,6 +52,7 @@ pub(crate) fn limit_keys(
         upper,
         restitution: keys.restitution.map_or(0.0, |r| *r.get_ref()),
         rest_speed: keys.rest_speed.map_or(REST_SPEED, |r| *r.get_ref()),
+        within_turn: false,
     };
     if let Err(what) = limit.check() {
         let at = if what.contains("restitution") {

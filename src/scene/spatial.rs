@@ -635,6 +635,19 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let mut row = SlipRow::default();
         for (k, l) in model.limit_specs().iter().enumerate() {
             let value = model.limit_row(k, 0.0, &q, &[], &mut row);
+            // A limited revolute joint's turns are counted from its start, read within a turn.
+            let beyond = |m: &&dalembert_spatial::joint_values::JointMove| {
+                l.within_turn && m.joint == l.name && m.value.abs() >= std::f64::consts::PI
+            };
+            if let Some(m) = moves.iter().find(beyond) {
+                return Err(ctx.err(
+                    span.clone(),
+                    format!(
+                        "[initial]: joint '{}' starts at {} rad, half a turn or more from the file's configuration: a limited joint counts its turns from a start within (−π, π)",
+                        l.name, m.value
+                    ),
+                ));
+            }
             if value < l.lower || value > l.upper {
                 return Err(ctx.err(
                     span.clone(),

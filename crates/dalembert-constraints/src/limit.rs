@@ -68,6 +68,7 @@ impl Limit {
             upper: self.upper,
             restitution: self.restitution,
             rest_speed: self.rest_speed,
+            within_turn: false,
         }
     }
 

@@ -37,12 +37,8 @@ pub enum JointValueKind {
 }
 
 /// The angle `candidate` (in `(−π, π]`) moved by a whole number of turns to lie within `π` of
-/// `previous`: a continuous angle from row to row when each row is less than half a turn from
-/// the last.
-pub fn unwrap_angle(previous: f64, candidate: f64) -> f64 {
-    let turn = std::f64::consts::TAU;
-    previous + (candidate - previous - turn * ((candidate - previous) / turn).round())
-}
+/// `previous` (the seam's, which joint limits use too).
+pub use dalembert_system::limit::unwrap_angle;
 
 impl Model {
     /// The joints that have a joint value (revolute and prismatic), with what the value is, in

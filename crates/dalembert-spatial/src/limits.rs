@@ -14,7 +14,8 @@
 //! ```
 //!
 //! with `ż_i = ω_i × z_i` (`b` is `ẅ` at zero accelerations). The angle is measured within a
-//! turn, so a revolute joint's bounds lie within `(−π, π)`.
+//! turn; its limit says so ([`JointLimit::within_turn`]), and the switching formulation follows
+//! it across half turns, so a revolute joint's bounds may lie beyond `±π`.
 
 use crate::frame::NV;
 use crate::joints::JointKind;
@@ -25,9 +26,9 @@ use nalgebra::Vector3;
 impl Model {
     /// The model with limits on some of its revolute and prismatic joints (each limit names its
     /// joint). Errors name the joint.
-    pub fn with_limits(mut self, limits: Vec<JointLimit>) -> Result<Self, ModelError> {
+    pub fn with_limits(mut self, mut limits: Vec<JointLimit>) -> Result<Self, ModelError> {
         let mut joints = Vec::with_capacity(limits.len());
-        for l in &limits {
+        for l in &mut limits {
             let bad = |what: String| ModelError::InvalidParameter {
                 element: format!("joint '{}'", l.name),
                 what,
@@ -39,15 +40,8 @@ impl Model {
                 .position(|j| j.name == l.name)
                 .ok_or_else(|| bad("a limit refers to a joint the model does not hold".into()))?;
             match self.joints()[index].kind {
-                Some(JointKind::Revolute) => {
-                    let pi = std::f64::consts::PI;
-                    if l.lower <= -pi || l.upper >= pi {
-                        return Err(bad(format!(
-                            "a spatial revolute joint's limits must lie within (−π, π) (its angle is measured within a turn), got [{}, {}]",
-                            l.lower, l.upper
-                        )));
-                    }
-                }
+                // Its angle is measured within a turn: the switching formulation follows it.
+                Some(JointKind::Revolute) => l.within_turn = true,
                 Some(JointKind::Prismatic) => {}
                 _ => return Err(bad("limits are for revolute and prismatic joints".into())),
             }

@@ -5,7 +5,7 @@
 //! formulation.
 
 use crate::friction::{solve_friction, FrictionTerms, FrictionWork, Mode};
-use crate::limit::{impact_impulse, impact_loss, LIMIT_SLACK};
+use crate::limit::{impact_impulse, impact_loss, unwrap_angle, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
 /// A formulation whose system has joint friction ([`MultibodySystem::frictions`]) or joint
@@ -31,6 +31,9 @@ pub struct Frictional {
     frictions: usize,
     /// The kinetic energy the impacts took so far (J).
     impact_loss: f64,
+    /// Each limit's coordinate at its last evaluation: a coordinate measured within a turn
+    /// ([`crate::JointLimit::within_turn`]) is followed from it across half turns.
+    coordinates: Vec<f64>,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -77,6 +80,7 @@ impl Frictional {
             started: false,
             frictions,
             impact_loss: 0.0,
+            coordinates: vec![0.0; count - frictions],
         })
     }
 
@@ -87,7 +91,9 @@ impl Frictional {
             system.slip_row(k, t, q, v, &mut self.terms[k].row);
             0.0
         } else {
-            system.limit_row(k - self.frictions, t, q, v, &mut self.terms[k].row)
+            let l = k - self.frictions;
+            let raw = system.limit_row(l, t, q, v, &mut self.terms[k].row);
+            follow(&system.limits()[l], &mut self.coordinates[l], raw)
         }
     }
 
@@ -166,6 +172,17 @@ impl Frictional {
         term.mode = if held { Mode::Held(sign) } else { Mode::Free };
         Ok(true)
     }
+}
+
+/// Limit `limit`'s coordinate from the system's value `raw`: followed from `last` across half
+/// turns when the system measures it within a turn, and recorded in `last`.
+fn follow(limit: &crate::JointLimit, last: &mut f64, raw: f64) -> f64 {
+    *last = if limit.within_turn {
+        unwrap_angle(*last, raw)
+    } else {
+        raw
+    };
+    *last
 }
 
 impl Formulation for Frictional {
@@ -249,7 +266,9 @@ impl Formulation for Frictional {
         }
         let limits = &mut self.terms[self.frictions..];
         for (k, (term, limit)) in limits.iter_mut().zip(system.limits()).enumerate() {
+            // The start is where a coordinate measured within a turn is followed from.
             let s = system.limit_row(k, t, q, v, &mut term.row);
+            self.coordinates[k] = s;
             let sign = limit.nearer_bound(s);
             let at_bound = limit.free_event(s) <= 2.0 * LIMIT_SLACK;
             term.mode = if at_bound && sign * term.row.dot(v) <= 0.0 {
@@ -298,7 +317,10 @@ impl Formulation for Frictional {
             let Some(slot) = out.get_mut(first + k) else { break };
             match term.mode {
                 Mode::Held(sign) => *slot = sign * term.hold,
-                _ => *slot = limit.free_event(system.limit_row(k, t, q, v, &mut term.row)),
+                _ => {
+                    let raw = system.limit_row(k, t, q, v, &mut term.row);
+                    *slot = limit.free_event(follow(limit, &mut self.coordinates[k], raw));
+                }
             }
         }
     }

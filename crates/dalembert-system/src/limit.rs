@@ -35,6 +35,10 @@ pub struct JointLimit {
     pub restitution: f64,
     /// The rebound speed below which an impact leaves the joint held at its bound (rad/s or m/s).
     pub rest_speed: f64,
+    /// True when the system measures the coordinate within a turn (`(−π, π]`, a spatial revolute
+    /// joint in absolute coordinates): the switching formulation then follows it across half
+    /// turns ([`unwrap_angle`]), so bounds may lie beyond `±π`.
+    pub within_turn: bool,
 }
 
 /// How far (rad or m) a free joint's event function reaches past a bound, so that a joint
@@ -51,6 +55,7 @@ impl JointLimit {
             upper: f64::INFINITY,
             restitution,
             rest_speed,
+            within_turn: false,
         }
     }
 
@@ -85,6 +90,14 @@ impl JointLimit {
         }
         Ok(())
     }
+}
+
+/// The angle `candidate` (in `(−π, π]`) moved by a whole number of turns to lie within half a
+/// turn of `previous`: a continuous angle from evaluation to evaluation when the joint turns less
+/// than half a turn between them.
+pub fn unwrap_angle(previous: f64, candidate: f64) -> f64 {
+    let turn = std::f64::consts::TAU;
+    previous + (candidate - previous - turn * ((candidate - previous) / turn).round())
 }
 
 /// The default rebound speed below which an impact leaves a joint held at its bound: 1e-3 m/s
