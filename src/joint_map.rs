@@ -18,8 +18,12 @@ use dalembert_system::{DynamicsError, Formulation, ModelError};
 /// (allocation-free after construction).
 pub(crate) struct JointMap {
     jc: JointCoordinates,
-    /// The chosen formulation on the model's absolute coordinates (for `q̈`, `λ`, residuals).
+    /// The chosen formulation on the model's absolute coordinates (for `q̈`, `λ`, residuals),
+    /// without the switching law: the run's limit forces are added to it.
     absolute: Box<dyn Formulation>,
+    /// The run's limit forces as one generalized force of the model, and one limit's row.
+    extra: Vec<f64>,
+    row: dalembert_system::SlipRow,
     frames: Vec<WorldFrame>,
     q: Vec<f64>,
     qd: Vec<f64>,
@@ -55,7 +59,7 @@ impl JointMap {
         // The model's independent coordinates do not index the joint coordinates (which are all
         // independent).
         let formulation = simulation.formulation_on(jc.system(), None)?;
-        let absolute = simulation.formulation()?;
+        let absolute = simulation.formulation_without_switching()?;
         let (n, m) = (qd.len(), simulation.model.num_equations());
         let map = JointMap {
             frames: jc.frames(),
@@ -64,6 +68,8 @@ impl JointMap {
             q: q.to_vec(),
             qd: qd.to_vec(),
             qdd: vec![0.0; n],
+            extra: vec![0.0; n],
+            row: dalembert_system::SlipRow::default(),
             lambda: vec![0.0; m],
             c: vec![0.0; m],
             cdot: vec![0.0; m],
@@ -87,12 +93,31 @@ impl JointMap {
     }
 
     /// Sample `s` of the joint-coordinate run in the model's coordinates: the state mapped, `q̈`,
-    /// `λ` and the residuals evaluated there by the model's formulation; the energy is the run's
-    /// (the same mechanism's).
-    pub fn sample(&mut self, s: &Sample<'_>) -> Result<Sample<'_>, DynamicsError> {
+    /// `λ` and the residuals evaluated there by the model's formulation with the run's limit
+    /// forces added (each along its limit's row in the model's coordinates, whose rate is the
+    /// same joint rate, so the same force); the energy, the limit forces and the energy the
+    /// impacts took are the run's (the same mechanism's).
+    pub fn sample<'a>(&'a mut self, s: &Sample<'a>) -> Result<Sample<'a>, DynamicsError> {
         self.map(s.q, s.qd);
-        self.absolute
-            .accelerations(s.t, &self.q, &self.qd, None, &mut self.qdd, &mut self.lambda)?;
+        let limited = s.limit.iter().any(|f| *f != 0.0);
+        if limited {
+            self.extra.iter_mut().for_each(|x| *x = 0.0);
+            let model = self.absolute.system();
+            for (k, f) in s.limit.iter().enumerate() {
+                model.limit_row(k, s.t, &self.q, &self.qd, &mut self.row);
+                for &(i, g) in self.row.entries() {
+                    self.extra[i] += g * f;
+                }
+            }
+            self.absolute.set_extra_force(Some(&self.extra));
+        }
+        let solved = self
+            .absolute
+            .accelerations(s.t, &self.q, &self.qd, None, &mut self.qdd, &mut self.lambda);
+        if limited {
+            self.absolute.set_extra_force(None);
+        }
+        solved?;
         self.absolute
             .residuals(s.t, &self.q, &self.qd, &mut self.c, &mut self.cdot);
         let max = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -103,8 +128,8 @@ impl JointMap {
             qdd: &self.qdd,
             lambda: &self.lambda,
             friction: &[],
-            limit: &[],
-            impact_loss: 0.0,
+            limit: s.limit,
+            impact_loss: s.impact_loss,
             constraint_violation: max(&self.c),
             velocity_violation: max(&self.cdot),
             energy: s.energy,

@@ -311,6 +311,22 @@ impl Simulation {
         system: Arc<dyn MultibodySystem>,
         independent: Option<Vec<usize>>,
     ) -> Result<Box<dyn Formulation>, SimulationError> {
+        self.build_on(system, independent, true)
+    }
+
+    /// The chosen formulation on the model (absolute coordinates) without the switching law of
+    /// its friction and limits: what a joint-coordinate run's samples are evaluated with, the
+    /// run's limit forces added ([`crate::joint_map`]).
+    pub(crate) fn formulation_without_switching(&self) -> Result<Box<dyn Formulation>, SimulationError> {
+        self.build_on(self.model.system(), self.independent.clone(), false)
+    }
+
+    fn build_on(
+        &self,
+        system: Arc<dyn MultibodySystem>,
+        independent: Option<Vec<usize>>,
+        switching: bool,
+    ) -> Result<Box<dyn Formulation>, SimulationError> {
         // The embedding and amalgamated formulations still partition the coordinates on a dense
         // C_q (m × n) and both store B_i by rows (n × dof) and the reduced mass matrix (dof ×
         // dof): refuse models whose dense matrices would not fit, naming the size, instead of
@@ -344,7 +360,7 @@ impl Simulation {
             independent,
         };
         let model = self.model.system();
-        let Some((joint, kind)) = switching_joint(model.as_ref()) else {
+        let Some((joint, kind)) = switching_joint(model.as_ref()).filter(|_| switching) else {
             return Ok((entry.build)(system, &settings)?);
         };
         let refuse = |what: String| {

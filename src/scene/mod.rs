@@ -177,15 +177,6 @@ impl Scene {
                     method.name
                 ));
             }
-            if self.settings.coordinates == crate::Coordinates::Joint {
-                let setting = match spelling {
-                    Spelling::Flags => "--coordinates joint",
-                    Spelling::Keywords => "coordinates=\"joint\"",
-                };
-                return Err(format!(
-                    "{setting}: joint '{joint}' has {kind}, solved in absolute coordinates only"
-                ));
-            }
         }
         if self.settings.coordinates != crate::Coordinates::Joint {
             // A method the formulation cannot take, refused before anything (a CSV) is written.

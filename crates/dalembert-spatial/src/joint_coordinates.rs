@@ -55,6 +55,18 @@ impl Model {
         if let Some(d) = self.driver_names().next() {
             return Err(refuse(format!("driver '{d}'"), "joint coordinates take no drivers yet"));
         }
+        if let Some(f) = self.frictions.first() {
+            return Err(refuse(
+                format!("joint '{}'", f.name),
+                "has friction, solved in absolute coordinates only (its load is the joint's reaction)",
+            ));
+        }
+        if let Some(c) = self.limits.get(self.limited_joints.len()) {
+            return Err(refuse(
+                format!("contact '{}'", c.name),
+                "rigid contact is solved in absolute coordinates only",
+            ));
+        }
         if let Some(f) = self.force_names().next() {
             return Err(refuse(
                 format!("force '{f}'"),
@@ -231,8 +243,20 @@ impl Model {
             });
         }
         let tree = KinematicTree::new(self.gravity().into(), bodies)?;
+        // Each limit on its joint's coordinate, which is zero here: the joint's value here added.
+        let mut tree_joint = vec![0; joints.len()];
+        for (t, &(_, _, k)) in order.iter().enumerate() {
+            tree_joint[k] = t;
+        }
+        let mut row = dalembert_system::SlipRow::default();
+        let limited = self
+            .limited_joints
+            .iter()
+            .map(|&k| (tree_joint[k], self.joint_row_into(k, q, v, &mut row)))
+            .collect();
+        let system = JointSpace::new(tree).with_limits(self.limits.clone(), limited)?;
         Ok(JointCoordinates {
-            system: Arc::new(JointSpace::new(tree)),
+            system: Arc::new(system),
             bodies: order.iter().map(|o| o.0).collect(),
             q0,
             v0,

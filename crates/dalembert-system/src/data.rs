@@ -85,7 +85,7 @@ impl Data {
     ) -> Result<Stage, DynamicsError> {
         model.check_lengths(&[("q̈", qdd.len())], &[("λ", lambda.len())])?;
         if let Some(tree) = &mut self.articulated {
-            tree.solve(model, t, q, qd, qdd)?;
+            tree.solve(model, (t, q, qd), &self.extra, qdd)?;
             return Ok(Stage::Solved);
         }
         self.load(model, t, q, qd)?;
@@ -126,13 +126,10 @@ impl Data {
             .residuals(model.constraints(), (t, q, qd), &mut self.values, c, cdot);
     }
 
-    /// Adds `extra` to the applied forces of the following evaluations (`None`: stops). Allocates
-    /// only the first time. Returns false for a tree solved outright, whose forces this does not
-    /// reach.
+    /// Adds `extra` to the applied forces of the following evaluations (`None`: stops), also
+    /// those of a tree solved outright by the articulated-body algorithm. Allocates only the
+    /// first time. Returns true.
     pub fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
-        if self.articulated.is_some() {
-            return false;
-        }
         match extra {
             Some(e) => {
                 self.extra.resize(e.len(), 0.0);

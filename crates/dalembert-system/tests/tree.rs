@@ -167,7 +167,7 @@ fn articulated_body_solves_the_composite_inertia_and_newton_euler_equations() {
         let (m, f) = mass_and_forces(&sys, &q, &qd);
         let expected = solve_dense(n, &m, &f);
         let mut qdd = vec![0.0; n];
-        aba.solve(&sys, 0.0, &q, &qd, &mut qdd)
+        aba.solve(&sys, (0.0, &q, &qd), &[], &mut qdd)
             .expect("the tree has inertia on every joint");
         let scale = expected.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         let diff = qdd.iter().zip(&expected).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
@@ -278,7 +278,7 @@ fn a_joint_without_inertia_is_reported_not_divided_by() {
     let sys = JointSpace::new(tree.clone());
     let mut qdd = [0.0];
     let e = Articulated::new(&tree)
-        .solve(&sys, 0.5, &[0.0], &[0.0], &mut qdd)
+        .solve(&sys, (0.5, &[0.0], &[0.0]), &[], &mut qdd)
         .unwrap_err()
         .to_string();
     assert!(e.contains("spinner") && e.contains("t = 0.5"), "{e}");

@@ -56,18 +56,18 @@ impl Articulated {
     }
 
     /// `q̈` of `system` (whose [`MultibodySystem::kinematic_tree`] this workspace was made for) at
-    /// `(t, q, q̇)` into `qdd`, after checking the state: what a formulation calls.
+    /// `(t, q, q̇)` into `qdd`, after checking the state, with the generalized force `extra` added
+    /// to the joints' (empty: none; [`crate::Data::set_extra_force`]): what a formulation calls.
     pub fn solve(
         &mut self,
         system: &dyn MultibodySystem,
-        t: f64,
-        q: &[f64],
-        qd: &[f64],
+        (t, q, qd): (f64, &[f64], &[f64]),
+        extra: &[f64],
         qdd: &mut [f64],
     ) -> Result<(), DynamicsError> {
         system.check_state(t, q, qd)?;
         match system.kinematic_tree() {
-            Some(tree) if tree.len() == self.d.len() => self.accelerations(tree, t, q, qd, qdd),
+            Some(tree) if tree.len() == self.d.len() => self.solve_tree(tree, (t, q, qd), extra, qdd),
             _ => Err(DynamicsError::Singular {
                 time: t,
                 what: "the articulated-body workspace does not match the system's tree".into(),
@@ -93,6 +93,18 @@ impl Articulated {
         qd: &[f64],
         qdd: &mut [f64],
     ) -> Result<(), DynamicsError> {
+        self.solve_tree(tree, (t, q, qd), &[], qdd)
+    }
+
+    /// [`Articulated::accelerations`] with the generalized force `extra` (one per joint, or
+    /// empty) added to the joints' forces.
+    fn solve_tree(
+        &mut self,
+        tree: &KinematicTree,
+        (t, q, qd): (f64, &[f64], &[f64]),
+        extra: &[f64],
+        qdd: &mut [f64],
+    ) -> Result<(), DynamicsError> {
         let n = tree.len();
         let p = &mut self.pass;
         tree.velocities(q, qd, p);
@@ -111,7 +123,7 @@ impl Articulated {
                     bodies: vec![tree.bodies()[i].name.clone()],
                 });
             }
-            let tau = tree.joint_force(i, q[i], qd[i]) - s.dot(&self.pa[i]);
+            let tau = tree.joint_force(i, q[i], qd[i]) + extra.get(i).copied().unwrap_or(0.0) - s.dot(&self.pa[i]);
             (self.u[i], self.d[i], self.tau[i]) = (u, d, tau);
             if let Some(k) = tree.links[i].parent {
                 let mut ia = self.ia[i];

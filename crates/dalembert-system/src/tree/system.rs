@@ -4,8 +4,8 @@
 use super::recursion::{Pass, WorldFrame};
 use super::{JointKind, KinematicTree};
 use crate::{
-    BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, Layout,
-    MultibodySystem,
+    BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, JointLimit, Layout,
+    ModelError, MultibodySystem, SlipRow,
 };
 use std::sync::Mutex;
 
@@ -20,6 +20,10 @@ pub struct JointSpace {
     pattern: ConstraintPattern,
     /// Scratch of the recursions behind `&self` (allocated once; the lock is uncontended in a run).
     scratch: Mutex<Scratch>,
+    /// Limits on some joints ([`JointSpace::with_limits`]).
+    limits: Vec<JointLimit>,
+    /// Each limit's joint (tree index) and its coordinate at the tree's zero configuration.
+    limited: Vec<(usize, f64)>,
 }
 
 #[derive(Debug)]
@@ -55,7 +59,37 @@ impl JointSpace {
             tree,
             layout,
             pattern,
+            limits: Vec::new(),
+            limited: Vec::new(),
         }
+    }
+
+    /// The system with limits on some of its joints (`docs/limits.md`): limit `k` is on joint
+    /// (tree index) `joints[k].0`, whose limit coordinate is `q + joints[k].1` (the coordinate at
+    /// the tree's zero configuration added). The joint coordinate is continuous, so a revolute
+    /// joint's limit is not read within a turn. An error names a limit whose joint the tree does
+    /// not have.
+    pub fn with_limits(mut self, mut limits: Vec<JointLimit>, joints: Vec<(usize, f64)>) -> Result<Self, ModelError> {
+        if let Some((l, _)) = limits
+            .iter()
+            .zip(&joints)
+            .find(|(_, (j, offset))| *j >= self.tree.len() || !offset.is_finite())
+        {
+            return Err(ModelError::InvalidParameter {
+                element: format!("{} '{}'", l.element, l.name),
+                what: "its joint is not in the tree".into(),
+            });
+        }
+        if limits.len() != joints.len() {
+            return Err(ModelError::InvalidParameter {
+                element: "limits".into(),
+                what: format!("{} limits for {} joints", limits.len(), joints.len()),
+            });
+        }
+        limits.iter_mut().for_each(|l| l.within_turn = false);
+        self.limits = limits;
+        self.limited = joints;
+        Ok(self)
     }
 
     /// The tree.
@@ -134,6 +168,25 @@ impl MultibodySystem for JointSpace {
 
     fn kinematic_tree(&self) -> Option<&KinematicTree> {
         Some(&self.tree)
+    }
+
+    fn limits(&self) -> &[JointLimit] {
+        &self.limits
+    }
+
+    /// One per limit (the switching formulation writes them, [`crate::Frictional`]).
+    fn num_events(&self) -> usize {
+        self.limits.len()
+    }
+
+    /// The joint's own coordinate: the row is a unit on it, with no bias.
+    fn limit_row(&self, k: usize, _t: f64, q: &[f64], _v: &[f64], row: &mut SlipRow) -> f64 {
+        row.clear();
+        let Some(&(joint, offset)) = self.limited.get(k) else {
+            return 0.0;
+        };
+        row.push(joint, 1.0);
+        q[joint] + offset
     }
 
     fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
