@@ -126,12 +126,19 @@ impl Scene {
     /// or finds none, from the position where the scene's motion with kinetic damping comes to
     /// rest ([`crate::relaxation`]).
     pub fn equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
-        if let Some(l) = self.model.system().limits().first() {
-            return Err(EquilibriumError::Model(format!(
-                "joint '{}' has limits: an equilibrium against a bound is not built yet (docs/limits.md)",
-                l.name
-            )));
+        let eq = self.equilibrium_without_limits()?;
+        // The equilibrium holds where every limit is free there.
+        match dalembert_system::limit::limit_reached(self.model.system().as_ref(), 0.0, &eq.q) {
+            None => Ok(eq),
+            Some((l, s)) => Err(EquilibriumError::Model(format!(
+                "the equilibrium found lies at or beyond the limits [{}, {}] of {} '{}' (its value there {s}): an equilibrium against a bound is not built yet (docs/limits.md)",
+                l.lower, l.upper, l.element, l.name
+            ))),
         }
+    }
+
+    /// [`Scene::equilibrium`] with the limits free.
+    fn equilibrium_without_limits(&self) -> Result<Equilibrium, EquilibriumError> {
         let first = self.equilibrium_from(&self.q);
         let settled = match &first {
             Ok(eq) if eq.unstable_directions.is_empty() => return first,

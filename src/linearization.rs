@@ -139,12 +139,6 @@ impl Scene {
                 f.name
             )));
         }
-        if let Some(l) = self.model.system().limits().first() {
-            return Err(LinearizationError::Model(format!(
-                "joint '{}' has limits, whose impacts have no linearization",
-                l.name
-            )));
-        }
         let input_of = options
             .inputs
             .iter()
@@ -162,6 +156,13 @@ impl Scene {
             })
             .collect::<Result<Vec<_>, _>>()?;
         let (t, q, qd, u) = self.operating_point(&options.about)?;
+        // Limits: the linearization holds where every one is free (an impact has none).
+        if let Some((l, s)) = dalembert_system::limit::limit_reached(self.model.system().as_ref(), t, &q) {
+            return Err(LinearizationError::Model(format!(
+                "{} '{}' is at or beyond its limits [{}, {}] at the operating point (its value {s}): an impact has no linearization; take a point inside them",
+                l.element, l.name, l.lower, l.upper
+            )));
+        }
         let (position_names, velocity_names) = state_names(self.model.as_system());
         let system = self.model.as_system();
         let sys = system.constraints();
@@ -192,9 +193,10 @@ impl Scene {
                 named.join(", ")
             )));
         }
+        // Free limits exert nothing near the point: the smooth formulation.
         let formulation = self
             .simulation()
-            .formulation()
+            .formulation_without_switching()
             .map_err(|e| LinearizationError::Model(e.to_string()))?;
         let mut reduced = Reduced::new(
             self,

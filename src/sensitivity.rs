@@ -26,6 +26,7 @@ use crate::output::{Recorder, Rows, Table};
 use crate::scene::{Scene, SceneError, SceneValue};
 use crate::simulation::{Coordinates, SimulationError};
 use dalembert_integrators::{integrate_sensitivities, Perturbed, PerturbedSide, Sample, Statistics};
+use dalembert_system::Frictional;
 use std::sync::atomic::AtomicBool;
 use thiserror::Error;
 
@@ -189,12 +190,6 @@ impl Scene {
                 f.name
             ));
         }
-        if let Some(l) = self.model.system().limits().first() {
-            return bad(format!(
-                "joint '{}' has limits, whose impacts switch at events: a run with limits has no sensitivities yet",
-                l.name
-            ));
-        }
         if !(request.relative_change.is_finite() && request.relative_change > 0.0 && request.relative_change < 0.1) {
             return bad(format!(
                 "the relative change of a parameter must be in (0, 0.1), got {}",
@@ -247,7 +242,8 @@ impl Scene {
                         "'{path}' changes the model's coordinates: a sensitivity needs the same model"
                     )));
                 }
-                let f = sim.formulation().map_err(fail)?;
+                // Free limits exert nothing; the run itself stops where one is reached.
+                let f = sim.formulation_without_switching().map_err(fail)?;
                 let y = [sim.q.as_slice(), sim.qd.as_slice()].concat();
                 Ok((f, y, Rows::new(&scene.model)))
             };
@@ -288,7 +284,13 @@ impl Scene {
     ) -> Result<Statistics, SimulationError> {
         let SensitivitySetup { perturbed, mut columns } = setup;
         let sim = self.simulation();
-        let mut f = sim.formulation()?;
+        // With limits: the run holds while they are free, and stops where one is reached (a
+        // sensitivity across an impact is not built).
+        let mut f = if self.model.system().limits().is_empty() {
+            sim.formulation()?
+        } else {
+            Box::new(Frictional::new(sim.formulation_without_switching()?)?.refusing_impacts())
+        };
         // The run's own sample is kept until the derivatives of its time are complete (the
         // observer sees both together).
         let mut last: Vec<f64> = Vec::new();

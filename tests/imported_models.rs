@@ -167,3 +167,64 @@ fn a_sprung_mjcf_slide_rests_where_its_spring_balances_gravity_far_from_the_file
     assert!((lin.a[(1, 0)] + k / m).abs() < 1e-9, "A = {}", lin.a);
     std::fs::remove_file(&path).ok();
 }
+
+/// A uniform rod of 1 kg and 1 m pinned at one end, released horizontal, in `file` (a URDF or an
+/// MJCF text) written to a temporary file named `name`.
+fn imported_rod(name: &str, file: &str) -> dalembert::output::Table {
+    let path = std::env::temp_dir().join(format!("{}-{name}", std::process::id()));
+    std::fs::write(&path, file).unwrap();
+    let mut scene = Scene::from_path(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    scene.settings.end = 1.5;
+    scene.settings.method = dalembert::integrators::Method::dopri5(1e-11, 1e-11);
+    let rec = scene.record(&std::sync::atomic::AtomicBool::new(false));
+    rec.outcome.unwrap();
+    rec.table
+}
+
+#[test]
+fn urdf_limits_and_mjcf_ranges_are_stops() {
+    // The rod falls from horizontal onto a stop 1 rad below it (a URDF `<limit lower="-1">`,
+    // an MJCF `range` in degrees) and rests there: a plastic stop takes all the kinetic energy,
+    // so it ends at rest with E = m g (L/2) sin(−1) (datum at the pin), held by the stop's torque
+    // m g (L/2) cos 1 = 2.650 N·m against its weight. dopri5 at 1e-11: the angle within 1e-9
+    // rad of the stop, the energy within 1e-8 J and the torque within 1e-8 N·m of these.
+    let urdf = r#"<robot name="rod">
+  <link name="world"/>
+  <link name="rod">
+    <inertial><origin xyz="0.5 0 0"/><mass value="1"/>
+      <inertia ixx="0.001" iyy="0.08333333333333333" izz="0.08333333333333333" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="pin" type="revolute">
+    <parent link="world"/><child link="rod"/><axis xyz="0 -1 0"/>
+    <limit lower="-1" upper="0.5" effort="10" velocity="10"/>
+  </joint>
+</robot>"#;
+    let mjcf = r#"<mujoco>
+  <worldbody>
+    <body name="rod">
+      <joint name="pin" type="hinge" axis="0 -1 0" range="-57.29577951308232 28.64788975654116"/>
+      <inertial pos="0.5 0 0" mass="1" diaginertia="0.001 0.08333333333333333 0.08333333333333333"/>
+    </body>
+  </worldbody>
+</mujoco>"#;
+    let (m, g, half) = (1.0, 9.81, 0.5);
+    for (name, file) in [("rod.urdf", urdf), ("rod.xml", mjcf)] {
+        let table = imported_rod(name, file);
+        let last = |c: &str| *table.column(c).unwrap().last().unwrap();
+        let angle = last("pin.q");
+        assert!((angle + 1.0).abs() < 1e-9, "{name}: rests at {angle} rad, expected -1");
+        let energy = last("energy");
+        let expected = m * g * half * (-1.0f64).sin();
+        assert!(
+            (energy - expected).abs() < 1e-8,
+            "{name}: E = {energy}, expected {expected}"
+        );
+        let torque = last("pin.limit").abs();
+        let expected = m * g * half * 1.0f64.cos();
+        assert!(
+            (torque - expected).abs() < 1e-8,
+            "{name}: held by {torque} N·m, expected {expected}"
+        );
+    }
+}

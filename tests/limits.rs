@@ -695,3 +695,55 @@ fn a_slider_held_on_its_stop_in_joint_coordinates_has_the_stop_force_and_reactio
         );
     }
 }
+
+/// A rod of 1 kg with inertia 0.1 kg·m² about its centre, pinned 0.5 m from it, released
+/// horizontal, with stops at `[lower, 0.5]` rad.
+fn pendulum_with_stops(lower: f64) -> Scene {
+    let text = format!(
+        "[scene]\ngravity = [0.0, -9.81]\n\
+         [[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = 0.1\nposition = [0.5, 0.0]\n\
+         [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
+         limits = [{lower}, 0.5]\n\
+         [simulation]\nend = 2.0\nintegrator = \"dopri5\"\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.01\n"
+    );
+    Scene::from_toml(&text, "pendulum with stops").unwrap()
+}
+
+#[test]
+fn sensitivities_hold_while_every_limit_is_free_and_stop_where_one_is_reached() {
+    // Stops the swing never reaches (−3.5 rad: it swings from 0 to −π and back) change nothing:
+    // the sensitivities of the angle to the mass are those of the same pendulum without them
+    // (the computation is the same while the stops exert nothing; round-off). Stops it
+    // reaches (−2 rad) end the run there with an error naming the joint, rather than a
+    // sensitivity carried across an impact it does not model.
+    use dalembert::SensitivityRequest;
+    let request = SensitivityRequest::new(&["bodies.rod.mass"], &["rod.angle"]);
+    let cancel = AtomicBool::new(false);
+    let limited = pendulum_with_stops(-3.5);
+    let free = Scene::from_toml(&limited.source.replace("limits = [-3.5, 0.5]\n", ""), "free").unwrap();
+    let a = limited.sensitivities(&request, &cancel).unwrap();
+    a.outcome.as_ref().unwrap();
+    let b = free.sensitivities(&request, &cancel).unwrap();
+    b.outcome.as_ref().unwrap();
+    let name = dalembert::sensitivity::column_name("rod.angle", "bodies.rod.mass");
+    let (x, y) = (
+        a.sensitivities.column(&name).unwrap(),
+        b.sensitivities.column(&name).unwrap(),
+    );
+    assert_eq!(x.len(), y.len());
+    let scale = y.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    assert!(scale > 0.1, "the mass changes the swing (inertia given apart)");
+    let worst = x.iter().zip(&y).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-12 * scale, "{worst:e} from the unlimited pendulum's");
+
+    let reached = pendulum_with_stops(-2.0).sensitivities(&request, &cancel).unwrap();
+    let error = reached.outcome.unwrap_err().to_string();
+    assert!(
+        error.contains("joint 'pin'") && error.contains("limits [-2, 0.5]"),
+        "{error}"
+    );
+    let t = reached.table.column("t").unwrap();
+    let end = *t.last().unwrap();
+    // The swing reaches −2 rad after about 0.5 s (well before 2 s).
+    assert!(end > 0.2 && end < 1.5, "stopped at {end} s");
+}

@@ -707,7 +707,7 @@ impl<'s, 'a> Reader<'s, 'a> {
         }
         if !damped_extras.is_empty() {
             self.notes.push(format!(
-                "joint limits are not modelled yet; the model leaves out those of {}",
+                "the cone limits of ball joints are not modelled yet; the model leaves out those of {}",
                 quoted(&damped_extras)
             ));
         }
@@ -777,6 +777,7 @@ impl<'s, 'a> Reader<'s, 'a> {
             let mut kind = Kind::Fixed;
             let (mut offset, mut axis, mut damping, mut joint_name) = (V3::zeros(), V3::z(), 0.0, name.clone());
             let (mut stiffness, mut spring_rest) = (0.0, 0.0);
+            let mut range = None;
             let mut file_name = name.clone();
             if let Some(&j) = js.first() {
                 if j.has_tag_name("freejoint") {
@@ -864,14 +865,43 @@ impl<'s, 'a> Reader<'s, 'a> {
                     } else {
                         joint_name = format!("{name}-joint");
                     }
-                    if self.value(j, "range").is_some() && self.value(j, "limited") != Some("false") {
-                        limited.push(joint_name.clone());
+                    // Limited where `limited` says so, or ("auto", the default) where a range is
+                    // given, as for the motors' ranges.
+                    let given = self.numbers::<2>(j, "range")?;
+                    let on = match self.value(j, "limited").unwrap_or("auto") {
+                        "true" => true,
+                        "false" => false,
+                        "auto" => given.is_some(),
+                        other => {
+                            return Err(
+                                self.err(j, format!("<joint> limited=\"{other}\": expected true, false or auto"))
+                            )
+                        }
+                    };
+                    match (on, given) {
+                        (true, None) => return Err(self.err(j, "<joint> limited=\"true\" needs range")),
+                        (true, Some(_)) if kind == Kind::Spherical => limited.push(joint_name.clone()),
+                        (true, Some([lo, hi])) if kind == Kind::Revolute => {
+                            range = Some([self.angle(lo), self.angle(hi)])
+                        }
+                        (true, Some(bounds)) if kind == Kind::Prismatic => range = Some(bounds),
+                        _ => {}
                     }
                 }
             }
             if names.contains_key(&joint_name) && kind != Kind::Fixed && kind != Kind::Floating {
                 joint_name = format!("{joint_name}-joint");
             }
+            let limits = match range {
+                Some([lo, hi]) => match super::tree::stops(&joint_name, lo, hi) {
+                    Ok(bounds) => Some(bounds),
+                    Err(note) => {
+                        self.notes.push(note);
+                        None
+                    }
+                },
+                None => None,
+            };
             let mut inertial = self.body_inertial(c)?;
             if let Some(i) = inertial.as_mut() {
                 i.frame.p -= offset;
@@ -903,6 +933,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                 damping,
                 stiffness,
                 spring_rest,
+                limits,
             });
             if let Some(&j) = js.first() {
                 places.insert(joint_name, j);

@@ -95,6 +95,25 @@ pub(crate) struct TreeJoint {
     pub(crate) stiffness: f64,
     /// … relaxed at this joint value (rad or m from the file's configuration; `springref`).
     pub(crate) spring_rest: f64,
+    /// Stops on the joint value `[lower, upper]` (rad or m from the file's configuration), which
+    /// hold it there (a URDF's `<limit>`, an MJCF joint's `range`; `docs/limits.md`).
+    pub(crate) limits: Option<[f64; 2]>,
+}
+
+/// The stops of joint `name` on `[lower, upper]` (from the file's configuration), or why they
+/// are left out (a line for the notes): a zero range, or a file's configuration outside them.
+pub(crate) fn stops(name: &str, lower: f64, upper: f64) -> Result<[f64; 2], String> {
+    if lower >= upper {
+        Err(format!(
+            "joint '{name}': its limits [{lower}, {upper}] have no range, so they are left out"
+        ))
+    } else if lower > 0.0 || upper < 0.0 {
+        Err(format!(
+            "joint '{name}': the file's configuration (joint value 0) lies outside its limits [{lower}, {upper}], so they are left out"
+        ))
+    } else {
+        Ok([lower, upper])
+    }
 }
 
 /// `'a', 'b' and 'c'`.
@@ -355,6 +374,10 @@ impl Tree {
             let axis = frame.r * j.axis;
             let bodies = [body_name(self.body[j.parent]), body_name(self.body[j.child])];
             let placed = joint(&j.name, kind, bodies).at(<[f64; 3]>::from(frame.p));
+            let placed = match j.limits {
+                Some(bounds) => placed.set("limits", bounds),
+                None => placed,
+            };
             model = model.joint(match j.kind {
                 Kind::Spherical => placed,
                 _ => placed.axis(<[f64; 3]>::from(axis)),

@@ -281,10 +281,18 @@ fn read<'a>(
         if axis.norm() < 1e-12 && matches!(kind, Kind::Revolute | Kind::Prismatic) {
             return Err(src.err(node, format!("{here}: its axis is zero")));
         }
+        let mut limits = None;
         if let Some(l) = src.child(node, "limit")? {
             let (lo, hi) = (src.number(l, "lower", Some(0.0))?, src.number(l, "upper", Some(0.0))?);
             if lo > hi {
                 return Err(src.err(l, format!("{here}: limit lower {lo} is above upper {hi}")));
+            }
+            // A continuous joint has none; a revolute or prismatic joint's are its stops.
+            if matches!(src.required(node, "type")?, "revolute" | "prismatic") {
+                match super::tree::stops(&joint_name, lo, hi) {
+                    Ok(bounds) => limits = Some(bounds),
+                    Err(note) => notes.push(note),
+                }
             }
         }
         let mut damping = 0.0;
@@ -311,6 +319,7 @@ fn read<'a>(
             damping,
             stiffness: 0.0,
             spring_rest: 0.0,
+            limits,
         });
     }
     let tree = Tree::of(src, robot, &links, &joints, &parent_joint, floating)?;

@@ -34,6 +34,9 @@ pub struct Frictional {
     /// Each limit's coordinate at its last evaluation: a coordinate measured within a turn
     /// ([`crate::JointLimit::within_turn`]) is followed from it across half turns.
     coordinates: Vec<f64>,
+    /// True when an evaluation past a free limit's bound is an error
+    /// ([`Frictional::refusing_impacts`]).
+    refuse_impacts: bool,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -81,7 +84,17 @@ impl Frictional {
             frictions,
             impact_loss: 0.0,
             coordinates: vec![0.0; count - frictions],
+            refuse_impacts: false,
         })
+    }
+
+    /// The formulation for a computation that holds only while every limit is free (a run's
+    /// sensitivities, which do not cross an impact): an evaluation where a limit's coordinate
+    /// reaches a bound, or starts held on one, is an error naming the limit
+    /// ([`DynamicsError::Limit`]), so the run stops there.
+    pub fn refusing_impacts(mut self) -> Self {
+        self.refuse_impacts = true;
+        self
     }
 
     /// Fills element `k`'s row at `(t, q, v)`; for a limit, returns its coordinate.
@@ -214,7 +227,20 @@ impl Formulation for Frictional {
             self.start_events(t, q, qd);
         }
         for k in 0..self.terms.len() {
-            self.fill_row(k, t, q, qd);
+            let s = self.fill_row(k, t, q, qd);
+            if self.refuse_impacts && k >= self.frictions {
+                let limit = &self.inner.system().limits()[k - self.frictions];
+                if self.terms[k].mode != Mode::Free || limit.free_event(s) <= LIMIT_SLACK {
+                    return Err(DynamicsError::Limit {
+                        time: t,
+                        element: format!("{} '{}'", limit.element, limit.name),
+                        what: format!(
+                            "reaches its limits [{}, {}] (at {s}), and this computation holds only while every limit is free",
+                            limit.lower, limit.upper
+                        ),
+                    });
+                }
+            }
             if self.terms[k].mode != Mode::Free {
                 self.response(k, (t, q, qd), baumgarte, (qdd, lambda))?;
             }

@@ -123,6 +123,19 @@ pub fn impact_loss(impulse: f64, before: f64, after: f64) -> f64 {
     -0.5 * impulse * (before + after)
 }
 
+/// The first limit of `system` at or past a bound at `(t, q)` (within [`LIMIT_SLACK`]), with its
+/// coordinate there (read within a turn where the system reads it so): where an analysis that
+/// holds only while every limit is free (a linearization, an equilibrium) does not hold. `None`
+/// where every limit is free. Allocates a velocity vector (not for stepping).
+pub fn limit_reached<'a>(system: &'a dyn crate::MultibodySystem, t: f64, q: &[f64]) -> Option<(&'a JointLimit, f64)> {
+    let v = vec![0.0; system.layout().n_v()];
+    let mut row = crate::SlipRow::default();
+    system.limits().iter().enumerate().find_map(|(k, limit)| {
+        let s = system.limit_row(k, t, q, &v, &mut row);
+        (limit.free_event(s) <= LIMIT_SLACK).then_some((limit, s))
+    })
+}
+
 /// True when a formulation's system has joint friction or joint limits (a model that needs the
 /// switching formulation, [`crate::Frictional`]).
 pub fn switches(f: &dyn Formulation) -> bool {
