@@ -463,9 +463,10 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
     let keys: &[&str] = match d.kind.as_str() {
         "circle-line" => &["body", "at", "radius", "line", "rigid", "restitution", "rest_speed"],
         "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed"],
+        "circle-profile" => &["body", "at", "radius", "profile", "rigid", "restitution", "rest_speed"],
         other => {
             return Err(err(format!(
-                "'rigid' is for circle-line and circle-circle contacts, this element is '{other}'"
+                "'rigid' is for circle-line, circle-circle and circle-profile contacts, this element is '{other}'"
             )))
         }
     };
@@ -474,7 +475,9 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
             "'{key}' does not belong to a rigid contact (it has no compliant law)"
         )));
     }
-    let (body, centre, radius, against) = if d.kind == "circle-line" {
+    let (body, centre, radius, against) = if d.kind == "circle-profile" {
+        circle_on_profile(b, d, span, &owner)?
+    } else if d.kind == "circle-line" {
         let c = circle_on_line(b, d, span, &owner)?;
         let line = Against::Line {
             body: c.line_body,
@@ -504,6 +507,51 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         .validate(&b.q)
         .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
     Ok(contact)
+}
+
+/// The circle and profile of a `circle-profile` element (a roller on a cam): the circle's body,
+/// centre (local; default the body's reference point) and radius, and the profile on its body
+/// (its points local to it, a periodic spline through them).
+fn circle_on_profile(
+    b: &Builder<'_>,
+    d: &ForceDef,
+    span: &Range<usize>,
+    owner: &str,
+) -> Result<(BodyRef, Vec2, f64, Against), SceneError> {
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let name = d
+        .body
+        .as_deref()
+        .ok_or_else(|| err("needs 'body' (the circle's)".into()))?;
+    let body = b.body(name, span, owner)?;
+    let centre = match d.at {
+        Some(Points::One(p)) => local_point_of(body, &b.q, v2(p)),
+        None => Vec2::zeros(),
+        Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)".into())),
+    };
+    let radius = d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?;
+    let p = d.profile.as_ref().ok_or_else(|| {
+        err(
+            "needs 'profile = { body = \"cam\", points = [[x, y], …] }' (global, the last point repeating the first)"
+                .into(),
+        )
+    })?;
+    let profile_body = b.body(&p.body, span, owner)?;
+    let local: Vec<Vec2> = p
+        .points
+        .iter()
+        .map(|&q| local_point_of(profile_body, &b.q, v2(q)))
+        .collect();
+    let profile = dalembert_constraints::Profile::closed_spline(&local).map_err(err)?;
+    Ok((
+        body,
+        centre,
+        radius,
+        Against::Profile {
+            body: profile_body,
+            profile,
+        },
+    ))
 }
 
 /// The two circles of a `circle-circle` element, compliant or rigid: their bodies, their
@@ -743,11 +791,12 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
-    if d.kind != "circle-line" && d.kind != "circle-circle" {
-        const CONTACT: [&str; 7] = [
+    if d.kind != "circle-line" && d.kind != "circle-circle" && d.kind != "circle-profile" {
+        const CONTACT: [&str; 8] = [
             "radius",
             "radii",
             "line",
+            "profile",
             "exponent",
             "dissipation",
             "friction",
@@ -892,6 +941,11 @@ fn force(
                 law: contact_law(d).map_err(err)?,
             })
         }
+        "circle-profile" => {
+            return Err(err(
+                "a compliant circle-profile contact is not built yet: give rigid = true (a rigid contact)".into(),
+            ))
+        }
         "code" => {
             if let Some(key) = d.keys_given().find(|k| *k != "body") {
                 return Err(err(format!(
@@ -907,7 +961,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, circle-profile, code)"
             )))
         }
     };

@@ -155,6 +155,8 @@ pub(crate) struct ForceDef {
     #[serde(default, deserialize_with = "strict::xy_opt")]
     pub radii: Option<[f64; 2]>,
     pub line: Option<LineDef>,
+    /// A `circle-profile` element's cam profile.
+    pub profile: Option<ProfileDef>,
     pub exponent: Option<f64>,
     pub dissipation: Option<f64>,
     pub friction: Option<f64>,
@@ -186,6 +188,7 @@ impl ForceDef {
             ("radius", self.radius.is_some()),
             ("radii", self.radii.is_some()),
             ("line", self.line.is_some()),
+            ("profile", self.profile.is_some()),
             ("exponent", self.exponent.is_some()),
             ("dissipation", self.dissipation.is_some()),
             ("friction", self.friction.is_some()),
@@ -209,6 +212,15 @@ pub(crate) struct LineDef {
     pub point: [f64; 2],
     #[serde(deserialize_with = "strict::xy")]
     pub normal: [f64; 2],
+}
+
+/// A closed profile fixed in a body (a cam's): points in the file's configuration (global),
+/// the last repeating the first.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ProfileDef {
+    pub body: String,
+    pub points: Vec<[f64; 2]>,
 }
 
 /// `[simulation]`. The methods' parameters (`rtol`, `rho_inf`, …) come from the integrators'

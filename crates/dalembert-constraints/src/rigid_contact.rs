@@ -6,10 +6,25 @@
 //!   where `s + R` is the coordinate of the centre `c` along `n` from `p`, the
 //!   [`line_coordinate`] primitive (its row gives `w = ṡ` and the bias of `s̈`).
 //! - Against another circle: `s = |c₂ − c₁| − R₁ − R₂`, the [`distance`] primitive.
+//! - Against a closed profile `x(u)` on another body (a roller on a cam, [`Profile`]):
+//!   `s = min_u |c − x(u)| − R`. At the closest point `u*` the row is the [`distance`]
+//!   primitive's between the profile's material point there and the centre (the envelope
+//!   theorem: `u*` moving does not change `ṡ`), and `s̈` gains the closest point's motion along
+//!   the profile: with `d(u) = |c − x(u)|`,
 //!
-//! The normal passes through the centres, so the impulse along it turns no body about them.
+//! ```text
+//! s̈ = d_q q̈ + d_qq[q̇, q̇] − (d_uq q̇)² / d_uu
+//! d_uq q̇ = −((ċ − ẋ)·x_u + (c − x)·ẋ_u) / d,   ẋ_u = θ̇ perp(x_u)
+//! d_uu = (|x_u|² − (n·x_u)²) / d − n·x_uu,      n = (c − x) / d
+//! ```
+//!
+//! The normal passes through the centres (for a profile, through the roller's centre and the
+//! profile's normal), so the impulse along it turns no circle about its centre.
 
 use crate::primitives::{distance, line_coordinate};
+use crate::profile::Profile;
+use dalembert_kinematics::rotation::perp;
+use dalembert_kinematics::PointState;
 use dalembert_kinematics::{BodyRef, BodyState, Vec2};
 use dalembert_system::{JointLimit, ModelError, SlipRow};
 
@@ -53,13 +68,20 @@ pub enum Against {
         /// Its radius (m).
         radius: f64,
     },
+    /// A closed profile (a cam's), the circle outside it (a roller follower).
+    Profile {
+        /// The body carrying the profile.
+        body: BodyRef,
+        /// The profile, local to its body.
+        profile: Profile,
+    },
 }
 
 impl RigidContact {
     /// The body the circle touches (a line's or the other circle's).
     fn other_body(&self) -> BodyRef {
         match self.against {
-            Against::Line { body, .. } | Against::Circle { body, .. } => body,
+            Against::Line { body, .. } | Against::Circle { body, .. } | Against::Profile { body, .. } => body,
         }
     }
 
@@ -83,6 +105,7 @@ impl RigidContact {
             return Err(bad(match self.against {
                 Against::Line { .. } => "the circle and the line are on the same body".into(),
                 Against::Circle { .. } => "the two circles are on the same body".into(),
+                Against::Profile { .. } => "the circle and the profile are on the same body".into(),
             }));
         }
         if let Against::Circle { radius, .. } = self.against {
@@ -99,12 +122,23 @@ impl RigidContact {
                 return Err(bad("the line's normal must be a unit vector".into()));
             }
         }
+        if let Against::Profile { profile, .. } = &self.against {
+            if let Some((rho, p)) = profile.tightest_concave_radius() {
+                if rho <= self.radius {
+                    return Err(bad(format!(
+                        "the roller (radius {} m) is larger than the profile's concave radius {rho:.4e} m near its point ({}, {}): it would touch the profile at two points",
+                        self.radius, p.x, p.y
+                    )));
+                }
+            }
+        }
         self.spec().check().map_err(bad)?;
         let gap = self.gap(q0);
         if gap < -1e-12 {
             let what = match self.against {
                 Against::Line { .. } => "the circle starts {} m into the line",
                 Against::Circle { .. } => "the circles start {} m into each other",
+                Against::Profile { .. } => "the circle starts {} m into the profile",
             };
             return Err(bad(what.replace("{}", &format!("{:e}", -gap))));
         }
@@ -120,12 +154,35 @@ impl RigidContact {
     pub fn gap_row(&self, q: &[f64], v: &[f64], out: &mut SlipRow) -> f64 {
         let circle = BodyState::of(self.body, q, v);
         let other = BodyState::of(self.other_body(), q, v);
-        let (row, reach) = match self.against {
-            Against::Line { point, normal, .. } => (
+        let mut envelope = 0.0;
+        let (row, reach) = match &self.against {
+            Against::Profile { profile, .. } => {
+                // The closest point, found in the profile's body frame.
+                let c = PointState::new(&circle, self.centre);
+                let local = other.rotation().transpose() * (c.position - other.position);
+                let [point, tangent, bend] = profile.at(profile.closest(local));
+                let Some(row) = distance(&other, point, &circle, self.centre) else {
+                    out.clear();
+                    return -self.radius;
+                };
+                let x = PointState::new(&other, point);
+                let (x_u, x_uu) = (other.rotation() * tangent, other.rotation() * bend);
+                let gap = c.position - x.position;
+                let d = gap.norm();
+                let n = gap / d;
+                let x_u_dot = perp(x_u) * other.omega;
+                let d_uq = -((c.velocity - x.velocity).dot(&x_u) + gap.dot(&x_u_dot)) / d;
+                let d_uu = (x_u.norm_squared() - n.dot(&x_u).powi(2)) / d - n.dot(&x_uu);
+                if d_uu > 0.0 {
+                    envelope = -d_uq * d_uq / d_uu;
+                }
+                (row, self.radius)
+            }
+            &Against::Line { point, normal, .. } => (
                 line_coordinate(&other, point, normal, &circle, self.centre),
                 self.radius,
             ),
-            Against::Circle { centre, radius, .. } => match distance(&other, centre, &circle, self.centre) {
+            &Against::Circle { centre, radius, .. } => match distance(&other, centre, &circle, self.centre) {
                 Some(row) => (row, self.radius + radius),
                 // Concentric: no direction to part along (a gap of minus both radii).
                 None => {
@@ -144,8 +201,76 @@ impl RigidContact {
                 }
             }
         }
-        // C_q q̈ = Q_d: the gap's acceleration is g·q̈ − Q_d.
-        out.bias = -row.gamma;
+        // C_q q̈ = Q_d: the gap's acceleration is g·q̈ − Q_d (and, on a profile, the closest
+        // point's motion along it).
+        out.bias = -row.gamma + envelope;
         row.c - reach
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dalembert_kinematics::BodyId;
+
+    /// An egg-shaped closed profile (convex), 200 points, local to its body.
+    fn egg() -> Vec<Vec2> {
+        (0..=200)
+            .map(|k| {
+                let a = std::f64::consts::TAU * k as f64 / 200.0;
+                let r = 0.08 + 0.015 * (1.0 - a.cos()) + 0.004 * (2.0 * a).sin();
+                Vec2::new(r * a.cos(), r * a.sin())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_roller_on_a_profile_has_the_gap_rate_and_acceleration_of_its_gap_differenced() {
+        // The cam (body 0) and the roller's body (body 1) move on q(t) = q + v t + a t²/2 from
+        // a state where the roller is near the profile: the row's rate g·v and its acceleration
+        // g·a + b must be the first and second central differences of the gap along that path
+        // (step 1e-4 s: truncation ~1e-8 of the second difference's scale, round-off 1e-12/h²).
+        let contact = RigidContact {
+            name: "roller".into(),
+            body: BodyRef::Body(BodyId(1)),
+            centre: Vec2::new(0.01, -0.02),
+            radius: 0.02,
+            against: Against::Profile {
+                body: BodyRef::Body(BodyId(0)),
+                profile: Profile::closed_spline(&egg()).unwrap(),
+            },
+            restitution: 0.0,
+            rest_speed: 1e-3,
+        };
+        for (k, angle) in [0.3f64, 1.7, 2.9, 4.4, 5.8].into_iter().enumerate() {
+            let shift = 0.001 * k as f64;
+            let q = [
+                0.002,
+                -0.001,
+                angle,
+                0.01 + 0.12 * (angle + 0.2).cos(),
+                0.02 + 0.12 * (angle + 0.2).sin() + shift,
+                0.4,
+            ];
+            let v = [0.1, -0.2, 7.0, 0.3, -0.5, -2.0];
+            let a = [1.0, 2.0, -30.0, -4.0, 3.0, 15.0];
+            let at = |t: f64| -> Vec<f64> { (0..6).map(|i| q[i] + v[i] * t + 0.5 * a[i] * t * t).collect() };
+            let mut row = SlipRow::default();
+            let s = contact.gap_row(&q, &v, &mut row);
+            let rate = row.dot(&v);
+            let acceleration = row.dot(&a) + row.bias;
+            let h = 1e-4;
+            let (sp, sm) = (contact.gap(&at(h)), contact.gap(&at(-h)));
+            let rate_fd = (sp - sm) / (2.0 * h);
+            let acceleration_fd = (sp - 2.0 * s + sm) / (h * h);
+            assert!(
+                (rate - rate_fd).abs() < 1e-7 * (1.0 + rate.abs()),
+                "rate {rate} vs {rate_fd}"
+            );
+            assert!(
+                (acceleration - acceleration_fd).abs() < 1e-4 * (1.0 + acceleration.abs()),
+                "at {angle}: acceleration {acceleration} vs {acceleration_fd}"
+            );
+        }
     }
 }

@@ -187,6 +187,10 @@ impl Frictional {
     }
 }
 
+/// The rate (m/s or rad/s) below which a limit that starts at its bound and moves away from it
+/// starts held: round-off of a rate that is zero (a cam's surface sliding along its follower).
+const START_RATE: f64 = 1e-12;
+
 /// Limit `limit`'s coordinate from the system's value `raw`: followed from `last` across half
 /// turns when the system measures it within a turn, and recorded in `last`.
 fn follow(limit: &crate::JointLimit, last: &mut f64, raw: f64) -> f64 {
@@ -297,7 +301,8 @@ impl Formulation for Frictional {
             self.coordinates[k] = s;
             let sign = limit.nearer_bound(s);
             let at_bound = limit.free_event(s) <= 2.0 * LIMIT_SLACK;
-            term.mode = if at_bound && sign * term.row.dot(v) <= 0.0 {
+            // Not moving away (to round-off: a cam's surface slides along the follower).
+            term.mode = if at_bound && sign * term.row.dot(v) <= START_RATE {
                 Mode::Held(sign)
             } else {
                 Mode::Free
