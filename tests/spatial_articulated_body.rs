@@ -178,7 +178,8 @@ fn the_library_recursion_gives_the_textbook_accelerations() {
             let thd: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -3.0, 3.0)).collect();
             let expected = chain.joint_accelerations(&chain.velocities(&th, &thd));
             let mut qdd = vec![0.0; n];
-            aba.solve(sys.as_ref(), (0.0, &th, &thd), &[], &mut qdd).expect("evaluation");
+            aba.solve(sys.as_ref(), (0.0, &th, &thd), &[], &mut qdd)
+                .expect("evaluation");
             let scale = expected.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             let diff = qdd.iter().zip(&expected).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
             worst = worst.max(diff / scale);

@@ -13,8 +13,8 @@ use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
     Against, BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear,
-    JointAngle, JointDisplacement, Limit, Model, PointOnLine, Prismatic, RackPinion, Revolute, Rigid, RigidContact,
-    STICK_SPEED,
+    JointAngle, JointDisplacement, Limit, Model, PointOnLine, Prismatic, Profile, RackPinion, Revolute, Rigid,
+    RigidContact, STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
@@ -464,9 +464,10 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         "circle-line" => &["body", "at", "radius", "line", "rigid", "restitution", "rest_speed"],
         "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed"],
         "circle-profile" => &["body", "at", "radius", "profile", "rigid", "restitution", "rest_speed"],
+        "line-profile" => &["body", "line", "profile", "rigid", "restitution", "rest_speed"],
         other => {
             return Err(err(format!(
-                "'rigid' is for circle-line, circle-circle and circle-profile contacts, this element is '{other}'"
+                "'rigid' is for circle-line, circle-circle, circle-profile and line-profile contacts, this element is '{other}'"
             )))
         }
     };
@@ -477,6 +478,8 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
     }
     let (body, centre, radius, against) = if d.kind == "circle-profile" {
         circle_on_profile(b, d, span, &owner)?
+    } else if d.kind == "line-profile" {
+        face_on_profile(b, d, span, &owner)?
     } else if d.kind == "circle-line" {
         let c = circle_on_line(b, d, span, &owner)?;
         let line = Against::Line {
@@ -530,19 +533,7 @@ fn circle_on_profile(
         Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)".into())),
     };
     let radius = d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?;
-    let p = d.profile.as_ref().ok_or_else(|| {
-        err(
-            "needs 'profile = { body = \"cam\", points = [[x, y], …] }' (global, the last point repeating the first)"
-                .into(),
-        )
-    })?;
-    let profile_body = b.body(&p.body, span, owner)?;
-    let local: Vec<Vec2> = p
-        .points
-        .iter()
-        .map(|&q| local_point_of(profile_body, &b.q, v2(q)))
-        .collect();
-    let profile = dalembert_constraints::Profile::closed_spline(&local).map_err(err)?;
+    let (profile_body, profile) = profile_of(b, d, span, owner)?;
     Ok((
         body,
         centre,
@@ -550,6 +541,61 @@ fn circle_on_profile(
         Against::Profile {
             body: profile_body,
             profile,
+        },
+    ))
+}
+
+/// The profile of a `circle-profile` or `line-profile` element: its body and the spline through
+/// its points (local to the body).
+fn profile_of(
+    b: &Builder<'_>,
+    d: &ForceDef,
+    span: &Range<usize>,
+    owner: &str,
+) -> Result<(BodyRef, Profile), SceneError> {
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let p = d.profile.as_ref().ok_or_else(|| {
+        err(
+            "needs 'profile = { body = \"cam\", points = [[x, y], …] }' (global, the last point repeating the first)"
+                .into(),
+        )
+    })?;
+    let body = b.body(&p.body, span, owner)?;
+    let local: Vec<Vec2> = p.points.iter().map(|&q| local_point_of(body, &b.q, v2(q))).collect();
+    Ok((body, Profile::closed_spline(&local).map_err(err)?))
+}
+
+/// The face and profile of a `line-profile` element (a flat-faced follower on a cam): the face's
+/// body, its point (local), 0 for the unused radius, and the profile with the face's unit normal
+/// (local, towards the profile).
+fn face_on_profile(
+    b: &Builder<'_>,
+    d: &ForceDef,
+    span: &Range<usize>,
+    owner: &str,
+) -> Result<(BodyRef, Vec2, f64, Against), SceneError> {
+    let err = |m: &str| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body' (the face's)"))?;
+    let body = b.body(name, span, owner)?;
+    let line = d.line.as_ref().ok_or_else(|| {
+        err("needs 'line = { point = [x, y], normal = [nx, ny] }' (the face on 'body', global, the normal towards the profile)")
+    })?;
+    if line.body.is_some() {
+        return Err(err("the face is on 'body': its 'line' takes no body of its own"));
+    }
+    let normal = v2(line.normal);
+    if normal.norm().is_nan() || normal.norm() == 0.0 {
+        return Err(err("the line's normal must not be zero"));
+    }
+    let (profile_body, profile) = profile_of(b, d, span, owner)?;
+    Ok((
+        body,
+        local_point_of(body, &b.q, v2(line.point)),
+        0.0,
+        Against::ProfileFace {
+            body: profile_body,
+            profile,
+            normal: local_direction_of(body, &b.q, normal / normal.norm()),
         },
     ))
 }
@@ -791,7 +837,7 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
-    if d.kind != "circle-line" && d.kind != "circle-circle" && d.kind != "circle-profile" {
+    if !["circle-line", "circle-circle", "circle-profile", "line-profile"].contains(&d.kind.as_str()) {
         const CONTACT: [&str; 8] = [
             "radius",
             "radii",
@@ -941,10 +987,11 @@ fn force(
                 law: contact_law(d).map_err(err)?,
             })
         }
-        "circle-profile" => {
-            return Err(err(
-                "a compliant circle-profile contact is not built yet: give rigid = true (a rigid contact)".into(),
-            ))
+        "circle-profile" | "line-profile" => {
+            return Err(err(format!(
+                "a compliant {} contact is not built yet: give rigid = true (a rigid contact)",
+                d.kind
+            )))
         }
         "code" => {
             if let Some(key) = d.keys_given().find(|k| *k != "body") {
@@ -961,7 +1008,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, circle-profile, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, circle-profile, line-profile, code)"
             )))
         }
     };

@@ -133,20 +133,35 @@ impl Profile {
     /// knot, Newton's method on `φ(u) = |S(u) − c|² / 2` kept within the knot's two segments
     /// (bisection where a step leaves them or `φ''` is not positive).
     pub fn closest(&self, c: Vec2) -> f64 {
-        let nearest = (0..self.points.len())
-            .min_by(|&i, &j| {
-                (self.points[i] - c)
-                    .norm_squared()
-                    .total_cmp(&(self.points[j] - c).norm_squared())
-            })
-            .unwrap_or(0) as f64;
-        let (mut lo, mut hi) = (nearest - 1.0, nearest + 1.0);
-        let mut u = nearest;
-        for _ in 0..60 {
-            let [s, ds, dds] = self.at(u);
+        let start = self.lowest_knot(|p| (p - c).norm_squared());
+        self.minimize(start, |[s, ds, dds]| {
             let d = s - c;
-            let slope = d.dot(&ds);
-            let bend = ds.norm_squared() + d.dot(&dds);
+            (d.dot(&ds), ds.norm_squared() + d.dot(&dds))
+        })
+    }
+
+    /// The parameter of the curve's support point against `direction` (local): the point
+    /// where `direction·S(u)` is least, the first a flat face moving along `−direction` meets.
+    pub fn support(&self, direction: Vec2) -> f64 {
+        let start = self.lowest_knot(|p| direction.dot(&p));
+        self.minimize(start, |[_, ds, dds]| (direction.dot(&ds), direction.dot(&dds)))
+    }
+
+    /// The knot where `f` is least.
+    fn lowest_knot(&self, f: impl Fn(Vec2) -> f64) -> f64 {
+        (0..self.points.len())
+            .min_by(|&i, &j| f(self.points[i]).total_cmp(&f(self.points[j])))
+            .unwrap_or(0) as f64
+    }
+
+    /// A minimum of a function of `u` near the knot `start`, given its first and second
+    /// derivatives from `S`, `S'`, `S''`: Newton's method kept within the knot's two segments
+    /// (bisection where a step leaves them or the second derivative is not positive).
+    fn minimize(&self, start: f64, derivatives: impl Fn([Vec2; 3]) -> (f64, f64)) -> f64 {
+        let (mut lo, mut hi) = (start - 1.0, start + 1.0);
+        let mut u = start;
+        for _ in 0..60 {
+            let (slope, bend) = derivatives(self.at(u));
             if slope > 0.0 {
                 hi = u;
             } else {

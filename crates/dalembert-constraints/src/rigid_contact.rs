@@ -18,6 +18,15 @@
 //! d_uu = (|x_u|² − (n·x_u)²) / d − n·x_uu,      n = (c − x) / d
 //! ```
 //!
+//! - A flat face (the line through a point `p` with unit normal `n` on the contact's body,
+//!   towards the profile) against a closed convex profile (a flat-faced follower on a cam):
+//!   `s = min_u n·(x(u) − p)`, the profile's support point; the row is the [`line_coordinate`]
+//!   primitive's of the profile's material point there, and with `f(u) = n·(x(u) − p)`,
+//!
+//! ```text
+//! s̈ = f_q q̈ + f_qq[q̇, q̇] − (f_uq q̇)² / f_uu,   f_uq q̇ = ṅ·x_u + n·ẋ_u,   f_uu = n·x_uu
+//! ```
+//!
 //! The normal passes through the centres (for a profile, through the roller's centre and the
 //! profile's normal), so the impulse along it turns no circle about its centre.
 
@@ -75,13 +84,27 @@ pub enum Against {
         /// The profile, local to its body.
         profile: Profile,
     },
+    /// A closed convex profile (a cam's) against a flat face of the contact's body (a
+    /// flat-faced follower): the line through the contact's `centre` with unit `normal` (local
+    /// to the contact's body, towards the profile); the contact's radius is not used.
+    ProfileFace {
+        /// The body carrying the profile.
+        body: BodyRef,
+        /// The profile, local to its body.
+        profile: Profile,
+        /// The face's unit normal, local to the contact's body, towards the profile.
+        normal: Vec2,
+    },
 }
 
 impl RigidContact {
     /// The body the circle touches (a line's or the other circle's).
     fn other_body(&self) -> BodyRef {
         match self.against {
-            Against::Line { body, .. } | Against::Circle { body, .. } | Against::Profile { body, .. } => body,
+            Against::Line { body, .. }
+            | Against::Circle { body, .. }
+            | Against::Profile { body, .. }
+            | Against::ProfileFace { body, .. } => body,
         }
     }
 
@@ -106,6 +129,7 @@ impl RigidContact {
                 Against::Line { .. } => "the circle and the line are on the same body".into(),
                 Against::Circle { .. } => "the two circles are on the same body".into(),
                 Against::Profile { .. } => "the circle and the profile are on the same body".into(),
+                Against::ProfileFace { .. } => "the face and the profile are on the same body".into(),
             }));
         }
         if let Against::Circle { radius, .. } = self.against {
@@ -120,6 +144,18 @@ impl RigidContact {
             let off_unit = (normal.norm() - 1.0).abs();
             if off_unit.is_nan() || off_unit >= 1e-12 {
                 return Err(bad("the line's normal must be a unit vector".into()));
+            }
+        }
+        if let Against::ProfileFace { profile, normal, .. } = &self.against {
+            let off_unit = (normal.norm() - 1.0).abs();
+            if off_unit.is_nan() || off_unit >= 1e-12 {
+                return Err(bad("the face's normal must be a unit vector".into()));
+            }
+            if let Some((rho, p)) = profile.tightest_concave_radius() {
+                return Err(bad(format!(
+                    "a flat face needs a convex profile: it is concave (radius {rho:.4e} m) near its point ({}, {})",
+                    p.x, p.y
+                )));
             }
         }
         if let Against::Profile { profile, .. } = &self.against {
@@ -139,6 +175,7 @@ impl RigidContact {
                 Against::Line { .. } => "the circle starts {} m into the line",
                 Against::Circle { .. } => "the circles start {} m into each other",
                 Against::Profile { .. } => "the circle starts {} m into the profile",
+                Against::ProfileFace { .. } => "the face starts {} m into the profile",
             };
             return Err(bad(what.replace("{}", &format!("{:e}", -gap))));
         }
@@ -178,6 +215,23 @@ impl RigidContact {
                 }
                 (row, self.radius)
             }
+            Against::ProfileFace { profile, normal, .. } => {
+                // The face's line on this contact's body; the profile's support point against
+                // its normal, found in the profile's body frame.
+                let n = circle.rotation() * normal;
+                let local = other.rotation().transpose() * n;
+                let [point, tangent, bend] = profile.at(profile.support(local));
+                let row = line_coordinate(&circle, self.centre, *normal, &other, point).swapped();
+                let (x_u, x_uu) = (other.rotation() * tangent, other.rotation() * bend);
+                let n_dot = perp(n) * circle.omega;
+                let x_u_dot = perp(x_u) * other.omega;
+                let f_uq = n_dot.dot(&x_u) + n.dot(&x_u_dot);
+                let f_uu = n.dot(&x_uu);
+                if f_uu > 0.0 {
+                    envelope = -f_uq * f_uq / f_uu;
+                }
+                (row, 0.0)
+            }
             &Against::Line { point, normal, .. } => (
                 line_coordinate(&other, point, normal, &circle, self.centre),
                 self.radius,
@@ -208,13 +262,13 @@ impl RigidContact {
     }
 }
 
+/// Shapes for the tests.
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use dalembert_kinematics::BodyId;
+mod tests_support {
+    use dalembert_kinematics::Vec2;
 
     /// An egg-shaped closed profile (convex), 200 points, local to its body.
-    fn egg() -> Vec<Vec2> {
+    pub fn egg() -> Vec<Vec2> {
         (0..=200)
             .map(|k| {
                 let a = std::f64::consts::TAU * k as f64 / 200.0;
@@ -223,6 +277,13 @@ mod tests {
             })
             .collect()
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tests_support::egg;
+    use super::*;
+    use dalembert_kinematics::BodyId;
 
     #[test]
     fn a_roller_on_a_profile_has_the_gap_rate_and_acceleration_of_its_gap_differenced() {
@@ -263,6 +324,54 @@ mod tests {
             let (sp, sm) = (contact.gap(&at(h)), contact.gap(&at(-h)));
             let rate_fd = (sp - sm) / (2.0 * h);
             let acceleration_fd = (sp - 2.0 * s + sm) / (h * h);
+            assert!(
+                (rate - rate_fd).abs() < 1e-7 * (1.0 + rate.abs()),
+                "rate {rate} vs {rate_fd}"
+            );
+            assert!(
+                (acceleration - acceleration_fd).abs() < 1e-4 * (1.0 + acceleration.abs()),
+                "at {angle}: acceleration {acceleration} vs {acceleration_fd}"
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod face_tests {
+    use super::tests_support::egg;
+    use super::*;
+    use dalembert_kinematics::BodyId;
+
+    #[test]
+    fn a_flat_face_on_a_profile_has_the_gap_rate_and_acceleration_of_its_gap_differenced() {
+        // As for the roller: the face (body 1, through (0.01, −0.02), normal (0.3, −1)/|…|
+        // towards the cam) and the egg (body 0) move on q + v t + a t²/2; the row's rate and
+        // g·a + b are the gap's central differences (same bars and reasons).
+        let normal = Vec2::new(0.3, -1.0).normalize();
+        let contact = RigidContact {
+            name: "face".into(),
+            body: BodyRef::Body(BodyId(1)),
+            centre: Vec2::new(0.01, -0.02),
+            radius: 0.0,
+            against: Against::ProfileFace {
+                body: BodyRef::Body(BodyId(0)),
+                profile: Profile::closed_spline(&egg()).unwrap(),
+                normal,
+            },
+            restitution: 0.0,
+            rest_speed: 1e-3,
+        };
+        for angle in [0.3f64, 1.7, 2.9, 4.4, 5.8] {
+            let q = [0.002, -0.001, angle, 0.03, 0.15, 0.2];
+            let v = [0.1, -0.2, 7.0, 0.3, -0.5, -2.0];
+            let a = [1.0, 2.0, -30.0, -4.0, 3.0, 15.0];
+            let at = |t: f64| -> Vec<f64> { (0..6).map(|i| q[i] + v[i] * t + 0.5 * a[i] * t * t).collect() };
+            let mut row = SlipRow::default();
+            let s = contact.gap_row(&q, &v, &mut row);
+            let (rate, acceleration) = (row.dot(&v), row.dot(&a) + row.bias);
+            let h = 1e-4;
+            let (sp, sm) = (contact.gap(&at(h)), contact.gap(&at(-h)));
+            let (rate_fd, acceleration_fd) = ((sp - sm) / (2.0 * h), (sp - 2.0 * s + sm) / (h * h));
             assert!(
                 (rate - rate_fd).abs() < 1e-7 * (1.0 + rate.abs()),
                 "rate {rate} vs {rate_fd}"
