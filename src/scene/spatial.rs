@@ -579,7 +579,10 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             continue;
         }
         let f = spatial_forces::force(d, &names, &ctx, &span, &owner, &positions)?;
-        if let dalembert_spatial::Force::SpherePlane { point, normal, .. } = &f {
+        if let dalembert_spatial::Force::SpherePlane { point, normal, .. }
+        | dalembert_spatial::Force::BoxPlane { point, normal, .. }
+        | dalembert_spatial::Force::CapsulePlane { point, normal, .. } = &f
+        {
             floors.push(spatial_forces::floor_visual(point, normal, &owner));
         }
         model.force(f);

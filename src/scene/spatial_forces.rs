@@ -42,6 +42,8 @@ pub(crate) struct ForceDef {
     pub actuator: Option<FunctionDef>,
     pub radius: Option<f64>,
     pub radii: Option<[f64; 2]>,
+    /// A `box-plane` element's edge lengths along its body's axes.
+    pub size: Option<[f64; 3]>,
     pub plane: Option<PlaneDef>,
     pub exponent: Option<f64>,
     pub dissipation: Option<f64>,
@@ -182,6 +184,7 @@ impl ForceDef {
             ("actuator", self.actuator.is_some()),
             ("radius", self.radius.is_some()),
             ("radii", self.radii.is_some()),
+            ("size", self.size.is_some()),
             ("plane", self.plane.is_some()),
             ("exponent", self.exponent.is_some()),
             ("dissipation", self.dissipation.is_some()),
@@ -316,6 +319,62 @@ pub(crate) fn force(
                     .map_err(|m| err(&m))?,
             }
         }
+        "box-plane" => {
+            check(d.only(&[
+                "body",
+                "at",
+                "size",
+                "plane",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ]))?;
+            let (body, centre, plane) = shape_on_plane(d, names, ctx, span, owner)?;
+            let centre = match centre {
+                Some(Points3::One(p)) => p,
+                None => body_position(body, positions),
+                Some(Points3::Two(_)) => return Err(err("'at' is the box's centre, one point [x, y, z] (global)")),
+            };
+            Force::BoxPlane {
+                name,
+                body,
+                centre,
+                size: d.size.ok_or_else(|| err("needs 'size = [a, b, c]' (m: its edges along the body's axes)"))?,
+                point: plane.point,
+                normal: plane.normal,
+                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
+                    .map_err(|m| err(&m))?,
+            }
+        }
+        "capsule-plane" => {
+            check(d.only(&[
+                "body",
+                "at",
+                "radius",
+                "plane",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ]))?;
+            let (body, ends, plane) = shape_on_plane(d, names, ctx, span, owner)?;
+            let Some(Points3::Two(ends)) = ends else {
+                return Err(err("needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (its segment's ends, global)"));
+            };
+            Force::CapsulePlane {
+                name,
+                body,
+                ends,
+                radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+                point: plane.point,
+                normal: plane.normal,
+                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
+                    .map_err(|m| err(&m))?,
+            }
+        }
         "sphere-sphere" => {
             check(d.only(&[
                 "bodies",
@@ -350,10 +409,35 @@ pub(crate) fn force(
         }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, sphere-sphere, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, box-plane, capsule-plane, sphere-sphere, code)"
             )))
         }
     })
+}
+
+/// The body, the `at` key and the plane of a `box-plane` or `capsule-plane` element.
+fn shape_on_plane<'a>(
+    d: &'a ForceDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+) -> Result<(BodyRef, Option<Points3>, &'a PlaneDef), SceneError> {
+    let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+    let body = names.body(ctx, name, span, owner)?;
+    let plane = d.plane.as_ref().ok_or_else(|| {
+        err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
+    })?;
+    Ok((body, d.at.clone(), plane))
+}
+
+/// A body's position in the file (the ground's origin for the ground).
+fn body_position(body: BodyRef, positions: &[[f64; 3]]) -> [f64; 3] {
+    match body {
+        BodyRef::Body(i) => positions[i],
+        BodyRef::Ground => [0.0; 3],
+    }
 }
 
 /// A `sphere-plane` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the sphere
@@ -368,6 +452,12 @@ pub(crate) fn rigid_sphere_plane(
     positions: &[[f64; 3]],
 ) -> Result<dalembert_spatial::limits::SpherePlaneContact, SceneError> {
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    if d.kind == "box-plane" || d.kind == "capsule-plane" {
+        return Err(err(&format!(
+            "a rigid {} contact is not built (its corners or caps strike at once, and simultaneous impacts are not resolved): use the compliant law",
+            d.kind
+        )));
+    }
     if d.kind != "sphere-plane" {
         return Err(err(&format!(
             "'rigid' is for sphere-plane contacts, this element is '{}'",

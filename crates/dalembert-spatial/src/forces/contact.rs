@@ -15,6 +15,13 @@
 //! `v_t`, so that a body at rest on a slope creeps at a speed below `v_s` instead of sticking.
 //! With `d = 0` and `μ = 0` the element is conservative with the potential `k δⁿ⁺¹ / (n + 1)`.
 //!
+//! A box or a capsule on a plane is the same law at several spheres of one body: a box's eight
+//! corners (radius 0: the lowest points of a box are always among its corners, and a face or an
+//! edge flat on the plane rests on its corners, as MuJoCo's box–plane contact does), a capsule's
+//! two end caps (its segment's ends with its radius: a capsule's lowest point is always on an
+//! end cap, and lying flat it rests on both). Each sphere that penetrates adds its own (K1) and
+//! (K2); the element's gap is the least of the spheres'.
+//!
 //! Two spheres (centres `cᵢ`, `cⱼ`, radii `Rᵢ`, `Rⱼ`) overlap by `δ = Rᵢ + Rⱼ − |cⱼ − cᵢ|` along
 //! `n = (cⱼ − cᵢ) / |cⱼ − cᵢ|`, `δ̇ = −n·(ċⱼ − ċᵢ)`; the same (K1) pushes `j` along `n` and `i`
 //! against it at the middle of the overlap, and (K2) acts on the relative sliding there.
@@ -86,14 +93,15 @@ impl SphereSphere {
     }
 }
 
-/// A sphere on a body against a plane of the ground.
+/// Spheres of one radius on a body against a plane of the ground (one sphere, a capsule's two
+/// end caps, a box's eight corners with radius 0).
 #[derive(Debug, Clone)]
 pub(crate) struct SpherePlane {
     /// The body.
     pub body: usize,
-    /// The sphere's centre in the body frame.
-    pub centre: V3,
-    /// Radius `R` (m).
+    /// The spheres' centres in the body frame.
+    pub centres: Vec<V3>,
+    /// Radius `R` (m; 0 for a box's corners).
     pub radius: f64,
     /// A point of the plane (global).
     pub point: V3,
@@ -104,32 +112,45 @@ pub(crate) struct SpherePlane {
 }
 
 impl SpherePlane {
-    /// The penetration `δ` at the state behind `frame` (negative: the gap).
+    /// The penetration `δ` of a sphere centred at `centre` (global).
+    fn depth(&self, centre: &V3) -> f64 {
+        self.radius - self.normal.dot(&(centre - self.point))
+    }
+
+    /// The deepest sphere's penetration `δ` at the state behind `frame` (negative: the gap).
     pub fn penetration(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
         let f = frame(Some(self.body));
-        self.radius - self.normal.dot(&(f.point(&self.centre) - self.point))
+        self.centres
+            .iter()
+            .map(|c| self.depth(&f.point(c)))
+            .fold(f64::NEG_INFINITY, f64::max)
     }
 
-    /// Adds the contact force's generalized force (K1, K2).
+    /// Adds each penetrating sphere's contact force's generalized force (K1, K2).
     pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
         let f = frame(Some(self.body));
-        let s_centre = f.global(&self.centre);
-        let centre = f.r + s_centre;
-        let depth = self.radius - self.normal.dot(&(centre - self.point));
-        if depth <= 0.0 {
-            return;
+        for c in &self.centres {
+            let s_centre = f.global(c);
+            let depth = self.depth(&(f.r + s_centre));
+            if depth <= 0.0 {
+                continue;
+            }
+            let rate = -self.normal.dot(&f.point_velocity(&s_centre));
+            let normal_force = self.law.normal_force(depth, rate);
+            let arm = s_centre - self.radius * self.normal;
+            let (sliding, speed) = sliding_speed(&f.point_velocity(&arm), &self.normal);
+            let force = normal_force * self.normal - self.law.friction_factor(normal_force, speed) * sliding;
+            add_point_force(out, self.body, &f, &arm, &force);
         }
-        let rate = -self.normal.dot(&f.point_velocity(&s_centre));
-        let normal_force = self.law.normal_force(depth, rate);
-        let arm = s_centre - self.radius * self.normal;
-        let (sliding, speed) = sliding_speed(&f.point_velocity(&arm), &self.normal);
-        let force = normal_force * self.normal - self.law.friction_factor(normal_force, speed) * sliding;
-        add_point_force(out, self.body, &f, &arm, &force);
     }
 
-    /// `k δⁿ⁺¹ / (n + 1)` where the sphere penetrates, 0 elsewhere.
+    /// `Σ k δⁿ⁺¹ / (n + 1)` over the spheres that penetrate.
     pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        self.law.potential(self.penetration(frame))
+        let f = frame(Some(self.body));
+        self.centres
+            .iter()
+            .map(|c| self.law.potential(self.depth(&f.point(c))))
+            .sum()
     }
 
     /// True without dissipation and friction.

@@ -135,6 +135,42 @@ pub enum Force {
         /// The contact law (checked when the model is built).
         law: ContactLaw,
     },
+    /// Compliant contact of a box on `body` with a plane of the ground, the law of
+    /// [`Force::SpherePlane`] at each of its eight corners that penetrates (`docs/contact.md`).
+    BoxPlane {
+        /// Name.
+        name: String,
+        /// The body carrying the box.
+        body: BodyRef,
+        /// The box's centre in the initial configuration (global).
+        centre: [f64; 3],
+        /// Its edge lengths along the body's axes (m).
+        size: [f64; 3],
+        /// A point of the plane (global).
+        point: [f64; 3],
+        /// The plane's normal, out of the solid (any length but zero).
+        normal: [f64; 3],
+        /// The contact law (checked when the model is built).
+        law: ContactLaw,
+    },
+    /// Compliant contact of a capsule on `body` (a segment swept by a sphere) with a plane of the
+    /// ground, the law of [`Force::SpherePlane`] at each of its two end caps that penetrates.
+    CapsulePlane {
+        /// Name.
+        name: String,
+        /// The body carrying the capsule.
+        body: BodyRef,
+        /// The segment's two ends in the initial configuration (global).
+        ends: [[f64; 3]; 2],
+        /// Radius (m).
+        radius: f64,
+        /// A point of the plane (global).
+        point: [f64; 3],
+        /// The plane's normal, out of the solid (any length but zero).
+        normal: [f64; 3],
+        /// The contact law (checked when the model is built).
+        law: ContactLaw,
+    },
     /// Compliant contact of two spheres on two bodies (either may be the ground), with the law of
     /// [`Force::SpherePlane`].
     SphereSphere {
@@ -162,6 +198,8 @@ impl Force {
             | Force::SpringDamper { name, .. }
             | Force::JointTorque { name, .. }
             | Force::SpherePlane { name, .. }
+            | Force::BoxPlane { name, .. }
+            | Force::CapsulePlane { name, .. }
             | Force::SphereSphere { name, .. }
             | Force::RotationalSpringDamper { name, .. } => name,
             Force::User(u) => u.name(),
@@ -402,7 +440,73 @@ impl ForceData {
                 let b = moving(*body)?;
                 ForceData::SpherePlane(SpherePlane {
                     body: b,
-                    centre: local(Some(b), centre),
+                    centres: vec![local(Some(b), centre)],
+                    radius: *radius,
+                    point: V3::from(*point),
+                    normal: n / n.norm(),
+                    law: *law,
+                })
+            }
+            Force::BoxPlane {
+                body,
+                centre,
+                size,
+                point,
+                normal,
+                law,
+                ..
+            } => {
+                if !finite(centre) || !finite(point) || !finite(normal) {
+                    return Err(bad("centre, point and normal must be finite"));
+                }
+                for (side, axis) in size.iter().zip(["x", "y", "z"]) {
+                    positive(*side, &format!("size along {axis}")).map_err(|m| bad(&m))?;
+                }
+                let n = V3::from(*normal);
+                if n.norm() == 0.0 {
+                    return Err(bad("the plane's normal must not be zero"));
+                }
+                law.check().map_err(|m| bad(&m))?;
+                let b = moving(*body)?;
+                let c = local(Some(b), centre);
+                let half = V3::from(*size) / 2.0;
+                let corners = (0..8)
+                    .map(|k| {
+                        let sign = |bit: usize| if k >> bit & 1 == 1 { 1.0 } else { -1.0 };
+                        c + V3::new(sign(0) * half.x, sign(1) * half.y, sign(2) * half.z)
+                    })
+                    .collect();
+                ForceData::SpherePlane(SpherePlane {
+                    body: b,
+                    centres: corners,
+                    radius: 0.0,
+                    point: V3::from(*point),
+                    normal: n / n.norm(),
+                    law: *law,
+                })
+            }
+            Force::CapsulePlane {
+                body,
+                ends,
+                radius,
+                point,
+                normal,
+                law,
+                ..
+            } => {
+                if !finite(&ends[0]) || !finite(&ends[1]) || !finite(point) || !finite(normal) {
+                    return Err(bad("ends, point and normal must be finite"));
+                }
+                let n = V3::from(*normal);
+                if n.norm() == 0.0 {
+                    return Err(bad("the plane's normal must not be zero"));
+                }
+                positive(*radius, "radius").map_err(|m| bad(&m))?;
+                law.check().map_err(|m| bad(&m))?;
+                let b = moving(*body)?;
+                ForceData::SpherePlane(SpherePlane {
+                    body: b,
+                    centres: vec![local(Some(b), &ends[0]), local(Some(b), &ends[1])],
                     radius: *radius,
                     point: V3::from(*point),
                     normal: n / n.norm(),
