@@ -429,7 +429,7 @@ fn shape_on_plane<'a>(
     let plane = d.plane.as_ref().ok_or_else(|| {
         err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
     })?;
-    Ok((body, d.at.clone(), plane))
+    Ok((body, d.at, plane))
 }
 
 /// A body's position in the file (the ground's origin for the ground).
