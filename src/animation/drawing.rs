@@ -91,6 +91,31 @@ pub enum Mark {
         /// The end points in each body's frame.
         points: [[f64; 2]; 2],
     },
+    /// A contact between two bodies' shapes (`docs/contact.md`, `docs/limits.md`), drawn with its
+    /// shapes where a body's own outline does not show them (a line, a cam's profile, a roller)
+    /// and, where the frames carry its normal force (CSV `<name>.normal`), an arrow of that force
+    /// on the first body at the contact point.
+    Contact {
+        /// Element name.
+        name: String,
+        /// `circle-line`, `circle-circle`, `circle-profile` or `line-profile`.
+        form: &'static str,
+        /// The first shape's body (the circle's, or the face's for `line-profile`) and the other
+        /// shape's (the line's, the other circle's, the profile's).
+        bodies: [DrawBody; 2],
+        /// The circle's centre or the face's point (first body's frame), and the line's point or
+        /// the other circle's centre (second body's frame; unused for a profile).
+        points: [[f64; 2]; 2],
+        /// The circles' radii (0 where there is none).
+        radii: [f64; 2],
+        /// The line's unit normal (second body's frame, towards the circle) or the face's (first
+        /// body's frame, towards the profile); zero otherwise.
+        normal: [f64; 2],
+        /// The profile's knots (second body's frame; empty without a profile).
+        profile: Vec<[f64; 2]>,
+        /// True when the frames carry its normal force (a rigid contact's `<name>.normal`).
+        force: bool,
+    },
     /// A spring–damper between two points, drawn as a zig-zag.
     Spring {
         /// Force element name.
@@ -138,6 +163,7 @@ impl Drawing {
                 follower_point,
                 ..
             } => vec![(*follower, *follower_point)],
+            Mark::Contact { .. } => Vec::new(),
         };
         for (b, p) in ends {
             self.attach(b, Vec2::new(p[0], p[1]));

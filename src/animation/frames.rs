@@ -65,15 +65,25 @@ impl Frames {
         self.reactions.extend_from_slice(forces);
     }
 
-    /// The output columns of the reactions a spatial drawing's joints are drawn with: each
-    /// joint's `fx, fy, fz` (none for a planar drawing).
+    /// The output columns of the forces a drawing's arrows show: a spatial drawing's joints'
+    /// reactions (each joint's `fx, fy, fz`), a planar drawing's contacts' normal forces (each
+    /// rigid contact's `<name>.normal`).
     pub fn reaction_columns(drawing: &Drawing) -> Vec<String> {
-        drawing.spatial.as_ref().map_or(Vec::new(), |s| {
-            s.joints
+        match drawing.spatial.as_ref() {
+            Some(s) => s
+                .joints
                 .iter()
                 .flat_map(|j| ["fx", "fy", "fz"].map(|c| format!("{}.{c}", j.name)))
-                .collect()
-        })
+                .collect(),
+            None => drawing
+                .marks
+                .iter()
+                .filter_map(|m| match m {
+                    super::Mark::Contact { name, force: true, .. } => Some(format!("{name}.normal")),
+                    _ => None,
+                })
+                .collect(),
+        }
     }
 
     /// At most `max` frames (at least two), evenly spread over the run and always keeping the first

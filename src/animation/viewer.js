@@ -90,6 +90,14 @@
     return d > 0 ? Math.min(m, d) : m;
   }, Infinity);
 
+  // A contact's profile and circle are drawn with their bodies: they count in their extents.
+  for (const m of drawing.marks.filter((x) => x.kind === "contact")) {
+    const [b0, b1] = m.bodies;
+    if (b1 !== null) outlines[b1].push(...m.profile);
+    const c = m.points[0], r = m.radii[0];
+    if (b0 !== null && r > 0) outlines[b0].push([c[0] + r, c[1]], [c[0] - r, c[1]], [c[0], c[1] + r], [c[0], c[1] - r]);
+  }
+
   // Bounding box of everything drawn over the whole run, and the travel of every guide.
   let box = [Infinity, Infinity, -Infinity, -Infinity];
   const grow = (p) => {
@@ -110,6 +118,7 @@
   for (const m of drawing.marks) {
     for (const [b, p] of (m.bodies || []).map((b, i) => [b, m.points[i]])) if (b === null) grow(p);
     if (m.kind === "guide" && m.body === null) grow(m.point);
+    if (m.kind === "contact" && m.bodies[1] === null) m.profile.forEach(grow);
   }
   for (const tr of data.traces) for (let k = 0; k < nf; k++) { poseOfFrame(k); grow(world(tr.body, tr.point)); }
   if (!isFinite(box[0])) box = [-1, -1, 1, 1];
@@ -287,6 +296,92 @@
     }
   }
 
+  // ---- contacts ----------------------------------------------------------------------------
+  // Each contact's shapes, and the arrow of its normal force on its first body (the frames'
+  // reactions: per rigid contact, its `<name>.normal`), scaled to the largest force of the run.
+  const reactions = data.reactions ? decode(data.reactions, Float32Array) : new Float32Array(0);
+  const contacts = drawing.marks.filter((m) => m.kind === "contact");
+  const forced = contacts.filter((m) => m.force);
+  const perFrame = forced.length;
+  let largestForce = 0;
+  for (let i = 0; i < reactions.length; i++) largestForce = Math.max(largestForce, Math.abs(reactions[i]));
+  const arrowColor = "#e6007e";
+  const shade = (b) => (b === null ? "#666666" : color(b));
+  // The contact point and the direction of the force on the first body, in the current pose
+  // (a profile's nearest knot or support knot: a drawing, not the solver's closest point).
+  function contactAt(m) {
+    const [b0, b1] = m.bodies;
+    if (m.form === "circle-line") {
+      const n = worldDir(b1, m.normal), c = world(b0, m.points[0]);
+      return { p: [c[0] - m.radii[0] * n[0], c[1] - m.radii[0] * n[1]], n };
+    }
+    if (m.form === "circle-circle") {
+      const c0 = world(b0, m.points[0]), c1 = world(b1, m.points[1]);
+      const d = [c0[0] - c1[0], c0[1] - c1[1]], l = norm(d) || 1, n = [d[0] / l, d[1] / l];
+      return { p: [c1[0] + m.radii[1] * n[0], c1[1] + m.radii[1] * n[1]], n };
+    }
+    const knots = m.profile.map((q) => world(b1, q));
+    if (m.form === "circle-profile") {
+      const c = world(b0, m.points[0]);
+      let p = knots[0];
+      for (const k of knots) if (norm([k[0] - c[0], k[1] - c[1]]) < norm([p[0] - c[0], p[1] - c[1]])) p = k;
+      const d = [c[0] - p[0], c[1] - p[1]], l = norm(d) || 1;
+      return { p, n: [d[0] / l, d[1] / l] };
+    }
+    const f = worldDir(b0, m.normal);
+    let p = knots[0];
+    for (const k of knots) if (f[0] * k[0] + f[1] * k[1] < f[0] * p[0] + f[1] * p[1]) p = k;
+    return { p, n: [-f[0], -f[1]] };
+  }
+  function drawContacts(pass, t) {
+    const k = frameIndex(t);
+    contacts.forEach((m) => {
+      const [b0, b1] = m.bodies;
+      if (pass === 0) {
+        if (m.profile.length) polygon(m.profile.map((q) => world(b1, q)), shade(b1) + "44", shade(b1));
+        const lineOn = m.form === "circle-line" ? b1 : m.form === "line-profile" ? b0 : undefined;
+        if (lineOn !== undefined) {
+          const at = m.form === "circle-line" ? world(b1, m.points[1]) : world(b0, m.points[0]);
+          const n = worldDir(lineOn, m.normal), u = [-n[1], n[0]];
+          // Centred on the first shape's side of the contact: the circle's foot, or the face's point.
+          const c = m.form === "circle-line" ? world(b0, m.points[0]) : at;
+          const s = (c[0] - at[0]) * u[0] + (c[1] - at[1]) * u[1], half = 0.25 * size;
+          const mid = [at[0] + s * u[0], at[1] + s * u[1]];
+          line([mid[0] - half * u[0], mid[1] - half * u[1]], [mid[0] + half * u[0], mid[1] + half * u[1]], 2, shade(lineOn));
+        }
+        if (m.radii[0] > 0) {
+          const c = world(b0, m.points[0]), pts = [];
+          for (let i = 0; i < 48; i++) {
+            const a = (2 * Math.PI * i) / 48;
+            pts.push([c[0] + m.radii[0] * Math.cos(a), c[1] + m.radii[0] * Math.sin(a)]);
+          }
+          polygon(pts, "#ffffff00", shade(b0));
+        }
+      } else if (m.force && largestForce > 0 && perFrame) {
+        const j = forced.indexOf(m), force = reactions[k * perFrame + j];
+        if (!(force > 0)) return;
+        const { p, n } = contactAt(m), L = (0.2 * size * force) / largestForce;
+        arrow(p, [p[0] + L * n[0], p[1] + L * n[1]]);
+      }
+    });
+    document.body.dataset.contactForces = JSON.stringify(
+      forced.map((m, j) => (perFrame ? reactions[k * perFrame + j] : null)),
+    );
+  }
+  function arrow(a, b) {
+    line(a, b, 3, arrowColor);
+    const A = px(a), B = px(b), dx = B[0] - A[0], dy = B[1] - A[1], l = Math.hypot(dx, dy);
+    if (l < 1) return;
+    const ux = dx / l, uy = dy / l, h = Math.min(10, 0.4 * l);
+    ctx.beginPath();
+    ctx.moveTo(B[0], B[1]);
+    ctx.lineTo(B[0] - h * ux - 0.5 * h * uy, B[1] - h * uy + 0.5 * h * ux);
+    ctx.lineTo(B[0] - h * ux + 0.5 * h * uy, B[1] - h * uy - 0.5 * h * ux);
+    ctx.closePath();
+    ctx.fillStyle = arrowColor;
+    ctx.fill();
+  }
+
   function drawTraces(k, t) {
     paths.forEach((xy, i) => {
       const col = traceColors[i % traceColors.length];
@@ -333,7 +428,9 @@
     drawTraces(frameIndex(t), t);
     setPose(t);
     for (let b = 0; b < nb; b++) drawBody(b);
+    drawContacts(0, t);
     drawMarks(1);
+    drawContacts(1, t);
     clock.textContent = "t = " + t.toFixed(3) + " s";
     slider.value = t1 > t0 ? Math.round((10000 * (t - t0)) / (t1 - t0)) : 0;
     document.body.dataset.time = String(t);

@@ -330,7 +330,9 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         let d = sf.get_ref();
         b.unique(&d.name, &span, "force")?;
         if d.rigid == Some(true) {
-            rigid_contacts.push(rigid_contact(&b, d, &span)?);
+            let contact = rigid_contact(&b, d, &span)?;
+            drawing.add(contact_mark(&contact, d.kind.as_str()));
+            rigid_contacts.push(contact);
             continue;
         }
         let (element, mark) = force(&b, d, &span, &joints)?;
@@ -598,6 +600,45 @@ fn face_on_profile(
             normal: local_direction_of(body, &b.q, normal / normal.norm()),
         },
     ))
+}
+
+/// How the viewer draws a rigid contact ([`Mark::Contact`]): its shapes and the arrow of its
+/// normal force (`<name>.normal`).
+fn contact_mark(c: &RigidContact, form: &str) -> Mark {
+    let form = match form {
+        "circle-circle" => "circle-circle",
+        "circle-profile" => "circle-profile",
+        "line-profile" => "line-profile",
+        _ => "circle-line",
+    };
+    let (other, point, radius, normal, profile) = match &c.against {
+        Against::Line { body, point, normal } => (*body, xy(*point), 0.0, xy(*normal), Vec::new()),
+        Against::Circle { body, centre, radius } => (*body, xy(*centre), *radius, [0.0; 2], Vec::new()),
+        Against::Profile { body, profile } => (
+            *body,
+            [0.0; 2],
+            0.0,
+            [0.0; 2],
+            profile.points().iter().map(|p| xy(*p)).collect(),
+        ),
+        Against::ProfileFace { body, profile, normal } => (
+            *body,
+            [0.0; 2],
+            0.0,
+            xy(*normal),
+            profile.points().iter().map(|p| xy(*p)).collect(),
+        ),
+    };
+    Mark::Contact {
+        name: c.name.clone(),
+        form,
+        bodies: [draw_body(c.body), draw_body(other)],
+        points: [xy(c.centre), point],
+        radii: [c.radius, radius],
+        normal,
+        profile,
+        force: true,
+    }
 }
 
 /// The two circles of a `circle-circle` element, compliant or rigid: their bodies, their

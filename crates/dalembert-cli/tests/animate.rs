@@ -765,3 +765,105 @@ fn the_3d_viewer_draws_each_joint_reaction_along_its_force() {
         assert_eq!(behind, 0, "t = {t}: the arrow points the other way");
     }
 }
+
+#[test]
+fn the_planar_viewer_draws_a_cam_profile_and_the_contact_force_along_its_normal() {
+    // scenes/cam-roller.toml at t = 0.125 s (the cam a quarter turn round): the page draws the
+    // profile on the cam (its outline, in the cam's colour, at a profile point a half turn from
+    // the roller, placed by the law the profile was made from), and an arrow of the contact force
+    // from the contact point along the normal into the roller (the profile's normal there: the
+    // pitch curve's, turned with the cam). Its force is the run's (`roller.normal` of that row,
+    // the page's `data-contact-forces`).
+    let Some(browser) = chromium_or_skip() else {
+        return;
+    };
+    let csv = tmp("cam-roller.csv");
+    let page = tmp("cam-roller.html");
+    let (ok, _, err) = dalembert(&[
+        "simulate",
+        &scene("cam-roller.toml"),
+        "--end",
+        "0.25",
+        "--output",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&[
+        "animate",
+        &scene("cam-roller.toml"),
+        "--from",
+        csv.to_str().unwrap(),
+        "--output",
+        page.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let t = 0.125;
+    let size = (900, 600);
+    let url = format!("file://{}#t={t}", page.display());
+    let dump_size = dump_window(&browser, &url, size, &[]);
+    let dom = browse(&browser, &url, dump_size, &["--dump-dom"]);
+    assert_eq!(attribute(&dom, "<body", "data-errors"), None, "console errors");
+    let mut rdr = csv::Reader::from_path(&csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = header.iter().position(|h| h == "roller.normal").unwrap();
+    let force: f64 = rdr
+        .records()
+        .map(|r| r.unwrap())
+        .find(|r| (r[0].parse::<f64>().unwrap() - t).abs() < 1e-9)
+        .map(|r| r[col].parse().unwrap())
+        .unwrap();
+    let shown = attribute(&dom, "<body", "data-contact-forces").unwrap();
+    let shown: f64 = shown.trim_matches(|c| c == '[' || c == ']').parse().unwrap();
+    assert!(
+        (shown - force).abs() < 1e-4 * force,
+        "the page shows {shown} N, the run {force} N"
+    );
+    let view = attribute(&dom, "<canvas", "data-view").unwrap();
+    let (scale, ox, oy) = (
+        json_number(&view, "scale"),
+        json_number(&view, "ox"),
+        json_number(&view, "oy"),
+    );
+    let to_px = |p: [f64; 2]| (ox + scale * p[0], oy - scale * p[1]);
+    let shot = tmp("cam-roller.png");
+    browse(&browser, &url, size, &[&format!("--screenshot={}", shot.display())]);
+    let png = Png::read(&shot);
+    // The law's geometry: the pitch curve C(φ) = Y(φ) (sin φ, cos φ) in the cam's frame, its
+    // outward normal N(φ), the profile C − R N; the cam turned by θ = ω t.
+    let (rb, r, h, w) = (0.05, 0.02, 0.03, 4.0 * std::f64::consts::PI);
+    let theta = w * t;
+    let profile = |phi: f64| -> ([f64; 2], [f64; 2]) {
+        let (y, yp) = (rb + r + 0.5 * h * (1.0 - phi.cos()), 0.5 * h * phi.sin());
+        let tangent = [yp * phi.sin() + y * phi.cos(), yp * phi.cos() - y * phi.sin()];
+        let len = tangent[0].hypot(tangent[1]);
+        let n = [-tangent[1] / len, tangent[0] / len];
+        let p = [y * phi.sin() - r * n[0], y * phi.cos() - r * n[1]];
+        let turn = |v: [f64; 2]| {
+            [
+                theta.cos() * v[0] - theta.sin() * v[1],
+                theta.sin() * v[0] + theta.cos() * v[1],
+            ]
+        };
+        (turn(p), turn(n))
+    };
+    // The roller touches the profile at φ = θ (its centre on the pitch curve's point there).
+    let (contact, normal) = profile(theta);
+    let along = |d: f64| to_px([contact[0] + d * normal[0], contact[1] + d * normal[1]]);
+    let magenta = hex("#e6007e");
+    let (x, y) = along(0.02);
+    assert!(
+        png.has_color_near(x, y, 3, magenta),
+        "no arrow 2 cm along the normal at ({x:.0}, {y:.0}) px"
+    );
+    let (x, y) = along(-0.02);
+    assert!(
+        !png.has_color_near(x, y, 3, magenta),
+        "an arrow into the cam at ({x:.0}, {y:.0}) px"
+    );
+    let (far, _) = profile(theta + std::f64::consts::PI);
+    let (x, y) = to_px(far);
+    assert!(
+        png.has_color_near(x, y, 1, hex("#1f77b4")),
+        "no profile outline at ({x:.0}, {y:.0}) px"
+    );
+}
