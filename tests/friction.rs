@@ -340,6 +340,18 @@ fn a_spatial_block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_stays_when_it_
                         t[k]
                     );
                 }
+                // The guide's reaction (what the block exerts on the ground through it) holds
+                // the friction too: by Newton's law on the block, m (g − a) with a = a (cos α,
+                // 0, −sin α) down the slope (the whole weight when it stays): 1e-9 N of 19.6 N.
+                let m = 2.0;
+                let expected = [-m * a * c, 0.0, -m * G + m * a * s];
+                for (axis, want) in ["fx", "fy", "fz"].into_iter().zip(expected) {
+                    let got = *table.column(&format!("guide.{axis}")).unwrap().last().unwrap();
+                    assert!(
+                        (got - want).abs() < 1e-9,
+                        "μ = {mu}, {formulation}, {integrator}: guide.{axis} = {got}, Newton's law {want}"
+                    );
+                }
             }
         }
     }

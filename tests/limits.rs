@@ -675,6 +675,13 @@ fn a_slider_held_on_its_stop_in_joint_coordinates_has_the_stop_force_and_reactio
     let limit = column(&joint, "guide.limit");
     let last = limit[limit.len() - 1];
     assert!((last - m * G).abs() < 1e-9, "held by {last} N, expected {}", m * G);
+    // The guide's reaction holds the stop's force: resting, the slider presses on the ground
+    // through it with its whole weight, (0, 0, −m g) (1e-9 N).
+    for table in [&joint, &absolute] {
+        let fz = column(table, "guide.fz");
+        let fz = fz[fz.len() - 1];
+        assert!((fz + m * G).abs() < 1e-9, "guide.fz = {fz}, expected {}", -m * G);
+    }
     for name in [
         "guide.q",
         "guide.qdd",

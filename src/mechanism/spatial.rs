@@ -119,9 +119,8 @@ impl ColumnWriter for SpatialColumns {
             .collect();
         names.extend(self.model.driver_names().map(|d| format!("{d}.effort")));
         // Joint limits: the stop's torque or force on the second body along the joint
-        // (`docs/limits.md`); not in the joint's reaction columns.
-        // Joint friction: its torque or force on the second body along the joint
-        // (`docs/friction.md`); not in the joint's reaction columns.
+        // (`docs/limits.md`); joint friction: its torque or force likewise (`docs/friction.md`).
+        // Both are in the joint's reaction columns too.
         names.extend(
             self.model
                 .friction_specs()
@@ -159,6 +158,8 @@ impl ColumnWriter for SpatialColumns {
             row.extend([*value, *rate, *acceleration]);
         }
         self.model.reactions_into(s.t, s.q, s.lambda, &mut self.reactions);
+        self.model
+            .add_joint_forces_into(s.q, s.limit, s.friction, &mut self.reactions);
         for r in &self.reactions {
             row.extend(r.force.iter().chain(r.moment.iter()));
         }

@@ -7,8 +7,10 @@
 //! `M_P = n_i − (P − r_i) × F_i`. When the first body is the ground, the reaction is computed on the
 //! second body and reversed (`F = −F_j`, `M_P = −(n_j + (r_j − P) × F_j)`).
 
+use crate::frame::NV;
 use crate::joints::primitives::Row;
 use crate::model::Model;
+use dalembert_system::SlipRow;
 use nalgebra::{Matrix3, Vector3};
 
 /// A joint's reaction: force and moment that its second body exerts on its first body.
@@ -82,6 +84,49 @@ impl Model {
                 point,
                 axes: fi.a * j.axes_i,
             };
+        }
+    }
+
+    /// Adds to the reactions (`out`, one per joint, from [`Model::reactions_into`]) the stops'
+    /// and friction's forces along their joints: `limit[k]` along limited joint `k`'s value,
+    /// `friction[k]` along friction joint `k`'s (each the force or torque on the second body along
+    /// the joint, `docs/limits.md`, `docs/friction.md`), so that a joint's reaction is all that
+    /// its second body exerts on its first through it. Allocates nothing.
+    pub fn add_joint_forces_into(&self, q: &[f64], limit: &[f64], friction: &[f64], out: &mut [Reaction]) {
+        let mut row = SlipRow::default();
+        let along = self
+            .limited_joints
+            .iter()
+            .zip(limit)
+            .chain(self.friction_joints.iter().zip(friction));
+        for (&joint, &force) in along {
+            if force == 0.0 {
+                continue;
+            }
+            self.joint_row_into(joint, q, &[], &mut row);
+            let j = &self.joints()[joint];
+            // The generalized force g F on the body whose side the reaction is taken on: its
+            // force (global) and its moment (body frame, turned to global).
+            let side = j.body_i.or(j.body_j);
+            let Some(b) = side else { continue };
+            let frame = self.frame(Some(b), q, &[]);
+            let (mut f, mut m) = (Vector3::zeros(), Vector3::zeros());
+            for &(i, g) in row.entries() {
+                match i.checked_sub(NV * b) {
+                    Some(c @ 0..=2) => f[c] += g * force,
+                    Some(c @ 3..=5) => m[c - 3] += g * force,
+                    _ => {}
+                }
+            }
+            let n = frame.a * m;
+            let slot = &mut out[joint];
+            if j.body_i.is_some() {
+                slot.force += f;
+                slot.moment += n - (slot.point - frame.r).cross(&f);
+            } else {
+                slot.force -= f;
+                slot.moment -= n + (frame.r - slot.point).cross(&f);
+            }
         }
     }
 }
