@@ -574,7 +574,9 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         }
         if d.rigid == Some(true) {
             let contact = spatial_forces::rigid_sphere_plane(d, &names, &ctx, &span, &owner, &positions)?;
-            floors.push(spatial_forces::floor_visual(&contact.point, &contact.normal, &owner));
+            if contact.plane_body.is_none() {
+                floors.push(spatial_forces::floor_visual(&contact.point, &contact.normal, &owner));
+            }
             rigid.push((contact, span.clone()));
             continue;
         }

@@ -59,6 +59,8 @@ pub(crate) struct ForceDef {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct PlaneDef {
+    /// The body the plane is fixed in (default the ground; a rigid contact only).
+    pub body: Option<String>,
     pub point: [f64; 3],
     pub normal: [f64; 3],
 }
@@ -308,6 +310,11 @@ pub(crate) fn force(
                 "smoothing_velocity",
             ]))?;
             let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
+            if plane.body.is_some() {
+                return Err(err(
+                    "a compliant sphere-plane's plane is of the ground (a plane on a body needs rigid = true)",
+                ));
+            }
             Force::SpherePlane {
                 name,
                 body,
@@ -429,6 +436,9 @@ fn shape_on_plane<'a>(
     let plane = d.plane.as_ref().ok_or_else(|| {
         err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
     })?;
+    if plane.body.is_some() {
+        return Err(err(&format!("a {}'s plane is of the ground", d.kind)));
+    }
     Ok((body, d.at, plane))
 }
 
@@ -470,6 +480,13 @@ pub(crate) fn rigid_sphere_plane(
     let BodyRef::Body(body) = body else {
         return Err(err("the sphere must be on a moving body"));
     };
+    let plane_body = match &plane.body {
+        None => None,
+        Some(name) => match names.body(ctx, name, span, owner)? {
+            BodyRef::Body(b) => Some(b),
+            BodyRef::Ground => None,
+        },
+    };
     Ok(dalembert_spatial::limits::SpherePlaneContact {
         name: d.name.clone(),
         body,
@@ -477,6 +494,7 @@ pub(crate) fn rigid_sphere_plane(
         radius,
         point: plane.point,
         normal: plane.normal,
+        plane_body,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
     })

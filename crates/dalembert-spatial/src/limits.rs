@@ -121,6 +121,8 @@ impl Model {
 /// ```
 ///
 /// where `c = r + s_c` is the sphere's centre and `s_c` its global arm from the centre of mass.
+/// A plane fixed in a body moves with it: the gap is then a prismatic joint's value with the
+/// plane's body as `i` and its normal as `z_i` (the formulas at the top of this module).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SpherePlaneContact {
     /// The contact's name.
@@ -131,10 +133,13 @@ pub struct SpherePlaneContact {
     pub centre: [f64; 3],
     /// The sphere's radius (m).
     pub radius: f64,
-    /// A point of the plane (global).
+    /// A point of the plane (global, in the file's configuration).
     pub point: [f64; 3],
-    /// The plane's normal out of the ground (global; any length but zero).
+    /// The plane's normal, towards the sphere (global, in the file's configuration; any length
+    /// but zero).
     pub normal: [f64; 3],
+    /// The body carrying the plane (`None`: the ground).
+    pub plane_body: Option<usize>,
     /// Newton's coefficient of restitution `e ∈ [0, 1]`.
     pub restitution: f64,
     /// The rebound speed below which the sphere rests on the plane (m/s).
@@ -172,6 +177,8 @@ pub(crate) enum ContactData {
         body: usize,
         centre: Vector3<f64>,
         radius: f64,
+        /// The plane's body (`None`: the ground), its point and unit normal in that body's frame.
+        plane_body: Option<usize>,
         point: Vector3<f64>,
         normal: Vector3<f64>,
     },
@@ -195,6 +202,12 @@ impl Model {
             if c.body >= self.bodies().len() {
                 return Err(bad("the sphere must be on a moving body".into()));
             }
+            if c.plane_body.is_some_and(|b| b >= self.bodies().len()) {
+                return Err(bad("the plane's body is not in the model".into()));
+            }
+            if c.plane_body == Some(c.body) {
+                return Err(bad("the sphere and the plane are on the same body".into()));
+            }
             if !(c.radius.is_finite() && c.radius >= 0.0) {
                 return Err(bad(format!("radius must be finite and ≥ 0, got {}", c.radius)));
             }
@@ -209,12 +222,14 @@ impl Model {
             spec.check().map_err(bad)?;
             let f = self.frame(Some(c.body), &q0, &[]);
             let normal = normal / length;
+            let fp = self.frame(c.plane_body, &q0, &[]);
             let data = ContactData::Plane {
                 body: c.body,
                 centre: f.a.transpose() * (Vector3::from(c.centre) - f.r),
                 radius: c.radius,
-                point: Vector3::from(c.point),
-                normal,
+                plane_body: c.plane_body,
+                point: fp.a.transpose() * (Vector3::from(c.point) - fp.r),
+                normal: fp.a.transpose() * normal,
             };
             let gap = normal.dot(&(Vector3::from(c.centre) - Vector3::from(c.point))) - c.radius;
             if gap < -1e-12 {
@@ -286,14 +301,23 @@ impl Model {
                 body,
                 centre,
                 radius,
+                plane_body,
                 point,
-                normal: n,
+                normal,
             } => {
-                let f = self.frame(Some(*body), q, v);
-                let arm = f.a * centre;
-                push(Some(*body), *n, f.a.transpose() * arm.cross(n));
-                row.bias = n.dot(&f.centripetal(&arm));
-                n.dot(&(f.r + arm - point)) - radius
+                // The gap is the centre's coordinate along the plane's normal less the radius:
+                // the prismatic joint's value with the plane's body as `i` (its formulas above).
+                let (fi, fj) = (self.frame(*plane_body, q, v), self.frame(Some(*body), q, v));
+                let (si, sj) = (fi.a * point, fj.a * centre);
+                let n = fi.a * normal;
+                let n_dot = fi.w.cross(&n);
+                let d = fj.r + sj - fi.r - si;
+                push(Some(*body), n, fj.a.transpose() * sj.cross(&n));
+                push(*plane_body, -n, fi.a.transpose() * n.cross(&(d + si)));
+                let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
+                let centripetal = fj.centripetal(&sj) - fi.centripetal(&si);
+                row.bias = fi.w.cross(&n_dot).dot(&d) + 2.0 * n_dot.dot(&d_dot) + n.dot(&centripetal);
+                n.dot(&d) - radius
             }
             ContactData::Spheres { bodies, centres, reach } => {
                 let fi = self.frame(bodies[0], q, v);
