@@ -19,7 +19,7 @@ use dalembert_constraints::{
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
     Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, PointForce,
-    RotationalSpringDamper, SpringDamper, Torque, Vec2,
+    RotationalSpringDamper, ShapeLine, SpringDamper, Torque, Vec2,
 };
 use dalembert_system::{TimeFunction, REST_SPEED};
 use std::cell::RefCell;
@@ -467,6 +467,12 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed"],
         "circle-profile" => &["body", "at", "radius", "profile", "rigid", "restitution", "rest_speed"],
         "line-profile" => &["body", "line", "profile", "rigid", "restitution", "rest_speed"],
+        "polygon-line" | "segment-line" => {
+            return Err(err(format!(
+                "a rigid {} contact is not built (its vertices or ends strike at once, and simultaneous impacts are not resolved): use the compliant law",
+                d.kind
+            )))
+        }
         other => {
             return Err(err(format!(
                 "'rigid' is for circle-line, circle-circle, circle-profile and line-profile contacts, this element is '{other}'"
@@ -878,12 +884,21 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
-    if !["circle-line", "circle-circle", "circle-profile", "line-profile"].contains(&d.kind.as_str()) {
-        const CONTACT: [&str; 8] = [
+    const CONTACTS: [&str; 6] = [
+        "circle-line",
+        "circle-circle",
+        "circle-profile",
+        "line-profile",
+        "polygon-line",
+        "segment-line",
+    ];
+    if !CONTACTS.contains(&d.kind.as_str()) {
+        const CONTACT: [&str; 9] = [
             "radius",
             "radii",
             "line",
             "profile",
+            "vertices",
             "exponent",
             "dissipation",
             "friction",
@@ -1028,6 +1043,54 @@ fn force(
                 law: contact_law(d).map_err(err)?,
             })
         }
+        "polygon-line" | "segment-line" => {
+            let polygon = d.kind == "polygon-line";
+            let keys: &[&str] = if polygon {
+                &["body", "vertices", "line", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"]
+            } else {
+                &["body", "at", "radius", "line", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"]
+            };
+            if let Some(key) = d.keys_given().find(|k| !keys.contains(k)) {
+                return Err(err(format!("'{key}' does not belong to a {} element", d.kind)));
+            }
+            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
+            let body = b.body(name, span, &owner)?;
+            let (centres, radius) = if polygon {
+                let vertices = d
+                    .vertices
+                    .as_ref()
+                    .ok_or_else(|| err("needs 'vertices = [[x, y], …]' (the polygon's, global)".into()))?;
+                if vertices.is_empty() {
+                    return Err(err("'vertices' is empty".into()));
+                }
+                (vertices.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(), 0.0)
+            } else {
+                let Some(Points::Two(ends)) = d.at else {
+                    return Err(err("needs 'at = [[x1, y1], [x2, y2]]' (the segment's ends, global)".into()));
+                };
+                let radius = d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?;
+                (ends.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(), radius)
+            };
+            let line = d.line.as_ref().ok_or_else(|| {
+                err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
+            })?;
+            if line.body.is_some() {
+                return Err(err(format!("a {}'s line is of the ground", d.kind)));
+            }
+            let normal = v2(line.normal);
+            if normal.norm().is_nan() || normal.norm() == 0.0 {
+                return Err(err("the line's normal must not be zero".into()));
+            }
+            Box::new(ShapeLine {
+                name: d.name.clone(),
+                body,
+                centres,
+                radius,
+                point: v2(line.point),
+                normal: normal / normal.norm(),
+                law: contact_law(d).map_err(err)?,
+            })
+        }
         "circle-profile" | "line-profile" => {
             return Err(err(format!(
                 "a compliant {} contact is not built yet: give rigid = true (a rigid contact)",
@@ -1049,7 +1112,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, circle-profile, line-profile, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, circle-profile, line-profile, polygon-line, segment-line, code)"
             )))
         }
     };

@@ -157,6 +157,8 @@ pub(crate) struct ForceDef {
     pub line: Option<LineDef>,
     /// A `circle-profile` element's cam profile.
     pub profile: Option<ProfileDef>,
+    /// A `polygon-line` element's vertices (global, in the file's configuration).
+    pub vertices: Option<Vec<[f64; 2]>>,
     pub exponent: Option<f64>,
     pub dissipation: Option<f64>,
     pub friction: Option<f64>,
@@ -189,6 +191,7 @@ impl ForceDef {
             ("radii", self.radii.is_some()),
             ("line", self.line.is_some()),
             ("profile", self.profile.is_some()),
+            ("vertices", self.vertices.is_some()),
             ("exponent", self.exponent.is_some()),
             ("dissipation", self.dissipation.is_some()),
             ("friction", self.friction.is_some()),

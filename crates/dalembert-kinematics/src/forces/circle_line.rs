@@ -80,6 +80,27 @@ impl CircleLine {
     }
 }
 
+/// A circle of radius `radius` centred at `centre` (body coordinates) of `body` in state `s`
+/// against the ground's line through `point` with unit `normal`: its penetration, and where it
+/// penetrates its contact force's generalized force added to `q_e` (the law of [`CircleLine`]).
+/// The one computation of every circle, segment and polygon element on a line.
+pub(super) fn press(
+    (body, s): (BodyRef, &BodyState),
+    (centre, radius): (Vec2, f64),
+    (point, normal): (Vec2, Vec2),
+    law: &ContactLaw,
+    q_e: Option<&mut [f64]>,
+) -> f64 {
+    let c = PointState::new(s, centre);
+    let depth = radius - normal.dot(&(c.position - point));
+    if let (true, Some(q_e)) = (depth > 0.0, q_e) {
+        let normal_force = law.normal_force(depth, -normal.dot(&c.velocity));
+        let x = point_at(s, c.position - radius * normal);
+        add_point_force(body, &x, contact_force(law, normal_force, normal, x.velocity), q_e);
+    }
+    depth
+}
+
 impl ForceElement for CircleLine {
     fn bodies(&self) -> Option<Vec<BodyRef>> {
         Some(vec![self.body])
@@ -91,18 +112,12 @@ impl ForceElement for CircleLine {
 
     fn add_generalized_force(&self, _t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
         let s = BodyState::of(self.body, q, qd);
-        let c = PointState::new(&s, self.centre);
-        let depth = self.radius - self.normal.dot(&(c.position - self.point));
-        if depth <= 0.0 {
-            return;
-        }
-        let normal_force = self.law.normal_force(depth, -self.normal.dot(&c.velocity));
-        let x = point_at(&s, c.position - self.radius * self.normal);
-        add_point_force(
-            self.body,
-            &x,
-            contact_force(&self.law, normal_force, self.normal, x.velocity),
-            q_e,
+        press(
+            (self.body, &s),
+            (self.centre, self.radius),
+            (self.point, self.normal),
+            &self.law,
+            Some(q_e),
         );
     }
 

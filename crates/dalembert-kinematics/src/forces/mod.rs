@@ -10,6 +10,7 @@ mod circle_line;
 mod gravity;
 mod point_force;
 mod rotational_spring_damper;
+mod shape_line;
 mod spring_damper;
 mod torque;
 
@@ -17,6 +18,7 @@ pub use circle_line::{CircleCircle, CircleLine};
 pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use rotational_spring_damper::RotationalSpringDamper;
+pub use shape_line::ShapeLine;
 pub use spring_damper::SpringDamper;
 pub use torque::Torque;
 
