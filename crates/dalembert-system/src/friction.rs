@@ -326,7 +326,13 @@ pub fn solve_friction(
             ));
         }
     }
-    terms.iter_mut().for_each(|k| k.force = 0.0);
+    // From the last evaluation's forces (the stages of a step are near each other, so Newton's
+    // method starts close); a free element has none.
+    for term in terms.iter_mut() {
+        if term.mode == Mode::Free || !term.force.is_finite() {
+            term.force = 0.0;
+        }
+    }
     work.holding.iter_mut().for_each(|h| *h = false);
     for iteration in 0..MAX_ITERATIONS {
         // λ(F) and the residuals and Newton matrix at F.
