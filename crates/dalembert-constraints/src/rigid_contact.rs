@@ -262,13 +262,13 @@ impl RigidContact {
     }
 }
 
-/// Shapes for the tests.
 #[cfg(test)]
-mod tests_support {
-    use dalembert_kinematics::Vec2;
+mod tests {
+    use super::*;
+    use dalembert_kinematics::BodyId;
 
     /// An egg-shaped closed profile (convex), 200 points, local to its body.
-    pub fn egg() -> Vec<Vec2> {
+    fn egg() -> Vec<Vec2> {
         (0..=200)
             .map(|k| {
                 let a = std::f64::consts::TAU * k as f64 / 200.0;
@@ -277,109 +277,71 @@ mod tests_support {
             })
             .collect()
     }
-}
 
-#[cfg(test)]
-mod tests {
-    use super::tests_support::egg;
-    use super::*;
-    use dalembert_kinematics::BodyId;
+    /// A contact of a shape on body 1 against the egg on body 0.
+    fn on_the_egg(radius: f64, against: impl Fn(Profile) -> Against) -> RigidContact {
+        RigidContact {
+            name: "follower".into(),
+            body: BodyRef::Body(BodyId(1)),
+            centre: Vec2::new(0.01, -0.02),
+            radius,
+            against: against(Profile::closed_spline(&egg()).unwrap()),
+            restitution: 0.0,
+            rest_speed: 1e-3,
+        }
+    }
+
+    /// Both bodies move on q(t) = q + v t + a t²/2: the row's rate g·v and its acceleration
+    /// g·a + b must be the first and second central differences of the gap along that path
+    /// (step 1e-4 s: truncation ~1e-8 of the second difference's scale, round-off 1e-12/h²).
+    fn assert_row_is_the_gap_differenced(contact: &RigidContact, q: [f64; 6], what: &str) {
+        let v = [0.1, -0.2, 7.0, 0.3, -0.5, -2.0];
+        let a = [1.0, 2.0, -30.0, -4.0, 3.0, 15.0];
+        let at = |t: f64| -> Vec<f64> { (0..6).map(|i| q[i] + v[i] * t + 0.5 * a[i] * t * t).collect() };
+        let mut row = SlipRow::default();
+        let s = contact.gap_row(&q, &v, &mut row);
+        let (rate, acceleration) = (row.dot(&v), row.dot(&a) + row.bias);
+        let h = 1e-4;
+        let (sp, sm) = (contact.gap(&at(h)), contact.gap(&at(-h)));
+        let (rate_fd, acceleration_fd) = ((sp - sm) / (2.0 * h), (sp - 2.0 * s + sm) / (h * h));
+        assert!(
+            (rate - rate_fd).abs() < 1e-7 * (1.0 + rate.abs()),
+            "{what}: rate {rate} vs {rate_fd}"
+        );
+        assert!(
+            (acceleration - acceleration_fd).abs() < 1e-4 * (1.0 + acceleration.abs()),
+            "{what}: acceleration {acceleration} vs {acceleration_fd}"
+        );
+    }
 
     #[test]
     fn a_roller_on_a_profile_has_the_gap_rate_and_acceleration_of_its_gap_differenced() {
-        // The cam (body 0) and the roller's body (body 1) move on q(t) = q + v t + a t²/2 from
-        // a state where the roller is near the profile: the row's rate g·v and its acceleration
-        // g·a + b must be the first and second central differences of the gap along that path
-        // (step 1e-4 s: truncation ~1e-8 of the second difference's scale, round-off 1e-12/h²).
-        let contact = RigidContact {
-            name: "roller".into(),
-            body: BodyRef::Body(BodyId(1)),
-            centre: Vec2::new(0.01, -0.02),
-            radius: 0.02,
-            against: Against::Profile {
-                body: BodyRef::Body(BodyId(0)),
-                profile: Profile::closed_spline(&egg()).unwrap(),
-            },
-            restitution: 0.0,
-            rest_speed: 1e-3,
-        };
+        // The cam (body 0) and the roller's body (body 1), the roller near the profile, at five
+        // cam angles.
+        let contact = on_the_egg(0.02, |profile| Against::Profile {
+            body: BodyRef::Body(BodyId(0)),
+            profile,
+        });
         for (k, angle) in [0.3f64, 1.7, 2.9, 4.4, 5.8].into_iter().enumerate() {
-            let shift = 0.001 * k as f64;
-            let q = [
-                0.002,
-                -0.001,
-                angle,
-                0.01 + 0.12 * (angle + 0.2).cos(),
-                0.02 + 0.12 * (angle + 0.2).sin() + shift,
-                0.4,
-            ];
-            let v = [0.1, -0.2, 7.0, 0.3, -0.5, -2.0];
-            let a = [1.0, 2.0, -30.0, -4.0, 3.0, 15.0];
-            let at = |t: f64| -> Vec<f64> { (0..6).map(|i| q[i] + v[i] * t + 0.5 * a[i] * t * t).collect() };
-            let mut row = SlipRow::default();
-            let s = contact.gap_row(&q, &v, &mut row);
-            let rate = row.dot(&v);
-            let acceleration = row.dot(&a) + row.bias;
-            let h = 1e-4;
-            let (sp, sm) = (contact.gap(&at(h)), contact.gap(&at(-h)));
-            let rate_fd = (sp - sm) / (2.0 * h);
-            let acceleration_fd = (sp - 2.0 * s + sm) / (h * h);
-            assert!(
-                (rate - rate_fd).abs() < 1e-7 * (1.0 + rate.abs()),
-                "rate {rate} vs {rate_fd}"
-            );
-            assert!(
-                (acceleration - acceleration_fd).abs() < 1e-4 * (1.0 + acceleration.abs()),
-                "at {angle}: acceleration {acceleration} vs {acceleration_fd}"
-            );
+            let near = 0.02 + 0.12 * (angle + 0.2).sin() + 0.001 * k as f64;
+            let q = [0.002, -0.001, angle, 0.01 + 0.12 * (angle + 0.2).cos(), near, 0.4];
+            assert_row_is_the_gap_differenced(&contact, q, &format!("roller at {angle}"));
         }
     }
-}
-
-#[cfg(test)]
-mod face_tests {
-    use super::tests_support::egg;
-    use super::*;
-    use dalembert_kinematics::BodyId;
 
     #[test]
     fn a_flat_face_on_a_profile_has_the_gap_rate_and_acceleration_of_its_gap_differenced() {
-        // As for the roller: the face (body 1, through (0.01, −0.02), normal (0.3, −1)/|…|
-        // towards the cam) and the egg (body 0) move on q + v t + a t²/2; the row's rate and
-        // g·a + b are the gap's central differences (same bars and reasons).
+        // The face (body 1, through (0.01, −0.02), normal (0.3, −1)/|…| towards the cam) and the
+        // egg (body 0), at five cam angles.
         let normal = Vec2::new(0.3, -1.0).normalize();
-        let contact = RigidContact {
-            name: "face".into(),
-            body: BodyRef::Body(BodyId(1)),
-            centre: Vec2::new(0.01, -0.02),
-            radius: 0.0,
-            against: Against::ProfileFace {
-                body: BodyRef::Body(BodyId(0)),
-                profile: Profile::closed_spline(&egg()).unwrap(),
-                normal,
-            },
-            restitution: 0.0,
-            rest_speed: 1e-3,
-        };
+        let contact = on_the_egg(0.0, |profile| Against::ProfileFace {
+            body: BodyRef::Body(BodyId(0)),
+            profile,
+            normal,
+        });
         for angle in [0.3f64, 1.7, 2.9, 4.4, 5.8] {
             let q = [0.002, -0.001, angle, 0.03, 0.15, 0.2];
-            let v = [0.1, -0.2, 7.0, 0.3, -0.5, -2.0];
-            let a = [1.0, 2.0, -30.0, -4.0, 3.0, 15.0];
-            let at = |t: f64| -> Vec<f64> { (0..6).map(|i| q[i] + v[i] * t + 0.5 * a[i] * t * t).collect() };
-            let mut row = SlipRow::default();
-            let s = contact.gap_row(&q, &v, &mut row);
-            let (rate, acceleration) = (row.dot(&v), row.dot(&a) + row.bias);
-            let h = 1e-4;
-            let (sp, sm) = (contact.gap(&at(h)), contact.gap(&at(-h)));
-            let (rate_fd, acceleration_fd) = ((sp - sm) / (2.0 * h), (sp - 2.0 * s + sm) / (h * h));
-            assert!(
-                (rate - rate_fd).abs() < 1e-7 * (1.0 + rate.abs()),
-                "rate {rate} vs {rate_fd}"
-            );
-            assert!(
-                (acceleration - acceleration_fd).abs() < 1e-4 * (1.0 + acceleration.abs()),
-                "at {angle}: acceleration {acceleration} vs {acceleration_fd}"
-            );
+            assert_row_is_the_gap_differenced(&contact, q, &format!("face at {angle}"));
         }
     }
 }
