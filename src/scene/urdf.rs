@@ -331,7 +331,7 @@ fn read<'a>(
     }
     if !with_friction.is_empty() {
         notes.push(format!(
-            "joint friction is not modelled yet; the model leaves out that of {}",
+            "constant joint friction is not modelled yet (the joints' friction law is load-dependent); the model leaves out that of {}",
             quoted(&with_friction)
         ));
     }
