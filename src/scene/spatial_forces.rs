@@ -218,6 +218,22 @@ pub(crate) fn force(
         names.body(ctx, n, span, owner)
     };
     let check = |r: Result<(), String>| r.map_err(|m| err(&m));
+    // The keys of a shape on a plane (its own, `radius` or `size`) and of every contact's law.
+    let on_plane = |shape: &'static str| {
+        [
+            "body",
+            "at",
+            shape,
+            "plane",
+            "stiffness",
+            "exponent",
+            "dissipation",
+            "friction",
+            "smoothing_velocity",
+        ]
+    };
+    let law =
+        || contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity).map_err(|m| err(&m));
     let name = d.name.clone();
     Ok(match d.kind.as_str() {
         "force" => {
@@ -298,17 +314,7 @@ pub(crate) fn force(
             }
         }
         "sphere-plane" => {
-            check(d.only(&[
-                "body",
-                "at",
-                "radius",
-                "plane",
-                "stiffness",
-                "exponent",
-                "dissipation",
-                "friction",
-                "smoothing_velocity",
-            ]))?;
+            check(d.only(&on_plane("radius")))?;
             let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
             if plane.body.is_some() {
                 return Err(err(
@@ -322,22 +328,11 @@ pub(crate) fn force(
                 radius,
                 point: plane.point,
                 normal: plane.normal,
-                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
-                    .map_err(|m| err(&m))?,
+                law: law()?,
             }
         }
         "box-plane" => {
-            check(d.only(&[
-                "body",
-                "at",
-                "size",
-                "plane",
-                "stiffness",
-                "exponent",
-                "dissipation",
-                "friction",
-                "smoothing_velocity",
-            ]))?;
+            check(d.only(&on_plane("size")))?;
             let (body, centre, plane) = shape_on_plane(d, names, ctx, span, owner)?;
             let centre = match centre {
                 Some(Points3::One(p)) => p,
@@ -351,22 +346,11 @@ pub(crate) fn force(
                 size: d.size.ok_or_else(|| err("needs 'size = [a, b, c]' (m: its edges along the body's axes)"))?,
                 point: plane.point,
                 normal: plane.normal,
-                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
-                    .map_err(|m| err(&m))?,
+                law: law()?,
             }
         }
         "capsule-plane" => {
-            check(d.only(&[
-                "body",
-                "at",
-                "radius",
-                "plane",
-                "stiffness",
-                "exponent",
-                "dissipation",
-                "friction",
-                "smoothing_velocity",
-            ]))?;
+            check(d.only(&on_plane("radius")))?;
             let (body, ends, plane) = shape_on_plane(d, names, ctx, span, owner)?;
             let Some(Points3::Two(ends)) = ends else {
                 return Err(err("needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (its segment's ends, global)"));
@@ -378,8 +362,7 @@ pub(crate) fn force(
                 radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
                 point: plane.point,
                 normal: plane.normal,
-                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
-                    .map_err(|m| err(&m))?,
+                law: law()?,
             }
         }
         "sphere-sphere" => {
@@ -399,8 +382,7 @@ pub(crate) fn force(
                 bodies,
                 centres,
                 radii,
-                law: contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity)
-                    .map_err(|m| err(&m))?,
+                law: law()?,
             }
         }
         "code" => {
