@@ -230,6 +230,12 @@ pub fn force(name: &str, kind: &str) -> Element {
     Element::named(name).set("type", kind)
 }
 
+/// A coupling named `name` of joint `follower`'s value to joint `leader`'s (spatial scenes):
+/// give its `multiplier` and `offset`, or its `polynomial` (`docs/couplings.md`).
+pub fn coupling(name: &str, leader: &str, follower: &str) -> Element {
+    Element::named(name).set("leader", leader).set("follower", follower)
+}
+
 impl Element {
     fn named(name: &str) -> Self {
         let mut t = Table::new();
@@ -364,6 +370,11 @@ impl ModelBuilder {
     /// Adds a force element ([`force`]).
     pub fn force(self, f: Element) -> Self {
         self.push("forces", f)
+    }
+
+    /// Adds a coupling between joint values ([`coupling`]; spatial scenes).
+    pub fn coupling(self, c: Element) -> Self {
+        self.push("couplings", c)
     }
 
     /// A `[simulation]` key: `end`, `formulation`, `integrator`, `step`, `output_every`,

@@ -34,7 +34,8 @@ pub trait ModelKind: std::fmt::Debug + Send + Sync + Any {
     /// body's position a user gives or reads.
     fn dimension(&self) -> usize;
 
-    /// The names of the joints and drivers, in the order of their reaction and effort columns.
+    /// The names of the joints, drivers and couplings, in the order of their reaction and effort
+    /// columns.
     fn constraint_names(&self) -> Vec<String>;
 
     /// The names of the drivers, in the order of their `<driver>.effort` columns.
@@ -140,7 +141,8 @@ impl Mechanism {
         self.as_system().layout().bodies().len()
     }
 
-    /// The names of the joints and drivers, in the order of their reaction and effort columns.
+    /// The names of the joints, drivers and couplings, in the order of their reaction and effort
+    /// columns.
     pub fn constraint_names(&self) -> Vec<String> {
         self.0.constraint_names()
     }

@@ -41,6 +41,7 @@ impl ModelKind for Model {
     fn constraint_names(&self) -> Vec<String> {
         self.joint_names()
             .chain(self.driver_names())
+            .chain(self.coupling_names())
             .map(String::from)
             .collect()
     }
@@ -118,6 +119,9 @@ impl ColumnWriter for SpatialColumns {
             .flat_map(|j| SPATIAL_JOINT_COLUMNS.iter().map(move |c| format!("{j}.{c}")))
             .collect();
         names.extend(self.model.driver_names().map(|d| format!("{d}.effort")));
+        // Couplings: the torque or force each applies along its follower joint
+        // (`docs/couplings.md`).
+        names.extend(self.model.coupling_names().map(|c| format!("{c}.effort")));
         // Joint limits: the stop's torque or force on the second body along the joint
         // (`docs/limits.md`); joint friction: its torque or force likewise (`docs/friction.md`).
         // Both are in the joint's reaction columns too.
@@ -165,6 +169,7 @@ impl ColumnWriter for SpatialColumns {
         }
         let first = s.lambda.len() - self.drivers;
         row.extend(s.lambda[first..].iter().map(|l| -l));
+        row.extend(self.model.coupling_efforts(s.lambda));
         let frictions = self.model.friction_specs().len();
         if s.friction.len() == frictions {
             row.extend_from_slice(s.friction);

@@ -19,7 +19,7 @@ use super::{build, Scene};
 use crate::animation::{Drawing, Solid, SpatialDrawing};
 use dalembert_spatial::body;
 use dalembert_spatial::euler_parameters::{self, EulerParameters};
-use dalembert_spatial::{Body, BodyRef, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
+use dalembert_spatial::{Body, BodyRef, Coupling, Driver, DriverTarget, Joint, JointKind, ModelBuilder};
 use dalembert_system::{MultibodySystem, SlipRow};
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
@@ -40,6 +40,8 @@ pub(crate) struct SpatialFile {
     pub drivers: Vec<Spanned<DriverDef>>,
     #[serde(default)]
     pub forces: Vec<Spanned<ForceDef>>,
+    #[serde(default)]
+    pub couplings: Vec<Spanned<CouplingDef>>,
     pub simulation: Option<Spanned<SimDef>>,
     pub initial: Option<Spanned<InitialDef>>,
 }
@@ -59,6 +61,8 @@ pub(crate) struct AroundFile {
     pub drivers: Vec<Spanned<DriverDef>>,
     #[serde(default)]
     pub forces: Vec<Spanned<ForceDef>>,
+    #[serde(default)]
+    pub couplings: Vec<Spanned<CouplingDef>>,
     pub simulation: Option<Spanned<SimDef>>,
     pub initial: Option<Spanned<InitialDef>>,
 }
@@ -168,6 +172,19 @@ pub(crate) struct JointDef {
     pub restitution: Option<Spanned<f64>>,
     /// The rebound speed below which the joint rests on a limit (default 1e-3).
     pub rest_speed: Option<Spanned<f64>>,
+}
+
+/// `[[couplings]]`: joint `follower`'s value as `multiplier · leader + offset`, or as the
+/// polynomial `c₀ + c₁ leader + …` (`docs/couplings.md`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CouplingDef {
+    pub name: String,
+    pub leader: Option<String>,
+    pub follower: String,
+    pub multiplier: Option<f64>,
+    pub offset: Option<f64>,
+    pub polynomial: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -558,6 +575,10 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         let function = time_function(&d.function, Some(start), ctx.inputs).map_err(err)?;
         model.driver(Driver::new(&d.name, target, function));
     }
+    let couplings = couplings(&ctx, &file, &mut names, &joint_kinds)?;
+    for c in &couplings {
+        model.coupling(c.clone());
+    }
     // A plane a contact rolls on is drawn as a square of the ground.
     let mut floors = Vec::new();
     let mut rigid = Vec::new();
@@ -664,6 +685,12 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             }
         }
     }
+    let follow = coupling_moves(&couplings, file.initial.as_ref().map(Spanned::get_ref));
+    if !follow.is_empty() {
+        model
+            .move_joints(&mut q, &mut qd, &follow)
+            .map_err(|e| model_err(&ctx, &names, format!("coupling: its follower cannot be placed: {e}")))?;
+    }
     let shapes: Vec<Option<Solid>> = file.bodies.iter().map(|b| solid(b.get_ref())).collect();
     let visuals = file
         .bodies
@@ -715,6 +742,103 @@ fn solid(def: &BodyDef) -> Option<Solid> {
         }),
         _ => None,
     }
+}
+
+/// The couplings of `[[couplings]]`, checked against the joints and drivers (`joint_kinds`: the
+/// joints' names).
+fn couplings(
+    ctx: &Ctx<'_>,
+    file: &SpatialFile,
+    names: &mut Names<BodyRef>,
+    joint_kinds: &HashMap<String, JointKind>,
+) -> Result<Vec<Coupling>, SceneError> {
+    let mut out = Vec::with_capacity(file.couplings.len());
+    for sc in &file.couplings {
+        let span = sc.span();
+        let d = sc.get_ref();
+        names.unique(ctx, &d.name, &span, "coupling")?;
+        let err = |m: String| ctx.err(Some(span.clone()), format!("coupling '{}': {m}", d.name));
+        let polynomial =
+            match (&d.polynomial, d.multiplier, d.offset) {
+                (Some(p), None, None) => p.clone(),
+                (Some(_), _, _) => return Err(err("give 'polynomial' or 'multiplier' and 'offset', not both".into())),
+                (None, _, _) if d.leader.is_none() => return Err(err(
+                    "needs 'leader', the joint it follows (or a 'polynomial' of one coefficient, the value it holds)"
+                        .into(),
+                )),
+                (None, m, o) => vec![o.unwrap_or(0.0), m.unwrap_or(1.0)],
+            };
+        for j in d.leader.iter().chain([&d.follower]) {
+            if !joint_kinds.contains_key(j) {
+                return Err(err(format!("unknown joint '{j}'")));
+            }
+        }
+        if let Some(driver) = file
+            .drivers
+            .iter()
+            .find(|x| x.get_ref().joint.as_ref() == Some(&d.follower))
+        {
+            return Err(err(format!(
+                "joint '{}' is driven by '{}' too: a joint follows one rule",
+                d.follower,
+                driver.get_ref().name
+            )));
+        }
+        if let Some(other) = out.iter().find(|c: &&Coupling| c.follower == d.follower) {
+            return Err(err(format!(
+                "joint '{}' follows coupling '{}' already: a joint follows one rule",
+                d.follower, other.name
+            )));
+        }
+        out.push(Coupling {
+            name: d.name.clone(),
+            leader: d.leader.clone(),
+            follower: d.follower.clone(),
+            polynomial,
+        });
+    }
+    Ok(out)
+}
+
+/// The moves that put each coupling's follower where its leader's start (`[initial]`, or the
+/// file's configuration) places it, unless `[initial]` places the follower itself: the follower
+/// value `p(x)` and rate `p′(x) ẋ` (a follower's value is relative to its own joint, so moving
+/// other joints first leaves it unchanged).
+fn coupling_moves(
+    couplings: &[Coupling],
+    initial: Option<&InitialDef>,
+) -> Vec<dalembert_spatial::joint_values::JointMove> {
+    let given = |j: &str| initial.is_some_and(|i| i.joints.contains_key(j) || i.rates.contains_key(j));
+    let start = |j: &str| {
+        initial.map_or((0.0, 0.0), |i| {
+            (
+                i.joints.get(j).copied().unwrap_or(0.0),
+                i.rates.get(j).copied().unwrap_or(0.0),
+            )
+        })
+    };
+    let mut moves = Vec::new();
+    for c in couplings.iter().filter(|c| !given(&c.follower)) {
+        let (x, rate) = c.leader.as_deref().map_or((0.0, 0.0), start);
+        let (mut value, mut slope) = (0.0, 0.0);
+        for a in c.polynomial.iter().rev() {
+            slope = slope * x + value;
+            value = value * x + a;
+        }
+        let (value, rate) = if c.leader.is_some() {
+            (value, slope * rate)
+        } else {
+            (c.polynomial[0], 0.0)
+        };
+        if value != 0.0 || rate != 0.0 {
+            moves.push(dalembert_spatial::joint_values::JointMove {
+                joint: c.follower.clone(),
+                value,
+                rate,
+            });
+        }
+    }
+    moves
 }
 
 /// The joint moves `[initial]` asks for; a driven joint is refused (its driver sets its motion).

@@ -439,12 +439,14 @@ pub(crate) fn scene_of(
                         scene.extend(keys.into_iter().filter(|(k, _)| k != "urdf" && k != "floating_base"));
                     }
                 }
-                ("bodies" | "joints" | "drivers" | "forces", toml::Value::Array(more)) => match tables.get_mut(&key) {
-                    Some(toml::Value::Array(list)) => list.extend(more),
-                    _ => {
-                        tables.insert(key, toml::Value::Array(more));
+                ("bodies" | "joints" | "drivers" | "forces" | "couplings", toml::Value::Array(more)) => {
+                    match tables.get_mut(&key) {
+                        Some(toml::Value::Array(list)) => list.extend(more),
+                        _ => {
+                            tables.insert(key, toml::Value::Array(more));
+                        }
                     }
-                },
+                }
                 (_, value) => {
                     tables.insert(key, value);
                 }

@@ -78,6 +78,7 @@ const NAMED: &[(&str, &str)] = &[
     ("joints", "joint"),
     ("drivers", "driver"),
     ("forces", "force"),
+    ("couplings", "coupling"),
 ];
 
 /// The tables of a scene file.

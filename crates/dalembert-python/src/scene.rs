@@ -160,7 +160,8 @@ impl PyScene {
         self.inner.model.body_names()
     }
 
-    /// Names of the joints and drivers, in the order of their reaction columns.
+    /// Names of the joints, drivers and couplings, in the order of their reaction and effort
+    /// columns.
     #[getter]
     fn constraints(&self) -> Vec<String> {
         self.inner.model.constraint_names()

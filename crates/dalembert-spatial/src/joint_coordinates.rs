@@ -67,6 +67,12 @@ impl Model {
                 "rigid contact is solved in absolute coordinates only",
             ));
         }
+        if let Some(c) = self.coupling_names().next() {
+            return Err(refuse(
+                format!("coupling '{c}'"),
+                "is a constraint between joints, solved in absolute coordinates only",
+            ));
+        }
         if let Some(f) = self.force_names().next() {
             return Err(refuse(
                 format!("force '{f}'"),

@@ -28,6 +28,7 @@
 //! ```
 
 pub mod body;
+pub mod couplings;
 pub mod drivers;
 pub mod euler_parameters;
 pub mod forces;
@@ -42,6 +43,7 @@ pub mod model;
 pub mod reactions;
 
 pub use body::Body;
+pub use couplings::Coupling;
 pub use drivers::{Driver, DriverTarget};
 pub use forces::Force;
 pub use joint_coordinates::JointCoordinates;

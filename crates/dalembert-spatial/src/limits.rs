@@ -77,39 +77,23 @@ impl Model {
     /// formulas above), and the value.
     pub(crate) fn joint_row_into(&self, joint: usize, q: &[f64], v: &[f64], row: &mut SlipRow) -> f64 {
         let j = &self.joints()[joint];
-        let fi = self.frame(j.body_i, q, v);
-        let fj = self.frame(j.body_j, q, v);
-        let axis = |k: usize| -> Vector3<f64> { fi.a * j.axes_i.column(k) };
-        let zi = axis(2);
-        let zi_dot = fi.w.cross(&zi);
+        let (fi, fj) = (self.frame(j.body_i, q, v), self.frame(j.body_j, q, v));
+        let (r, _) = crate::couplings::joint_value_row(j, &fi, &fj);
         row.clear();
-        let mut push = |body: Option<usize>, offset: usize, g: Vector3<f64>| {
-            if let Some(b) = body {
+        for (part, offset) in [(0, 0), (1, 3)] {
+            for (body, f, g) in [(j.body_j, &fj, r.j[part]), (j.body_i, &fi, r.i[part])] {
+                let Some(b) = body else { continue };
+                // ∂/∂ω' = (∂/∂ω) A.
+                let g = if part == 1 { f.a.transpose() * g } else { g };
                 for (c, x) in g.iter().enumerate() {
                     if *x != 0.0 {
                         row.push(NV * b + offset + c, *x);
                     }
                 }
             }
-        };
-        if j.kind == Some(JointKind::Revolute) {
-            push(j.body_j, 3, fj.a.transpose() * zi);
-            push(j.body_i, 3, -(fi.a.transpose() * zi));
-            row.bias = zi_dot.dot(&(fj.w - fi.w));
-            let xj = fj.a * j.axes_j.column(0);
-            xj.dot(&axis(1)).atan2(xj.dot(&axis(0)))
-        } else {
-            let (si, sj) = (fi.a * j.point_i, fj.a * j.point_j);
-            let d = fj.r + sj - fi.r - si;
-            push(j.body_j, 0, zi);
-            push(j.body_i, 0, -zi);
-            push(j.body_j, 3, fj.a.transpose() * sj.cross(&zi));
-            push(j.body_i, 3, fi.a.transpose() * zi.cross(&(d + si)));
-            let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
-            let centripetal = fj.centripetal(&sj) - fi.centripetal(&si);
-            row.bias = fi.w.cross(&zi_dot).dot(&d) + 2.0 * zi_dot.dot(&d_dot) + zi.dot(&centripetal);
-            zi.dot(&d)
         }
+        row.bias = -r.gamma;
+        r.c
     }
 }
 

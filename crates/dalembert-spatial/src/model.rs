@@ -14,6 +14,7 @@
 //! `C_q` is the Jacobian with respect to `v` (columns `ṙ`, `ω'`); a correction `Δ = (Δr, Δθ')`
 //! moves the positions by `r + Δr`, `p ⊗ exp(Δθ'/2)`.
 
+use crate::couplings::{Coupling, CouplingData};
 use crate::euler_parameters::{self, rotate_body};
 use crate::forces::ForceData;
 use crate::frame::{self, Frame, NQ, NV, POSITION_LABELS, VELOCITY_LABELS};
@@ -34,6 +35,7 @@ pub struct ModelBuilder {
     joints: Vec<Joint>,
     drivers: Vec<Driver>,
     forces: Vec<Force>,
+    couplings: Vec<Coupling>,
 }
 
 impl ModelBuilder {
@@ -66,6 +68,12 @@ impl ModelBuilder {
     /// Adds a force element.
     pub fn force(&mut self, force: Force) -> &mut Self {
         self.forces.push(force);
+        self
+    }
+
+    /// Adds a coupling between two joints' values (`docs/couplings.md`).
+    pub fn coupling(&mut self, coupling: Coupling) -> &mut Self {
+        self.couplings.push(coupling);
         self
     }
 
@@ -107,6 +115,11 @@ impl ModelBuilder {
             let (bi, bj) = (index(&element, j.body_i)?, index(&element, j.body_j)?);
             joints.push(JointData::new(j, bi, bj, &frame_of(bi), &frame_of(bj))?);
         }
+        let couplings = self
+            .couplings
+            .iter()
+            .map(|c| CouplingData::new(c, &joints))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut drivers = Vec::with_capacity(self.drivers.len());
         for d in &self.drivers {
             let element = format!("driver '{}'", d.name);
@@ -127,9 +140,10 @@ impl ModelBuilder {
                 .iter()
                 .map(|b| (b.name.as_str(), POSITION_LABELS, VELOCITY_LABELS)),
         );
+        // Rows: the joints', the couplings', the drivers'.
         let mut segments = Vec::new();
         let mut equations = Vec::new();
-        for (ji, j) in joints.iter().chain(&drivers).enumerate() {
+        fn rows_of(ji: usize, j: &JointData, equations: &mut Vec<(usize, usize)>, segments: &mut Vec<(usize, usize)>) {
             for k in 0..j.num_equations() {
                 let row = equations.len();
                 equations.push((ji, k));
@@ -137,11 +151,23 @@ impl ModelBuilder {
                 segments.extend(j.body_j.map(|b| (row, b)));
             }
         }
+        for (ji, j) in joints.iter().enumerate() {
+            rows_of(ji, j, &mut equations, &mut segments);
+        }
+        for (k, c) in couplings.iter().enumerate() {
+            let row = equations.len();
+            equations.push((joints.len() + k, 0));
+            segments.extend(c.bodies.iter().map(|&b| (row, b)));
+        }
+        for (d, j) in drivers.iter().enumerate() {
+            rows_of(joints.len() + couplings.len() + d, j, &mut equations, &mut segments);
+        }
         let pattern = ConstraintPattern::from_segments(equations.len(), &layout, segments);
         Ok(Model {
             gravity: Vector3::from(self.gravity),
             bodies: self.bodies,
             joints,
+            couplings,
             drivers,
             forces,
             force_names: self.forces.iter().map(|f| f.name().to_string()).collect(),
@@ -163,14 +189,17 @@ pub struct Model {
     gravity: Vector3<f64>,
     bodies: Vec<Body>,
     joints: Vec<JointData>,
-    /// Drivers, as constraints after the joints (their rows follow the joints' rows).
+    /// Couplings between joint values (their rows follow the joints').
+    couplings: Vec<CouplingData>,
+    /// Drivers, as constraints after the joints (their rows follow the couplings' rows).
     drivers: Vec<JointData>,
     forces: Vec<ForceData>,
     /// The force elements' names (messages).
     force_names: Vec<String>,
     layout: Layout,
     pattern: ConstraintPattern,
-    /// `(joint or driver, equation within it)` of every row (drivers numbered after the joints).
+    /// `(joint, coupling or driver, equation within it)` of every row (couplings numbered after
+    /// the joints, drivers after the couplings).
     equations: Vec<(usize, usize)>,
     /// Joint limits (`docs/limits.md`), and the index of each one's joint.
     pub(crate) limits: Vec<dalembert_system::JointLimit>,
@@ -232,9 +261,27 @@ impl Model {
         lambda[first..].iter().map(|l| -l).collect()
     }
 
-    /// Joints then drivers: every constraint in row order.
+    /// Joints then drivers (the couplings' rows lie between them).
     fn constraint_data(&self) -> impl Iterator<Item = &JointData> {
         self.joints.iter().chain(&self.drivers)
+    }
+
+    /// Names of the couplings, in order (the order of [`Model::coupling_efforts`]).
+    pub fn coupling_names(&self) -> impl Iterator<Item = &str> {
+        self.couplings.iter().map(|c| c.name.as_str())
+    }
+
+    /// The index of the first coupling's row (the joints' rows come before it).
+    fn first_coupling_row(&self) -> usize {
+        self.joints.iter().map(JointData::num_equations).sum()
+    }
+
+    /// Each coupling's effort `−λ`: the torque about (or force along) its follower joint's axis
+    /// on the follower's second body, from the multipliers of all equations.
+    /// Allocates nothing.
+    pub fn coupling_efforts<'a>(&self, lambda: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+        let first = self.first_coupling_row();
+        lambda[first..first + self.couplings.len()].iter().map(|l| -l)
     }
 
     /// Names of the force elements, in order.
@@ -300,15 +347,19 @@ impl ConstraintSet for Model {
 
     fn equation(&self, row: usize) -> EquationRef {
         let (ji, k) = self.equations[row];
-        let j = match ji.checked_sub(self.joints.len()) {
-            None => &self.joints[ji],
-            Some(d) => &self.drivers[d],
+        let (name, label) = match ji.checked_sub(self.joints.len()) {
+            None => (&self.joints[ji].name, self.joints[ji].labels[k]),
+            Some(c) if c < self.couplings.len() => (&self.couplings[c].name, "coupling"),
+            Some(c) => {
+                let d = &self.drivers[c - self.couplings.len()];
+                (&d.name, d.labels[k])
+            }
         };
         EquationRef {
             constraint: ji,
-            name: j.name.clone(),
+            name: name.clone(),
             equation: k,
-            label: j.labels[k],
+            label,
         }
     }
 
@@ -339,27 +390,52 @@ impl ConstraintSet for Model {
             Some(b) if cached => load_frame(&scratch[FRAME_LEN * b..FRAME_LEN * (b + 1)]),
             _ => self.frame(b, q, v),
         };
-        for j in self.constraint_data() {
+        let mut joint_rows = |j: &JointData, row: &mut usize, entry: &mut usize, out: &mut ConstraintValues| {
             let (fi, fj) = (frame(j.body_i), frame(j.body_j));
             for prim in &j.primitives {
                 let n = prim.len();
                 prim.evaluate(t, &fi, &fj, &mut rows[..n]);
                 for r in &rows[..n] {
-                    out.c[row] = r.c;
-                    out.c_t[row] = r.c_t;
-                    out.gamma[row] = r.gamma;
+                    out.c[*row] = r.c;
+                    out.c_t[*row] = r.c_t;
+                    out.gamma[*row] = r.gamma;
                     for (body, frame, [lin, ang]) in [(j.body_i, &fi, r.i), (j.body_j, &fj, r.j)] {
                         if body.is_some() {
                             // ∂/∂ω' = (∂/∂ω) A.
                             let ang_body = frame.a.transpose() * ang;
-                            out.jacobian[entry..entry + 3].copy_from_slice(lin.as_slice());
-                            out.jacobian[entry + 3..entry + 6].copy_from_slice(ang_body.as_slice());
-                            entry += NV;
+                            out.jacobian[*entry..*entry + 3].copy_from_slice(lin.as_slice());
+                            out.jacobian[*entry + 3..*entry + 6].copy_from_slice(ang_body.as_slice());
+                            *entry += NV;
                         }
                     }
-                    row += 1;
+                    *row += 1;
                 }
             }
+        };
+        for j in &self.joints {
+            joint_rows(j, &mut row, &mut entry, out);
+        }
+        for c in &self.couplings {
+            let (value, gamma, ends) = c.row(&self.joints, &frame);
+            out.c[row] = value;
+            out.c_t[row] = 0.0;
+            out.gamma[row] = gamma;
+            // The ends on each of the row's bodies summed (two joints may share a body).
+            for &b in &c.bodies {
+                let (mut lin, mut ang) = (Vector3::zeros(), Vector3::zeros());
+                for (_, [l, a]) in ends.iter().filter(|(e, _)| *e == Some(b)) {
+                    lin += l;
+                    ang += a;
+                }
+                let ang_body = frame(Some(b)).a.transpose() * ang;
+                out.jacobian[entry..entry + 3].copy_from_slice(lin.as_slice());
+                out.jacobian[entry + 3..entry + 6].copy_from_slice(ang_body.as_slice());
+                entry += NV;
+            }
+            row += 1;
+        }
+        for j in &self.drivers {
+            joint_rows(j, &mut row, &mut entry, out);
         }
         out.scratch = scratch;
     }
@@ -437,6 +513,10 @@ impl MultibodySystem for Model {
                     out.add_v(NV * i + 3 + r, NV * i + 3 + c, g[(r, c)]);
                 }
             }
+        }
+        if !self.couplings.is_empty() {
+            // A coupling's second derivatives are not written out: the residual is differenced.
+            return false;
         }
         let mut row = 0;
         for j in self.constraint_data() {
