@@ -898,3 +898,70 @@ fn a_rigid_ball_strikes_a_plate_moving_on_its_guide_by_newtons_law() {
         }
     }
 }
+
+/// Rod `upper` (1 m, 1 kg) pinned horizontal at the origin and resting on a stop there (held by
+/// the load), rod `lower` (1 m, 1 kg) hanging from its tip and swung clockwise at 3 rad/s onto
+/// the elbow's stop at −0.5 rad, `e = 0.5`.
+fn elbow_striking_while_the_shoulder_rests(formulation: &str, integrator: &str) -> Scene {
+    let text = format!(
+        "[scene]\ngravity = [0.0, -9.81]\n\
+         [[bodies]]\nname = \"upper\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [0.5, 0.0]\n\
+         [[bodies]]\nname = \"lower\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [1.0, -0.5]\n\
+         angle = -1.5707963267948966\nangular_velocity = -3.0\nvelocity = [-1.5, 0.0]\n\
+         [[joints]]\nname = \"shoulder\"\ntype = \"revolute\"\nbodies = [\"ground\", \"upper\"]\nat = [0.0, 0.0]\n\
+         limits = [0.0, 1.0]\n\
+         [[joints]]\nname = \"elbow\"\ntype = \"revolute\"\nbodies = [\"upper\", \"lower\"]\nat = [1.0, 0.0]\n\
+         limits = [-0.5, 0.5]\nrestitution = 0.5\n\
+         [simulation]\nend = 0.45\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+         step = 1e-3\nrtol = 1e-11\natol = 1e-11\noutput_every = 0.005\n"
+    );
+    Scene::from_toml(&text, "elbow").unwrap()
+}
+
+#[test]
+fn a_stop_that_holds_keeps_its_joint_through_another_joints_impact() {
+    // The shoulder's stop holds the upper rod through the elbow's impact (its impulse pushes:
+    // the elbow stop's reaction turns the upper rod into it by more than the pin's lifts it), so
+    // the lower rod moves as a compound pendulum on a fixed pivot: it reaches the stop with
+    // ½ J ω⁻² = ½ J ω₀² − m g (L/2)(1 − cos 0.5) and leaves with ω⁺ = −e ω⁻, so the impact takes
+    // ½ J (1 − e²) ω⁻² (J = m L²/3 about the elbow). The shoulder stays on its stop (1e-12 rad)
+    // and the energy after the impact is the closed form's (1e-8 J, dopri5 at 1e-11; RK4 at
+    // 1 ms: 1e-6 J, its error over the swing). An impulse found with the shoulder free would
+    // turn the upper rod into its stop and take another share of the energy.
+    let (j, m, l, g, e) = (1.0 / 3.0, 1.0, 1.0, 9.81, 0.5);
+    let w_minus2 = 9.0 - 2.0 * m * g * (l / 2.0) * (1.0 - 0.5f64.cos()) / j;
+    let loss = 0.5 * j * (1.0 - e * e) * w_minus2;
+    for formulation in FORMULATIONS {
+        for (integrator, bar) in [("dopri5", 1e-8), ("rk4", 1e-6)] {
+            let rec = elbow_striking_while_the_shoulder_rests(formulation, integrator).record(&AtomicBool::new(false));
+            let impacts = rec.outcome.unwrap().events;
+            assert!(
+                impacts >= 1,
+                "{formulation} {integrator}: the elbow never reached its stop"
+            );
+            let table = rec.table;
+            let (shoulder, elbow, energy) = (
+                column(&table, "shoulder.q"),
+                column(&table, "elbow.q"),
+                column(&table, "energy"),
+            );
+            let worst = shoulder.iter().fold(0.0f64, |a, q| a.max(q.abs()));
+            assert!(
+                worst < 1e-12,
+                "{formulation} {integrator}: the shoulder left its stop by {worst:e} rad"
+            );
+            // The last row is after the one impact: the rod has rebounded off the stop.
+            let last = energy.len() - 1;
+            assert!(
+                impacts == 1 && elbow[last] > -0.5 + 1e-3,
+                "{formulation} {integrator}: {impacts} impacts"
+            );
+            let expected = energy[0] - loss;
+            assert!(
+                (energy[last] - expected).abs() < bar,
+                "{formulation} {integrator}: energy after the impact {} J, closed form {expected} J",
+                energy[last]
+            );
+        }
+    }
+}

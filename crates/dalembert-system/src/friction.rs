@@ -207,7 +207,16 @@ pub struct FrictionWork {
     holding: Vec<bool>,
     /// The slip direction of each element in the last iteration (0 where held).
     direction: Vec<f64>,
+    /// The pull a held limit may take and stay held (N or N·m): [`RELEASE_SHARE`] of the
+    /// evaluation's largest force, so that a stop whose force is zero to round-off (a gripper's
+    /// two fingers pushed alike) is not let go and struck again at every step.
+    pub adhesion: f64,
 }
+
+/// The share of an evaluation's largest multiplier or element force that a held limit may pull
+/// with and stay held (`docs/limits.md`, (L2)): far above the round-off of a force that is zero
+/// (1e-15 of the largest), far below any force that moves a joint measurably.
+pub const RELEASE_SHARE: f64 = 1e-10;
 
 impl FrictionWork {
     /// Storage for `k` elements and `m` multipliers.
@@ -220,6 +229,7 @@ impl FrictionWork {
             lambda: vec![0.0; m],
             holding: vec![false; k],
             direction: vec![0.0; k],
+            adhesion: 0.0,
         }
     }
 }
@@ -334,6 +344,11 @@ pub fn solve_friction(
         }
     }
     work.holding.iter_mut().for_each(|h| *h = false);
+    let largest = lambda
+        .iter()
+        .chain(terms.iter().map(|t| &t.force))
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    work.adhesion = RELEASE_SHARE * largest;
     for iteration in 0..MAX_ITERATIONS {
         // λ(F) and the residuals and Newton matrix at F.
         work.lambda.copy_from_slice(lambda);
@@ -361,7 +376,7 @@ pub fn solve_friction(
             let law = match term.mode {
                 Mode::Free => Law::Zero,
                 Mode::Held(sign) => {
-                    if sign * hold >= 0.0 && !stays_loose {
+                    if sign * hold >= -work.adhesion && !stays_loose {
                         Law::Hold
                     } else {
                         Law::Zero
@@ -421,9 +436,19 @@ pub fn solve_friction(
             }
         }
         if !solve_dense(&mut work.jacobian, &mut work.residual, k_len) {
-            return Err(all(
-                "the friction and limit forces of these joints are not determined (their joints move together)".into(),
-            ));
+            let what = "the friction and limit forces of these joints are not determined (their joints move together)";
+            // Name the elements that hold (a stop or a sticking joint): theirs are the forces in
+            // question; when only stops hold, say so.
+            let held: Vec<usize> = (0..k_len).filter(|&k| work.holding[k]).collect();
+            if !held.is_empty() && held.iter().all(|&k| k >= frictions.len()) {
+                let names: Vec<&str> = held.iter().map(|&k| name(k)).collect();
+                return Err(DynamicsError::Limit {
+                    time: t,
+                    element: format!("joints '{}'", names.join("', '")),
+                    what: "their forces are not determined (their joints move together, as a coupling or a loop makes them)".into(),
+                });
+            }
+            return Err(all(what.into()));
         }
         let mut step = 0.0f64;
         for (term, d) in terms.iter_mut().zip(&work.residual) {
@@ -473,7 +498,7 @@ enum Law {
 
 /// Solves `A x = b` in place (`A` row-major `n × n`, overwritten by its LU factors; `b` by `x`)
 /// by Gaussian elimination with partial pivoting. False when `A` is singular.
-fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
+pub(crate) fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
     let largest = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     for c in 0..n {
         let p = (c..n)

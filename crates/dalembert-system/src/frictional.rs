@@ -4,6 +4,7 @@
 //! [`crate::friction`] and the impact law of [`crate::limit`] on top. One code for every
 //! formulation.
 
+use crate::friction::{solve_dense, RELEASE_SHARE};
 use crate::friction::{solve_friction, FrictionTerms, FrictionWork, Mode};
 use crate::limit::{impact_impulse, impact_loss, unwrap_angle, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
@@ -37,6 +38,12 @@ pub struct Frictional {
     /// True when an evaluation past a free limit's bound is an error
     /// ([`Frictional::refusing_impacts`]).
     refuse_impacts: bool,
+    /// An impact's limits (the impacting one first, then the held ones), their `G` and its
+    /// factorization's work copy, and their impulses ([`Frictional::solve_impulses`]).
+    impact_set: Vec<usize>,
+    impact_g: Vec<f64>,
+    impact_lu: Vec<f64>,
+    impact_p: Vec<f64>,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -85,6 +92,10 @@ impl Frictional {
             impact_loss: 0.0,
             coordinates: vec![0.0; count - frictions],
             refuse_impacts: false,
+            impact_set: Vec::with_capacity(count),
+            impact_g: vec![0.0; count * count],
+            impact_lu: vec![0.0; count * count],
+            impact_p: vec![0.0; count],
         })
     }
 
@@ -151,39 +162,110 @@ impl Frictional {
     /// An impact of limit `k` (its index among the elements) at `(t, q, v)`, by (L3) of
     /// `docs/limits.md`: `v` changes by the impulse along the limit's row, and the joint is held
     /// at the bound when its rebound is below its rest speed (its rate then set to zero) and
-    /// free otherwise. Nothing happens where the joint moves away from its nearer bound.
+    /// free otherwise. The limits held at their bounds keep their joints there through the
+    /// impact, each by an impulse of its own that pushes (L5): the impulses solve
+    /// `G P = w⁺ − w⁻` with `G_ab = g_a·A_b` over the impacting limit and the held ones, and a
+    /// held limit whose impulse would pull lets go. Nothing happens where the joint moves away
+    /// from its nearer bound.
     fn impact(&mut self, k: usize, t: f64, q: &[f64], v: &mut [f64]) -> Result<bool, DynamicsError> {
         let s = self.fill_row(k, t, q, v);
         let limit = &self.inner.system().limits()[k - self.frictions];
-        let (sign, rest_speed) = (limit.nearer_bound(s), limit.rest_speed);
+        let (sign, rest_speed, restitution) = (limit.nearer_bound(s), limit.rest_speed, limit.restitution);
         let before = self.terms[k].row.dot(v);
         if sign * before >= 0.0 {
             return Ok(false);
         }
         let mut qdd = std::mem::take(&mut self.event_qdd);
         let mut lambda = std::mem::take(&mut self.event_lambda);
-        let result = self
-            .inner
-            .accelerations(t, q, v, None, &mut qdd, &mut lambda)
-            .and_then(|()| self.response(k, (t, q, v), None, (&qdd, &lambda)));
+        let mut result = self.inner.accelerations(t, q, v, None, &mut qdd, &mut lambda);
+        // The impacting limit first, then the held ones.
+        self.impact_set.clear();
+        self.impact_set.push(k);
+        for j in self.frictions..self.terms.len() {
+            if j != k && matches!(self.terms[j].mode, Mode::Held(_)) {
+                self.impact_set.push(j);
+            }
+        }
+        for a in 0..self.impact_set.len() {
+            let j = self.impact_set[a];
+            if j != k {
+                self.fill_row(j, t, q, v);
+            }
+            result = result.and_then(|()| self.response(j, (t, q, v), None, (&qdd, &lambda)));
+        }
         self.event_qdd = qdd;
         self.event_lambda = lambda;
         result?;
-        let term = &mut self.terms[k];
-        let response = term.row.dot(&term.dv);
+        let term = &self.terms[k];
         let limit = &self.inner.system().limits()[k - self.frictions];
-        let mut impulse = impact_impulse(limit, before, response, t)?;
-        let mut after = before + response * impulse;
-        let held = after.abs() < rest_speed;
-        if held {
-            // The rebound is too small to leave: the joint rests on its bound, its rate zero.
-            impulse -= after / response;
-            after = 0.0;
+        // Alone, (L3) in closed form (and its check that the impulse moves the joint).
+        impact_impulse(limit, before, term.row.dot(&term.dv), t)?;
+        // The rebound too small to leave: the joint rests on its bound, its rate zero.
+        let held = restitution * before.abs() < rest_speed;
+        let target = if held { 0.0 } else { -restitution * before };
+        loop {
+            self.solve_impulses(target, v, t)?;
+            // A held limit whose impulse would pull lets go, and the impulses are found again;
+            // a pull at round-off of the largest impulse does not count ((L2)'s adhesion).
+            let n = self.impact_set.len();
+            let largest = self.impact_p[..n].iter().fold(0.0f64, |m, p| m.max(p.abs()));
+            let pulling = (1..n).find(|&a| match self.terms[self.impact_set[a]].mode {
+                Mode::Held(sigma) => sigma * self.impact_p[a] < -RELEASE_SHARE * largest,
+                _ => false,
+            });
+            match pulling {
+                Some(a) => {
+                    let j = self.impact_set.remove(a);
+                    self.terms[j].mode = Mode::Free;
+                }
+                None => break,
+            }
         }
-        v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
-        self.impact_loss += impact_loss(impulse, before, after);
-        term.mode = if held { Mode::Held(sign) } else { Mode::Free };
+        // The kinetic energy the impulses take, −Σ P (w⁻ + w⁺) / 2 with w⁺ = w⁻ + G P, goes to
+        // the balance; then they are applied.
+        let n = self.impact_set.len();
+        for a in 0..n {
+            let w_before = self.terms[self.impact_set[a]].row.dot(v);
+            let change: f64 = (0..n).map(|b| self.impact_g[a * n + b] * self.impact_p[b]).sum();
+            self.impact_loss += impact_loss(self.impact_p[a], w_before, w_before + change);
+        }
+        for a in 0..n {
+            let (term, impulse) = (&self.terms[self.impact_set[a]], self.impact_p[a]);
+            v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
+        }
+        self.terms[k].mode = if held { Mode::Held(sign) } else { Mode::Free };
         Ok(true)
+    }
+
+    /// The impulses `P` over `impact_set` (rows and responses filled) that take the first
+    /// limit's rate to `target` and keep each other one's at zero: `G P = w⁺ − w⁻` with
+    /// `G_ab = g_a·A_b` (kept in `impact_g`), into `impact_p`.
+    fn solve_impulses(&mut self, target: f64, v: &[f64], t: f64) -> Result<(), DynamicsError> {
+        let n = self.impact_set.len();
+        for a in 0..n {
+            let row = &self.terms[self.impact_set[a]].row;
+            for b in 0..n {
+                self.impact_g[a * n + b] = row.dot(&self.terms[self.impact_set[b]].dv);
+            }
+            let goal = if a == 0 { target } else { 0.0 };
+            self.impact_p[a] = goal - row.dot(v);
+        }
+        self.impact_lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
+        if solve_dense(&mut self.impact_lu[..n * n], &mut self.impact_p[..n], n) {
+            return Ok(());
+        }
+        let system = self.inner.system();
+        let names: Vec<&str> = self
+            .impact_set
+            .iter()
+            .map(|&j| system.limits()[j - self.frictions].name.as_str())
+            .collect();
+        Err(DynamicsError::Limit {
+            time: t,
+            element: format!("joints '{}'", names.join("', '")),
+            what: "the impulses of an impact with these joints held are not determined (their joints move together)"
+                .into(),
+        })
     }
 }
 
@@ -347,7 +429,8 @@ impl Formulation for Frictional {
             let term = &mut self.terms[first + k];
             let Some(slot) = out.get_mut(first + k) else { break };
             match term.mode {
-                Mode::Held(sign) => *slot = sign * term.hold,
+                // Its force, less the pull it may take and stay held.
+                Mode::Held(sign) => *slot = sign * term.hold + self.work.adhesion,
                 _ => {
                     let raw = system.limit_row(k, t, q, v, &mut term.row);
                     *slot = limit.free_event(follow(limit, &mut self.coordinates[k], raw));
