@@ -14,8 +14,11 @@
 //! - The model loads at rest with every joint at 0 (the file's configuration) under gravity
 //!   `(0, 0, −9.81)`.
 //!
+//! - A `<mimic>` joint's value is `multiplier` times its leader's plus `offset`: a coupling
+//!   named `<joint>-mimic` (`docs/couplings.md`), its effort the torque or force it takes.
+//!
 //! What the reader cannot model yet is refused in one line naming the element and its line: a
-//! `mimic` coupling, a `planar` joint. Joint friction is left out with a note. `<visual>`
+//! `planar` joint. Joint friction is left out with a note. `<visual>`
 //! geometries (box, cylinder, sphere, mesh) are kept for the 3D viewer only; `<collision>` is
 //! skipped (nothing collides yet), as are the elements that carry no dynamics (`material`,
 //! `gazebo`, `transmission`, `ros2_control`).
@@ -25,6 +28,7 @@ use super::tree::{
 };
 use super::xml::{self, Source};
 use super::{Scene, SceneError};
+use crate::builder::coupling;
 use nalgebra::{Matrix3, Rotation3};
 use roxmltree::Node;
 use std::collections::HashMap;
@@ -223,6 +227,8 @@ fn read<'a>(
     let mut joints: Vec<TreeJoint> = Vec::new();
     let mut notes = Vec::new();
     let mut with_friction = Vec::new();
+    // (follower, leader as the file names it, multiplier, offset, the <mimic> element)
+    let mut mimics = Vec::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
     for node in robot.children().filter(|c| c.has_tag_name("joint")) {
         let file_name = src.required(node, "name")?;
@@ -247,7 +253,16 @@ fn read<'a>(
         );
         let kind = joint_kind(src, node)?;
         if let Some(m) = src.child(node, "mimic")? {
-            return Err(src.err(m, format!("{here}: <mimic> couplings are not supported yet")));
+            if !matches!(kind, Kind::Revolute | Kind::Prismatic) {
+                return Err(src.err(
+                    m,
+                    format!("{here}: <mimic> is for revolute, continuous and prismatic joints"),
+                ));
+            }
+            let leader = src.required(m, "joint")?.to_string();
+            let multiplier = src.number(m, "multiplier", Some(1.0))?;
+            let offset = src.number(m, "offset", Some(0.0))?;
+            mimics.push((joint_name.clone(), leader, multiplier, offset, m));
         }
         let link_of = |tag: &str| -> Result<usize, SceneError> {
             let e = src
@@ -335,8 +350,45 @@ fn read<'a>(
             quoted(&with_friction)
         ));
     }
+    // A mimic joint's value is the multiplier times its leader's plus the offset: a coupling
+    // (`docs/couplings.md`), named after the follower. The leader's stops hold both: the
+    // follower's own would hold the same motion twice, and their forces would not be determined.
+    let mut couplings = Vec::with_capacity(mimics.len());
+    for (follower, leader, multiplier, offset, m) in mimics {
+        let l = joints.iter().find(|j| j.file_name == leader).ok_or_else(|| {
+            src.err(
+                m,
+                format!("joint '{follower}': <mimic joint=\"{leader}\"> names a joint the file does not have"),
+            )
+        })?;
+        if !matches!(l.kind, Kind::Revolute | Kind::Prismatic) {
+            return Err(src.err(
+                m,
+                format!("joint '{follower}': <mimic> follows joint '{leader}', which does not move on its own axis"),
+            ));
+        }
+        let name = format!("{follower}-mimic");
+        let leader_name = l.name.clone();
+        places.insert(name.clone(), m);
+        couplings.push(
+            coupling(&name, &leader_name, &follower)
+                .set("multiplier", multiplier)
+                .set("offset", offset),
+        );
+        if let Some(f) = joints.iter_mut().find(|j| j.name == follower) {
+            if f.limits.take().is_some() {
+                notes.push(format!(
+                    "joint '{follower}' follows joint '{leader_name}' (<mimic>): its limits are left out, the leader's hold both"
+                ));
+            }
+        }
+    }
     notes.extend(skipped.lines());
-    Ok((tree.elements(src, name, &links, &joints, "link")?, places, notes))
+    let mut model = tree.elements(src, name, &links, &joints, "link")?;
+    for c in couplings {
+        model = model.coupling(c);
+    }
+    Ok((model, places, notes))
 }
 
 /// The scene a URDF file describes (see the module documentation); `origin` names the file in
