@@ -93,6 +93,8 @@ struct Work {
     f: Vec<f64>,
     /// Multipliers on the independent rows, `r`.
     lam_r: Vec<f64>,
+    /// The correction of `q̈_i` by one step of iterative refinement, `ni`.
+    refine: Vec<f64>,
     /// `[M B_i  C_q,Rᵀ]` (elimination only), `n × n`.
     elimination: Option<DenseLu>,
     /// Row of each system equation among the partition's rows (elimination only).
@@ -113,6 +115,7 @@ impl Work {
             sol: vec![0.0; n],
             f: vec![0.0; n],
             lam_r: vec![0.0; partition.rows.len()],
+            refine: vec![0.0; ni],
             elimination: (multipliers == Multipliers::Elimination).then(|| DenseLu::new(n, 1)),
             row_slot,
         }
@@ -274,6 +277,16 @@ impl Formulation for Embedding {
         // q̈ = B_i q̈_i + γ_i
         qdd.copy_from_slice(&vt.gamma);
         vt.mul_add(&work.sol[..ni], qdd);
+        if work.elimination.is_none() {
+            // One step of iterative refinement: M_i Δ = B_iᵀ (Q_e − M q̈), q̈ += B_i Δ. Forming
+            // M_i squares B_i's scale, so its Cholesky solve loses digits a well-conditioned
+            // motion does not have; the residual, taken in the absolute coordinates, returns them.
+            work.f.copy_from_slice(q_e);
+            mass.mul_add(-1.0, qdd, &mut work.f);
+            vt.mul_transpose(&work.f, &mut work.refine);
+            work.mi.solve_vec(&mut work.refine);
+            vt.mul_add(&work.refine, qdd);
+        }
         if work.elimination.is_none() {
             // Multipliers on the independent rows from the dependent columns of C_qᵀ λ = Q_e − M q̈.
             work.f.copy_from_slice(q_e);
