@@ -273,6 +273,22 @@ impl Frictional {
 /// starts held: round-off of a rate that is zero (a cam's surface sliding along its follower).
 const START_RATE: f64 = 1e-12;
 
+/// The coordinate of `limit` (read within a turn as `raw`) at a start: within half a turn of
+/// `last` if that lies within the bounds, else the nearest turn of it that does, else `raw`
+/// followed from `last`.
+fn start_turn(limit: &crate::JointLimit, last: f64, raw: f64) -> f64 {
+    let near = unwrap_angle(last, raw);
+    let inside = |s: f64| s >= limit.lower && s <= limit.upper;
+    if inside(near) {
+        return near;
+    }
+    let turn = std::f64::consts::TAU;
+    (1..4)
+        .flat_map(|k| [near - k as f64 * turn, near + k as f64 * turn])
+        .find(|&s| inside(s))
+        .unwrap_or(near)
+}
+
 /// Limit `limit`'s coordinate from the system's value `raw`: followed from `last` across half
 /// turns when the system measures it within a turn, and recorded in `last`.
 fn follow(limit: &crate::JointLimit, last: &mut f64, raw: f64) -> f64 {
@@ -378,8 +394,14 @@ impl Formulation for Frictional {
         }
         let limits = &mut self.terms[self.frictions..];
         for (k, (term, limit)) in limits.iter_mut().zip(system.limits()).enumerate() {
-            // The start is where a coordinate measured within a turn is followed from.
-            let s = system.limit_row(k, t, q, v, &mut term.row);
+            // The start is where a coordinate measured within a turn is followed from: the turn
+            // nearest the last one that lies within the bounds (a joint's range may pass ±π).
+            let raw = system.limit_row(k, t, q, v, &mut term.row);
+            let s = if limit.within_turn {
+                start_turn(limit, self.coordinates[k], raw)
+            } else {
+                raw
+            };
             self.coordinates[k] = s;
             let sign = limit.nearer_bound(s);
             let at_bound = limit.free_event(s) <= 2.0 * LIMIT_SLACK;

@@ -500,6 +500,9 @@ impl Integration {
         self.mon.scale0 = 1.0 + inf_norm(&self.y);
         let conservative_fixed = self.mon.branch.watches_energy();
         self.mon.branch = BranchMonitor::new(f, q, qd, energy, conservative_fixed);
+        // The modes (a limit held or free, a joint stuck or slipping) and the coordinates a
+        // limit follows across half turns are the new state's, not those of the state before.
+        f.start_events(t, q, qd);
         self.events.accepted(f, t, &self.y, n);
         self.restart_at(t);
         Ok(())
