@@ -61,8 +61,6 @@ struct Work {
     rhs: Vec<f64>,
     sol: Vec<f64>,
     kx: Vec<f64>,
-    /// The correction of one step of iterative refinement (`dim`).
-    correction: Vec<f64>,
     /// Scratch of length `n`.
     tmp: Vec<f64>,
     /// Multipliers on the independent rows (`r`).
@@ -77,7 +75,6 @@ impl Work {
             rhs: vec![0.0; dim],
             sol: vec![0.0; dim],
             kx: vec![0.0; dim],
-            correction: vec![0.0; dim],
             tmp: vec![0.0; n],
             y: vec![0.0; r],
         }
@@ -227,13 +224,6 @@ impl Formulation for Amalgamated {
         let factored = work.schur.factor().is_ok();
         if factored {
             amalgamated_solve(mass, vt, &mut work.schur, &work.rhs, &mut work.sol, &mut work.tmp);
-            // One step of iterative refinement, K δ = b − K x with the same factors: the Schur
-            // complement B_iᵀ M B_i squares B_i's scale, so its solve loses digits a
-            // well-conditioned motion does not have; the residual of K returns them.
-            amalgamated_mul(mass, vt, &work.sol, &mut work.kx);
-            work.kx.iter_mut().zip(&work.rhs).for_each(|(k, b)| *k = b - *k);
-            amalgamated_solve(mass, vt, &mut work.schur, &work.kx, &mut work.correction, &mut work.tmp);
-            work.sol.iter_mut().zip(&work.correction).for_each(|(x, d)| *x += d);
         }
         // Accept the solve when its residual is at round-off: ‖K x − b‖∞ ≤ 1e-9 (‖b‖∞ + s ‖x‖∞),
         // s the largest entry of K.
