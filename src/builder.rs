@@ -237,6 +237,12 @@ pub fn coupling(name: &str, leader: &str, follower: &str) -> Element {
 }
 
 impl Element {
+    /// The element without `key`.
+    pub(crate) fn without(mut self, key: &str) -> Self {
+        self.0.remove(key);
+        self
+    }
+
     fn named(name: &str) -> Self {
         let mut t = Table::new();
         t.insert("name".into(), Value::String(name.into()));

@@ -570,23 +570,68 @@ impl<'s, 'a> Reader<'s, 'a> {
                 let label = self.value(c, "name").unwrap_or(&default_name).to_string();
                 match tag {
                     "connect" => {
-                        self.attributes(c, &["name", "body1", "body2", "anchor", "active", "class"], &["solref", "solimp"])?;
+                        self.attributes(
+                            c,
+                            &["name", "body1", "body2", "anchor", "active", "class"],
+                            &["solref", "solimp"],
+                        )?;
                         let (b1, b2) = (link_of("body1")?, link_of("body2")?);
                         let anchor = self.numbers::<3>(c, "anchor")?.map_or(V3::zeros(), V3::from);
                         // The anchor is in body 1's frame, the link's frame less its joint offset.
                         let at = tree.world[b1].p + tree.world[b1].r * (anchor - parts[b1].offset);
-                        model = model.joint(joint(&label, "spherical", [body_name(b1), body_name(b2)]).at(<[f64; 3]>::from(at)));
+                        model = model
+                            .joint(joint(&label, "spherical", [body_name(b1), body_name(b2)]).at(<[f64; 3]>::from(at)));
                         places.insert(label, c);
                     }
                     "weld" => {
                         self.attributes(c, &["name", "body1", "body2", "active", "class"], &["solref", "solimp"])?;
                         let (b1, b2) = (link_of("body1")?, link_of("body2")?);
                         let at = tree.world[b1].p;
-                        model = model.joint(joint(&label, "fixed", [body_name(b1), body_name(b2)]).at(<[f64; 3]>::from(at)));
+                        model = model
+                            .joint(joint(&label, "fixed", [body_name(b1), body_name(b2)]).at(<[f64; 3]>::from(at)));
+                        places.insert(label, c);
+                    }
+                    "joint" => {
+                        // joint1 = p(joint2), each from its reference (0 here): a coupling
+                        // (`docs/couplings.md`); without joint2, joint1 held at polycoef[0].
+                        self.attributes(
+                            c,
+                            &["name", "joint1", "joint2", "polycoef", "active", "class"],
+                            &["solref", "solimp"],
+                        )?;
+                        let moving = |key: &str| -> Result<Option<String>, SceneError> {
+                            let Some(target) = self.value(c, key) else {
+                                return Ok(None);
+                            };
+                            let j = joints
+                                .iter()
+                                .find(|j| j.file_name == target)
+                                .ok_or_else(|| self.err(c, format!("<joint> {key}=\"{target}\": no such joint")))?;
+                            if !matches!(j.kind, Kind::Revolute | Kind::Prismatic) {
+                                return Err(self.err(
+                                    c,
+                                    format!("<joint> {key}=\"{target}\": a coupling joins hinge and slide joints"),
+                                ));
+                            }
+                            Ok(Some(j.name.clone()))
+                        };
+                        let follower = moving("joint1")?.ok_or_else(|| self.err(c, "<joint> needs 'joint1'"))?;
+                        let leader = moving("joint2")?;
+                        let coefficients = self.numbers::<5>(c, "polycoef")?.unwrap_or([0.0, 1.0, 0.0, 0.0, 0.0]);
+                        let element = crate::builder::coupling(&label, leader.as_deref().unwrap_or(""), &follower)
+                            .set("polynomial", coefficients);
+                        model = model.coupling(if leader.is_none() {
+                            element.without("leader")
+                        } else {
+                            element
+                        });
                         places.insert(label, c);
                     }
                     other => {
-                        return Err(self.err(c, format!("<equality> <{other}> is outside the subset (connect and weld are read; a joint coupling is not modelled yet)")))
+                        return Err(self.err(
+                            c,
+                            format!("<equality> <{other}> is outside the subset (connect, weld and joint are read)"),
+                        ))
                     }
                 }
             }
