@@ -385,15 +385,7 @@ fn friction(
     let owner = format!("joint '{}'", d.name);
     let joint = match info {
         JointInfo::Revolute(r) => FrictionJoint::Revolute(r.clone()),
-        JointInfo::Prismatic(p) => {
-            if f.radius.is_some() {
-                return Err(b.ctx.err(
-                    span,
-                    format!("{owner}: a prismatic joint's friction has no 'radius' (the friction force is μ N)"),
-                ));
-            }
-            FrictionJoint::Prismatic(p.clone())
-        }
+        JointInfo::Prismatic(p) => FrictionJoint::Prismatic(p.clone()),
         JointInfo::Other(_) => {
             return Err(b.ctx.err(
                 span,
@@ -404,20 +396,14 @@ fn friction(
             ))
         }
     };
-    let radius = match (&joint, f.radius) {
-        (FrictionJoint::Revolute(_), None) => {
-            return Err(b.ctx.err(
-                span,
-                format!("{owner}: a revolute joint's friction needs 'radius', the pin radius in m (torque μ r |F|)"),
-            ))
-        }
-        (_, r) => r.unwrap_or(0.0),
-    };
+    let revolute = matches!(joint, FrictionJoint::Revolute(_));
+    let (coefficient, radius, constant) = f.law(revolute, &owner).map_err(|m| b.ctx.err(span.clone(), m))?;
     let friction = Friction {
         joint,
         constraint,
-        coefficient: f.coefficient,
+        coefficient,
         radius,
+        constant,
         viscous: f.viscous.unwrap_or(0.0),
         stick_speed: f.stick_speed.unwrap_or(STICK_SPEED),
     };

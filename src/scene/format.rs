@@ -80,15 +80,42 @@ pub(crate) struct JointDef {
     pub rest_speed: Option<Spanned<f64>>,
 }
 
-/// `friction = { coefficient = μ, radius = r, viscous = c, stick_speed = w }` on a revolute or
-/// prismatic joint (`docs/friction.md`).
+/// `friction = { coefficient = μ, radius = r, constant = f₀, viscous = c, stick_speed = w }` on a
+/// revolute or prismatic joint (`docs/friction.md`): `μ` with the load, `f₀` without, or both.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FrictionDef {
-    pub coefficient: f64,
+    pub coefficient: Option<f64>,
+    pub constant: Option<f64>,
     pub radius: Option<f64>,
     pub viscous: Option<f64>,
     pub stick_speed: Option<f64>,
+}
+
+impl FrictionDef {
+    /// `(μ, r, f₀)` of a friction table on a revolute (`revolute`) or prismatic joint, or what is
+    /// wrong with it (`owner` names the joint): `μ` or `f₀` or both; `radius` on a revolute joint
+    /// with `μ` only (it turns `μ |F|` into a torque), never on a prismatic one.
+    pub(crate) fn law(&self, revolute: bool, owner: &str) -> Result<(f64, f64, f64), String> {
+        if self.coefficient.is_none() && self.constant.is_none() {
+            return Err(format!(
+                "{owner}: friction needs 'coefficient' (μ, with the joint's load) or 'constant' (a force or torque without it), or both"
+            ));
+        }
+        let coefficient = self.coefficient.unwrap_or(0.0);
+        match (revolute, self.radius) {
+            (false, Some(_)) => Err(format!(
+                "{owner}: a prismatic joint's friction has no 'radius' (the friction force is μ N)"
+            )),
+            (true, None) if self.coefficient.is_some() => Err(format!(
+                "{owner}: a revolute joint's friction needs 'radius', the pin radius in m (torque μ r |F|)"
+            )),
+            (true, Some(_)) if self.coefficient.is_none() => Err(format!(
+                "{owner}: 'radius' turns μ's force into a torque: give 'coefficient' with it (a constant friction is a torque already)"
+            )),
+            (_, r) => Ok((coefficient, r.unwrap_or(0.0), self.constant.unwrap_or(0.0))),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]

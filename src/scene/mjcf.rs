@@ -821,7 +821,7 @@ impl<'s, 'a> Reader<'s, 'a> {
             }
             let mut kind = Kind::Fixed;
             let (mut offset, mut axis, mut damping, mut joint_name) = (V3::zeros(), V3::z(), 0.0, name.clone());
-            let (mut stiffness, mut spring_rest) = (0.0, 0.0);
+            let (mut stiffness, mut spring_rest, mut friction) = (0.0, 0.0, 0.0);
             let mut range = None;
             let mut file_name = name.clone();
             if let Some(&j) = js.first() {
@@ -857,7 +857,21 @@ impl<'s, 'a> Reader<'s, 'a> {
                             "actuatorfrclimited",
                         ],
                     )?;
-                    for key in ["armature", "frictionloss", "ref"] {
+                    // Dry friction on the joint: a constant friction torque or force (exact here,
+                    // where MuJoCo's is soft).
+                    friction = self.number(j, "frictionloss", 0.0)?;
+                    if friction.is_nan()
+                        || friction < 0.0
+                        || (friction > 0.0 && !matches!(self.value(j, "type").unwrap_or("hinge"), "hinge" | "slide"))
+                    {
+                        return Err(self.err(
+                            j,
+                            format!(
+                                "<joint> frictionloss=\"{friction}\": non-negative, and on hinge and slide joints only"
+                            ),
+                        ));
+                    }
+                    for key in ["armature", "ref"] {
                         let v = self.number(j, key, 0.0)?;
                         if v != 0.0 {
                             return Err(
@@ -978,6 +992,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                 damping,
                 stiffness,
                 spring_rest,
+                friction,
                 limits,
             });
             if let Some(&j) = js.first() {

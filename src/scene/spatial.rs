@@ -499,24 +499,20 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
         }
         if let Some(def) = &d.friction {
             let f = def.get_ref();
-            if f.radius.is_some() && d.kind == "prismatic" {
+            if !matches!(d.kind.as_str(), "revolute" | "prismatic") {
                 return Err(ctx.err(
                     Some(def.span()),
-                    format!("{owner}: a prismatic joint's friction has no 'radius' (the friction force is μ N)"),
+                    format!("{owner}: friction is for revolute and prismatic joints"),
                 ));
             }
-            if f.radius.is_none() && d.kind == "revolute" {
-                return Err(ctx.err(
-                    Some(def.span()),
-                    format!(
-                        "{owner}: a revolute joint's friction needs 'radius', the pin radius in m (torque μ r |F|)"
-                    ),
-                ));
-            }
+            let (coefficient, radius, constant) = f
+                .law(d.kind == "revolute", &owner)
+                .map_err(|m| ctx.err(Some(def.span()), m))?;
             frictions.push(dalembert_spatial::friction::SpatialFriction {
                 joint: d.name.clone(),
-                coefficient: f.coefficient,
-                radius: f.radius.unwrap_or(0.0),
+                coefficient,
+                radius,
+                constant,
                 viscous: f.viscous.unwrap_or(0.0),
                 stick_speed: f.stick_speed.unwrap_or(dalembert_constraints::STICK_SPEED),
             });

@@ -95,6 +95,9 @@ pub(crate) struct TreeJoint {
     pub(crate) stiffness: f64,
     /// … relaxed at this joint value (rad or m from the file's configuration; `springref`).
     pub(crate) spring_rest: f64,
+    /// A constant friction force or torque on the joint (N or N·m; a URDF's `<dynamics
+    /// friction>`, an MJCF joint's `frictionloss`; `docs/friction.md`).
+    pub(crate) friction: f64,
     /// Stops on the joint value `[lower, upper]` (rad or m from the file's configuration), which
     /// hold it there (a URDF's `<limit>`, an MJCF joint's `range`; `docs/limits.md`).
     pub(crate) limits: Option<[f64; 2]>,
@@ -377,6 +380,11 @@ impl Tree {
             let placed = match j.limits {
                 Some(bounds) => placed.set("limits", bounds),
                 None => placed,
+            };
+            let placed = if j.friction > 0.0 {
+                placed.set("friction", KeyValue::table([("constant", KeyValue::from(j.friction))]))
+            } else {
+                placed
             };
             model = model.joint(match j.kind {
                 Kind::Spherical => placed,

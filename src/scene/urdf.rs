@@ -10,7 +10,9 @@
 //!   ones, at the joint frame's origin along its `axis` (any direction, joint frame); a
 //!   `floating` joint leaves its child free.
 //! - `<dynamics damping>` becomes a damper on the joint: a rotational spring–damper of zero
-//!   stiffness (revolute) or a spring–damper of zero stiffness along the axis (prismatic).
+//!   stiffness (revolute) or a spring–damper of zero stiffness along the axis (prismatic);
+//!   `<dynamics friction>` the joint's constant friction (`friction = { constant }`,
+//!   `docs/friction.md`).
 //! - The model loads at rest with every joint at 0 (the file's configuration) under gravity
 //!   `(0, 0, −9.81)`.
 //!
@@ -18,14 +20,12 @@
 //!   named `<joint>-mimic` (`docs/couplings.md`), its effort the torque or force it takes.
 //!
 //! What the reader cannot model yet is refused in one line naming the element and its line: a
-//! `planar` joint. Joint friction is left out with a note. `<visual>`
+//! `planar` joint. `<visual>`
 //! geometries (box, cylinder, sphere, mesh) are kept for the 3D viewer only; `<collision>` is
 //! skipped (nothing collides yet), as are the elements that carry no dynamics (`material`,
 //! `gazebo`, `transmission`, `ros2_control`).
 
-use super::tree::{
-    quoted, scene_of, Inertial, Kind, Link, LinkVisual, Pose, Read, Shape, Skipped, Tree, TreeJoint, V3,
-};
+use super::tree::{scene_of, Inertial, Kind, Link, LinkVisual, Pose, Read, Shape, Skipped, Tree, TreeJoint, V3};
 use super::xml::{self, Source};
 use super::{Scene, SceneError};
 use crate::builder::coupling;
@@ -226,7 +226,6 @@ fn read<'a>(
     }
     let mut joints: Vec<TreeJoint> = Vec::new();
     let mut notes = Vec::new();
-    let mut with_friction = Vec::new();
     // (follower, leader as the file names it, multiplier, offset, the <mimic> element)
     let mut mimics = Vec::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
@@ -310,15 +309,19 @@ fn read<'a>(
                 }
             }
         }
-        let mut damping = 0.0;
+        let (mut damping, mut friction) = (0.0, 0.0);
         if let Some(d) = src.child(node, "dynamics")? {
             damping = src.number(d, "damping", Some(0.0))?;
-            let friction = src.number(d, "friction", Some(0.0))?;
+            friction = src.number(d, "friction", Some(0.0))?;
             if damping < 0.0 {
                 return Err(src.err(d, format!("{here}: damping {damping} is negative")));
             }
-            if friction != 0.0 {
-                with_friction.push(joint_name.clone());
+            if friction.is_nan() || friction < 0.0 {
+                return Err(src.err(d, format!("{here}: friction {friction} is negative")));
+            }
+            if friction > 0.0 && !matches!(kind, Kind::Revolute | Kind::Prismatic) {
+                // A fixed or floating joint's <dynamics friction> has no motion to resist.
+                friction = 0.0;
             }
         }
         parent_joint[child] = Some(joints.len());
@@ -334,6 +337,7 @@ fn read<'a>(
             damping,
             stiffness: 0.0,
             spring_rest: 0.0,
+            friction,
             limits,
         });
     }
@@ -342,12 +346,6 @@ fn read<'a>(
         return Err(src.err(
             robot,
             "nothing moves: every link is fixed to the root link, which is fixed to the ground",
-        ));
-    }
-    if !with_friction.is_empty() {
-        notes.push(format!(
-            "constant joint friction is not modelled yet (the joints' friction law is load-dependent); the model leaves out that of {}",
-            quoted(&with_friction)
         ));
     }
     // A mimic joint's value is the multiplier times its leader's plus the offset: a coupling

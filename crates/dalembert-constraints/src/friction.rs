@@ -39,6 +39,8 @@ pub struct Friction {
     pub radius: f64,
     /// Viscous coefficient `c ≥ 0` (N·s/m or N·m·s/rad).
     pub viscous: f64,
+    /// A load-independent friction force (N) or torque (N·m) `f₀ ≥ 0`, added to `μ N`.
+    pub constant: f64,
     /// Slip rate below which the joint counts as at rest (m/s or rad/s).
     pub stick_speed: f64,
 }
@@ -136,7 +138,15 @@ impl Friction {
                 self.coefficient
             )));
         }
-        if matches!(self.joint, FrictionJoint::Revolute(_)) && !(self.radius.is_finite() && self.radius > 0.0) {
+        if !(self.constant.is_finite() && self.constant >= 0.0) {
+            return Err(bad(format!("constant friction must be ≥ 0, got {}", self.constant)));
+        }
+        // The radius scales μ's torque; a constant friction alone needs none.
+        let needs_radius = self.coefficient > 0.0;
+        if needs_radius
+            && matches!(self.joint, FrictionJoint::Revolute(_))
+            && !(self.radius.is_finite() && self.radius > 0.0)
+        {
             return Err(bad(format!("friction radius must be > 0 m, got {}", self.radius)));
         }
         if !(self.viscous.is_finite() && self.viscous >= 0.0) {
@@ -158,6 +168,7 @@ impl Friction {
             name: self.name().to_string(),
             coefficient,
             viscous: self.viscous,
+            constant: self.constant,
             load_rows,
             stick_speed: self.stick_speed,
         }

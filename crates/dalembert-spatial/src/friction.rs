@@ -24,6 +24,9 @@ pub struct SpatialFriction {
     pub radius: f64,
     /// Viscous friction `c ≥ 0` (N·m·s/rad or N·s/m).
     pub viscous: f64,
+    /// A load-independent friction torque (N·m) or force (N) `f₀ ≥ 0`, added to `μ r |F|` or
+    /// `μ N`.
+    pub constant: f64,
     /// The slip rate within which a stuck joint stays stuck (rad/s or m/s).
     pub stick_speed: f64,
 }
@@ -47,7 +50,8 @@ impl Model {
             let first: usize = self.joints()[..index].iter().map(|j| j.num_equations()).sum();
             let (coefficient, load_rows) = match self.joints()[index].kind {
                 Some(JointKind::Revolute) => {
-                    if !(f.radius.is_finite() && f.radius > 0.0) {
+                    // The radius scales μ's torque; a constant friction alone needs none.
+                    if f.coefficient > 0.0 && !(f.radius.is_finite() && f.radius > 0.0) {
                         return Err(bad(format!("friction radius must be > 0 m, got {}", f.radius)));
                     }
                     (f.coefficient * f.radius, vec![first, first + 1, first + 2])
@@ -61,6 +65,9 @@ impl Model {
             if !(f.viscous.is_finite() && f.viscous >= 0.0) {
                 return Err(bad(format!("viscous friction must be ≥ 0, got {}", f.viscous)));
             }
+            if !(f.constant.is_finite() && f.constant >= 0.0) {
+                return Err(bad(format!("constant friction must be ≥ 0, got {}", f.constant)));
+            }
             if !(f.stick_speed.is_finite() && f.stick_speed > 0.0) {
                 return Err(bad(format!("stick_speed must be > 0, got {}", f.stick_speed)));
             }
@@ -68,6 +75,7 @@ impl Model {
                 name: f.joint.clone(),
                 coefficient,
                 viscous: f.viscous,
+                constant: f.constant,
                 load_rows,
                 stick_speed: f.stick_speed,
             });

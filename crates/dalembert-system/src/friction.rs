@@ -44,6 +44,9 @@ pub struct JointFriction {
     pub coefficient: f64,
     /// `c_k`: viscous friction per unit slip rate (N·s/m or N·m·s/rad).
     pub viscous: f64,
+    /// `f₀_k`: a friction force (N) or torque (N·m) that does not depend on the load (a URDF
+    /// joint's `<dynamics friction>`, an MJCF joint's `frictionloss`), added to `μ_k N_k`.
+    pub constant: f64,
     /// The multiplier rows whose Euclidean norm is the joint's normal load `N_k`.
     pub load_rows: Vec<usize>,
     /// `w_s`: the slip rate below which the joint counts as at rest (m/s or rad/s).
@@ -235,14 +238,16 @@ impl FrictionWork {
 }
 
 /// The normal load `μ |L λ|` of `spec` and its gradient `μ (Lλ)ᵀ L / |Lλ|` dotted with `dl`.
+/// The friction bound `μ_k N_k + f₀_k` at the multipliers `lambda`.
 fn load(spec: &JointFriction, lambda: &[f64]) -> f64 {
-    spec.coefficient
-        * spec
-            .load_rows
-            .iter()
-            .map(|&r| lambda[r] * lambda[r])
-            .sum::<f64>()
-            .sqrt()
+    spec.constant
+        + spec.coefficient
+            * spec
+                .load_rows
+                .iter()
+                .map(|&r| lambda[r] * lambda[r])
+                .sum::<f64>()
+                .sqrt()
 }
 
 fn load_change(spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
