@@ -9,7 +9,7 @@
 //! ```
 //!
 //! `w` is a joint's value (an angle or a displacement, 0 in the model's initial configuration),
-//! `g` its row and `b` its bias (`crate::limits`, whose formulas [`joint_value_row`] gives once
+//! `g` its row and `b` its bias (`crate::limits`, whose formulas `joint_value_row` gives once
 //! for both). Without a leader, `C = w_f − c₀` holds the follower at a value. A revolute
 //! follower's `C` is taken within a turn (`θ_f − p` wrapped to `(−π, π]`), so the follower may
 //! turn any number of times; a revolute leader's angle is read within a turn of the initial
