@@ -168,6 +168,37 @@ fn a_sprung_mjcf_slide_rests_where_its_spring_balances_gravity_far_from_the_file
     std::fs::remove_file(&path).ok();
 }
 
+/// The rod of [`imported_rod`] as a URDF: its joint of `kind` about −y, with `extra` in it.
+fn rod_urdf(kind: &str, extra: &str) -> String {
+    format!(
+        r#"<robot name="rod">
+  <link name="world"/>
+  <link name="rod">
+    <inertial><origin xyz="0.5 0 0"/><mass value="1"/>
+      <inertia ixx="0.001" iyy="0.08333333333333333" izz="0.08333333333333333" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="pin" type="{kind}">
+    <parent link="world"/><child link="rod"/><axis xyz="0 -1 0"/>
+    {extra}
+  </joint>
+</robot>"#
+    )
+}
+
+/// The same rod as an MJCF: its hinge about −y with the attributes `extra`.
+fn rod_mjcf(extra: &str) -> String {
+    format!(
+        r#"<mujoco>
+  <worldbody>
+    <body name="rod">
+      <joint name="pin" type="hinge" axis="0 -1 0" {extra}/>
+      <inertial pos="0.5 0 0" mass="1" diaginertia="0.001 0.08333333333333333 0.08333333333333333"/>
+    </body>
+  </worldbody>
+</mujoco>"#
+    )
+}
+
 /// A uniform rod of 1 kg and 1 m pinned at one end, released horizontal, in `file` (a URDF or an
 /// MJCF text) written to a temporary file named `name`.
 fn imported_rod(name: &str, file: &str) -> dalembert::output::Table {
@@ -189,28 +220,14 @@ fn urdf_limits_and_mjcf_ranges_are_stops() {
     // so it ends at rest with E = m g (L/2) sin(−1) (datum at the pin), held by the stop's torque
     // m g (L/2) cos 1 = 2.650 N·m against its weight. dopri5 at 1e-11: the angle within 1e-9
     // rad of the stop, the energy within 1e-8 J and the torque within 1e-8 N·m of these.
-    let urdf = r#"<robot name="rod">
-  <link name="world"/>
-  <link name="rod">
-    <inertial><origin xyz="0.5 0 0"/><mass value="1"/>
-      <inertia ixx="0.001" iyy="0.08333333333333333" izz="0.08333333333333333" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <joint name="pin" type="revolute">
-    <parent link="world"/><child link="rod"/><axis xyz="0 -1 0"/>
-    <limit lower="-1" upper="0.5" effort="10" velocity="10"/>
-  </joint>
-</robot>"#;
-    let mjcf = r#"<mujoco>
-  <worldbody>
-    <body name="rod">
-      <joint name="pin" type="hinge" axis="0 -1 0" range="-57.29577951308232 28.64788975654116"/>
-      <inertial pos="0.5 0 0" mass="1" diaginertia="0.001 0.08333333333333333 0.08333333333333333"/>
-    </body>
-  </worldbody>
-</mujoco>"#;
+    let urdf = rod_urdf(
+        "revolute",
+        r#"<limit lower="-1" upper="0.5" effort="10" velocity="10"/>"#,
+    );
+    let mjcf = rod_mjcf(r#"range="-57.29577951308232 28.64788975654116""#);
     let (m, g, half) = (1.0, 9.81, 0.5);
     for (name, file) in [("rod.urdf", urdf), ("rod.xml", mjcf)] {
-        let table = imported_rod(name, file);
+        let table = imported_rod(name, &file);
         let last = |c: &str| *table.column(c).unwrap().last().unwrap();
         let angle = last("pin.q");
         assert!((angle + 1.0).abs() < 1e-9, "{name}: rests at {angle} rad, expected -1");
@@ -238,28 +255,8 @@ fn urdf_and_mjcf_joint_friction_is_a_constant_friction_torque() {
     // work, 4 N·m times the angle it turned through (the balance E − W, dopri5 at 1e-11: 1e-8 J).
     let (m, g, half) = (1.0, 9.81, 0.5);
     for f0 in [5.0, 4.0] {
-        let urdf = format!(
-            r#"<robot name="rod">
-  <link name="world"/>
-  <link name="rod">
-    <inertial><origin xyz="0.5 0 0"/><mass value="1"/>
-      <inertia ixx="0.001" iyy="0.08333333333333333" izz="0.08333333333333333" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <joint name="pin" type="continuous">
-    <parent link="world"/><child link="rod"/><axis xyz="0 -1 0"/><dynamics friction="{f0}"/>
-  </joint>
-</robot>"#
-        );
-        let mjcf = format!(
-            r#"<mujoco>
-  <worldbody>
-    <body name="rod">
-      <joint name="pin" type="hinge" axis="0 -1 0" frictionloss="{f0}"/>
-      <inertial pos="0.5 0 0" mass="1" diaginertia="0.001 0.08333333333333333 0.08333333333333333"/>
-    </body>
-  </worldbody>
-</mujoco>"#
-        );
+        let urdf = rod_urdf("continuous", &format!(r#"<dynamics friction="{f0}"/>"#));
+        let mjcf = rod_mjcf(&format!(r#"frictionloss="{f0}""#));
         for (name, file) in [("rod-friction.urdf", urdf), ("rod-friction.xml", mjcf)] {
             let table = imported_rod(name, &file);
             let angle = table.column("pin.q").unwrap();
