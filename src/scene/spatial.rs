@@ -816,11 +816,7 @@ fn coupling_moves(
     let mut moves = Vec::new();
     for c in couplings.iter().filter(|c| !given(&c.follower)) {
         let (x, rate) = c.leader.as_deref().map_or((0.0, 0.0), start);
-        let (mut value, mut slope) = (0.0, 0.0);
-        for a in c.polynomial.iter().rev() {
-            slope = slope * x + value;
-            value = value * x + a;
-        }
+        let [value, slope, _] = c.polynomial_at(x);
         let (value, rate) = if c.leader.is_some() {
             (value, slope * rate)
         } else {

@@ -51,6 +51,22 @@ impl Coupling {
             polynomial: vec![offset, multiplier],
         }
     }
+
+    /// `p(x)`, `p′(x)` and `p″(x)` (Horner's rule).
+    pub fn polynomial_at(&self, x: f64) -> [f64; 3] {
+        polynomial_at(&self.polynomial, x)
+    }
+}
+
+/// `p(x)`, `p′(x)` and `p″(x)` of the coefficients `c₀, c₁, …` by Horner's rule.
+fn polynomial_at(coefficients: &[f64], x: f64) -> [f64; 3] {
+    let (mut p, mut d1, mut d2) = (0.0, 0.0, 0.0);
+    for &c in coefficients.iter().rev() {
+        d2 = d2 * x + 2.0 * d1;
+        d1 = d1 * x + p;
+        p = p * x + c;
+    }
+    [p, d1, d2]
 }
 
 /// A coupling in model terms: its joints' indices and the distinct bodies its row spans.
@@ -118,17 +134,6 @@ impl CouplingData {
         })
     }
 
-    /// `p(x)`, `p′(x)` and `p″(x)` by Horner's rule.
-    fn polynomial_at(&self, x: f64) -> [f64; 3] {
-        let (mut p, mut d1, mut d2) = (0.0, 0.0, 0.0);
-        for &c in self.polynomial.iter().rev() {
-            d2 = d2 * x + 2.0 * d1;
-            d1 = d1 * x + p;
-            p = p * x + c;
-        }
-        [p, d1, d2]
-    }
-
     /// The coupling's equation at the frames `frame` gives: `C`, `Q_d`, and its Jacobian as
     /// global `[ṙ; ω]` parts on up to four joint ends (`None` for the ground or an unused end).
     pub fn row(&self, joints: &[JointData], frame: &dyn Fn(Option<usize>) -> Frame) -> (f64, f64, [End; 4]) {
@@ -143,7 +148,7 @@ impl CouplingData {
             Some(l) => {
                 let l = &joints[l];
                 let (rl, rate) = joint_value_row(l, &frame(l.body_i), &frame(l.body_j));
-                let [p, d1, d2] = self.polynomial_at(rl.c);
+                let [p, d1, d2] = polynomial_at(&self.polynomial, rl.c);
                 c -= p;
                 gamma += -d1 * rl.gamma + d2 * rate * rate;
                 ends[2] = (l.body_i, rl.i.map(|g| -d1 * g));
@@ -211,16 +216,8 @@ mod tests {
     #[test]
     fn horner_gives_the_polynomial_and_its_two_derivatives() {
         // p = 1 + 2x − 3x² + 0.5x³ at x = 1.5, differentiated by hand.
-        let c = CouplingData {
-            name: "c".into(),
-            leader: None,
-            follower: 0,
-            polynomial: vec![1.0, 2.0, -3.0, 0.5],
-            bodies: vec![],
-            wrap: false,
-        };
         let x: f64 = 1.5;
-        let [p, d1, d2] = c.polynomial_at(x);
+        let [p, d1, d2] = polynomial_at(&[1.0, 2.0, -3.0, 0.5], x);
         assert!((p - (1.0 + 2.0 * x - 3.0 * x * x + 0.5 * x.powi(3))).abs() < 1e-14);
         assert!((d1 - (2.0 - 6.0 * x + 1.5 * x * x)).abs() < 1e-14);
         assert!((d2 - (-6.0 + 3.0 * x)).abs() < 1e-14);
