@@ -416,6 +416,99 @@ fn the_simulator_loop_allocates_nothing() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The allocations of `counted` rounds of the simulator's loop (as [`simulator_loop`], without
+/// inputs) on `scene` after `warm_up` rounds, and the re-partitions made while they were counted.
+fn loop_after_warm_up(scene: &dalembert::Scene, warm_up: usize, counted: usize) -> (usize, u64) {
+    let mut sim = scene.simulator().unwrap();
+    let round = |sim: &mut dalembert::Simulator, k: usize| {
+        sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
+        sim.step().unwrap();
+    };
+    for k in 1..=warm_up {
+        round(&mut sim, k);
+    }
+    let (before, repartitions) = (ALLOCATIONS.load(Ordering::Relaxed), sim.statistics().repartitions);
+    for k in warm_up + 1..=warm_up + counted {
+        round(&mut sim, k);
+    }
+    (
+        ALLOCATIONS.load(Ordering::Relaxed) - before,
+        sim.statistics().repartitions - repartitions,
+    )
+}
+
+/// A re-partition allocates nothing where `C_qd` is factored dense: the choice's matrices, a spare
+/// partition and velocity transformation, and the log's entries are set up with the first
+/// partition. The double pendulum released horizontal and the UR5 swinging under gravity, in
+/// absolute coordinates, with the embedding and amalgamated formulations and every method: after
+/// 50 rounds, 300 more allocate nothing, while the partition changes in them (in one method at
+/// least: the test would pass vacuously otherwise). Before, each re-partition made about 40
+/// allocations. And a run of an adaptive method whose
+/// steps shrink (dopri5 on the slider-crank whose motor input jumps every round) checks its
+/// positions for a singular one without allocating (before: 5 allocations per check, of the SVD
+/// of `C_q`).
+#[test]
+fn re_partitions_and_singularity_checks_allocate_nothing() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let mut failures = Vec::new();
+    for path in ["scenes/double-pendulum.toml", "scenes/robots/ur5-swing.toml"] {
+        let base = dalembert::Scene::from_path(path).unwrap();
+        for formulation in [
+            dalembert::FormulationKind::Embedding,
+            dalembert::FormulationKind::Amalgamated,
+        ] {
+            let mut changes = 0;
+            for entry in METHODS {
+                if entry.applies == Applies::AugmentedIndex3 {
+                    continue;
+                }
+                let mut scene = base.clone();
+                scene.settings.formulation = formulation;
+                scene.settings.method = Method::of(entry);
+                scene.settings.step = 1e-3;
+                let (count, repartitions) = loop_after_warm_up(&scene, 50, 300);
+                changes += repartitions;
+                if count > 0 {
+                    failures.push(format!(
+                        "{path}, {}, {}: {count} allocations, {repartitions} re-partitions in 300 rounds",
+                        formulation.name(),
+                        entry.name
+                    ));
+                }
+            }
+            if changes == 0 {
+                failures.push(format!("{path}, {}: no re-partition was counted", formulation.name()));
+            }
+        }
+    }
+    let text = std::fs::read_to_string("scenes/slider-crank.toml").unwrap();
+    let text = format!("{text}\n[[forces]]\nname = \"commanded\"\ntype = \"torque\"\nbody = \"crank\"\nvalue = {{ input = \"motor\" }}\n");
+    let mut scene = dalembert::Scene::from_toml(&text, "slider-crank with a motor input").unwrap();
+    scene.settings.method = Method::of(METHODS.iter().find(|e| e.name == "dopri5").unwrap());
+    for formulation in dalembert::FormulationKind::ALL {
+        scene.settings.formulation = formulation;
+        let mut sim = scene.simulator().unwrap();
+        let mut count = 0;
+        for k in 1..=600 {
+            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            sim.set_input("motor", 40.0 * (k as f64).sin()).unwrap();
+            sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
+            sim.step().unwrap();
+            if k > 50 {
+                count += ALLOCATIONS.load(Ordering::Relaxed) - before;
+            }
+        }
+        if count > 0 {
+            failures.push(format!(
+                "slider-crank with jumping input, {}, dopri5: {count} allocations in 550 rounds",
+                formulation.name()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
 /// The same loop (without inputs: joint coordinates take no force elements) on a spatial chain in
 /// joint coordinates, every formulation × method: the map to the model's coordinates and the
 /// evaluation of its reactions there allocate nothing either.

@@ -184,7 +184,7 @@ impl Formulation for Amalgamated {
         }
         let n = qd.len();
         let sys = self.model.constraints();
-        let before = self.tracker.log.len();
+        let before = self.tracker.count();
         let m = sys.num_equations();
         let model = Arc::clone(&self.model);
         let sys = model.constraints();
@@ -201,7 +201,7 @@ impl Formulation for Amalgamated {
             mass, q_e, values, rhs, ..
         } = data;
         let transformed = tracker.transform(t, sys, values, rhs).is_some();
-        stats.repartitions += (tracker.log.len() - before) as u64;
+        stats.repartitions += tracker.count() - before;
         let (true, Some((partition, vt))) = (transformed, tracker.last()) else {
             return Err(sys.redundancy_error(t, values));
         };

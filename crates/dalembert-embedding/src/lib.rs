@@ -163,7 +163,7 @@ impl Embedding {
 
     /// Every re-partition so far: time, old and new independent coordinates.
     pub fn repartitions(&self) -> &[Repartition] {
-        &self.tracker.log
+        self.tracker.log()
     }
 }
 
@@ -191,7 +191,7 @@ impl Formulation for Embedding {
         }
         let sys = self.model.constraints();
         let n = qd.len();
-        let before = self.tracker.log.len();
+        let before = self.tracker.count();
         let m = sys.num_equations();
         let model = Arc::clone(&self.model);
         let sys = model.constraints();
@@ -208,7 +208,7 @@ impl Formulation for Embedding {
             mass, q_e, values, rhs, ..
         } = data;
         let transformed = tracker.transform(t, sys, values, rhs).is_some();
-        stats.repartitions += (tracker.log.len() - before) as u64;
+        stats.repartitions += tracker.count() - before;
         let (true, Some((partition, vt))) = (transformed, tracker.last()) else {
             return Err(sys.redundancy_error(t, values));
         };

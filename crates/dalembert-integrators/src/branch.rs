@@ -16,6 +16,7 @@
 //! elsewhere (an undamped generalized-α growing on a pendulum) is left to the divergence monitor.
 
 use crate::{IntegrationError, Statistics};
+use dalembert_system::jacobian_svd::SingularityCheck;
 use dalembert_system::{EquationRef, Formulation};
 
 /// Share of the largest kinetic energy one step's velocity projection may remove
@@ -53,10 +54,13 @@ const MEMORY: f64 = 0.99;
 /// `h` ends up to `h·|v|` past the singular position.
 pub const NEAR: f64 = 1e-2;
 
+/// Relative singular value below which `C_q` has lost rank for good (redundant constraints), not
+/// come near a singular position.
+pub(crate) const RANK_TOLERANCE: f64 = 1e-9;
+
 /// The equations of `C_q` at `(t, q, v)` when it has singular values below `near` of the largest
-/// (above the rank tolerance 1e-9, which redundant constraints fall under for good); allocates, so
-/// the loop calls it only when a check fired (here, the adaptive guard, a step failed down to the
-/// minimum).
+/// (above [`RANK_TOLERANCE`]). Allocates its storage: for a run that failed; a run that goes on
+/// checks with the [`SingularityCheck`] it keeps ([`BranchMonitor::check`]).
 pub(crate) fn near_singular(
     f: &dyn Formulation,
     t: f64,
@@ -64,9 +68,7 @@ pub(crate) fn near_singular(
     near: f64,
 ) -> Option<Vec<EquationRef>> {
     let sys = f.system().constraints();
-    let mut values = sys.values();
-    sys.evaluate(t, q, v, &mut values);
-    dalembert_system::structure::near_singular(sys, &values, near, 1e-9)
+    SingularityCheck::new(sys).near_singular(sys, t, (q, v), near, RANK_TOLERANCE)
 }
 
 /// A share measured against the steps before.
@@ -108,6 +110,9 @@ pub(crate) struct BranchMonitor {
     energy_check: bool,
     projection: Jump,
     energy: Jump,
+    /// The near-singularity check of the run, sized at setup (a check that finds a regular
+    /// position allocates nothing).
+    pub(crate) check: SingularityCheck,
 }
 
 impl BranchMonitor {
@@ -122,6 +127,7 @@ impl BranchMonitor {
             energy_check,
             projection: Jump::default(),
             energy: Jump::default(),
+            check: SingularityCheck::new(f.system().constraints()),
         }
     }
 
@@ -164,8 +170,9 @@ impl BranchMonitor {
         }
         let share = self.share(f.system().kinetic_energy(q, &self.v_stepped));
         let mut involved = None;
+        let check = &mut self.check;
         let confirm = || {
-            involved = near_singular(f, t, (q, v), NEAR);
+            involved = check.near_singular(f.system().constraints(), t, (q, v), NEAR, RANK_TOLERANCE);
             involved.is_some()
         };
         if let Some(before) = self
@@ -204,8 +211,9 @@ impl BranchMonitor {
         let share = self.share((energy - self.last_energy).abs());
         self.last_energy = energy;
         let mut involved = None;
+        let check = &mut self.check;
         let confirm = || {
-            involved = near_singular(f, t, (q, v), NEAR);
+            involved = check.near_singular(f.system().constraints(), t, (q, v), NEAR, RANK_TOLERANCE);
             involved.is_some()
         };
         match self.energy.record(share, BRANCH_SWITCH_ENERGY, first, confirm) {

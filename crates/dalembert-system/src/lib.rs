@@ -29,6 +29,7 @@ pub mod frictional;
 pub mod gram;
 pub mod inputs;
 pub mod inverse;
+pub mod jacobian_svd;
 pub mod kinematics;
 pub mod layout;
 pub mod limit;

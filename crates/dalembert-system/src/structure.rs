@@ -11,6 +11,7 @@
 //! fits in [`DENSE_LIMIT_BYTES`], and the result is [`ConstraintError::TooLarge`] when it does not.
 
 use crate::gram::SparseGram;
+use crate::jacobian_svd::{nearly_singular_range, JacobianSvd, SVD_EQUATIONS_UP_TO};
 use crate::{ConstraintError, ConstraintSet, ConstraintValues, EquationRef};
 
 /// From this many coordinates on, the analyses try the sparse path first ([`SparseGram`]): the
@@ -164,7 +165,7 @@ pub fn dependent_equations<S: ConstraintSet + ?Sized>(
             .map(|s| s.redundant)
             .unwrap_or_default()
     };
-    if m > 600 {
+    if m > SVD_EQUATIONS_UP_TO {
         return redundant();
     }
     singular_vector_rows(sys, values, 1e-6, |s, largest| {
@@ -186,26 +187,20 @@ fn singular_vector_rows<S: ConstraintSet + ?Sized>(
     weight: f64,
     select: impl Fn(&[f64], f64) -> Option<(usize, usize)>,
 ) -> Option<Vec<EquationRef>> {
-    let a = sys.jacobian_dense(values);
-    let svd = a.svd().ok()?;
-    let col = svd.S().column_vector();
-    let s: Vec<f64> = (0..col.nrows()).map(|i| col[i]).collect();
-    let largest = s.iter().cloned().fold(0.0, f64::max);
-    let (from, to) = select(&s, largest)?;
-    let u = svd.U();
-    Some(
-        (0..sys.num_equations())
-            .filter(|&r| (from..to).any(|j| u[(r, j)].abs() > weight))
-            .map(|r| sys.equation(r))
-            .collect(),
-    )
+    let mut svd = JacobianSvd::new(sys.num_equations(), sys.num_coordinates());
+    if !svd.decompose(sys, values) {
+        return None;
+    }
+    svd.rows_of_vectors(sys, weight, select)
 }
 
 /// The equations of a **nearly** singular `C_q` (a closed chain close to a singular position, where
 /// links line up): `Some` when the singular values above `rank_tolerance × σ_max` (the numerical
 /// rank, which redundant constraints lower permanently) include some below `near_tolerance × σ_max`;
 /// the equations returned are those with weight in the left singular vectors of those values.
-/// `None` for a well-conditioned `C_q` and for more than 600 equations (not checked).
+/// `None` for a well-conditioned `C_q` and for more than [`SVD_EQUATIONS_UP_TO`] equations (not
+/// checked). Allocates its storage; a run checking while it steps keeps a
+/// [`crate::jacobian_svd::SingularityCheck`] instead.
 pub fn near_singular<S: ConstraintSet + ?Sized>(
     sys: &S,
     values: &ConstraintValues,
@@ -213,16 +208,11 @@ pub fn near_singular<S: ConstraintSet + ?Sized>(
     rank_tolerance: f64,
 ) -> Option<Vec<EquationRef>> {
     let m = sys.num_equations();
-    if m == 0 || m > 600 {
+    if m == 0 || m > SVD_EQUATIONS_UP_TO {
         return None;
     }
     singular_vector_rows(sys, values, 1e-3, |s, largest| {
-        if !(largest > 0.0 && largest.is_finite()) {
-            return None;
-        }
-        let rank = s.iter().filter(|&&v| v > rank_tolerance * largest).count();
-        let well = s.iter().filter(|&&v| v > near_tolerance * largest).count();
-        (well < rank).then_some((well, rank))
+        nearly_singular_range(s, largest, near_tolerance, rank_tolerance)
     })
 }
 

@@ -1,7 +1,8 @@
 //! The check that stops an adaptive method whose steps collapse at a singular position.
 
-use crate::branch::near_singular;
+use crate::branch::RANK_TOLERANCE;
 use crate::IntegrationError;
+use dalembert_system::jacobian_svd::SingularityCheck;
 use dalembert_system::Formulation;
 
 /// Stops an adaptive method whose steps collapse at a singular position of a closed chain.
@@ -12,7 +13,7 @@ use dalembert_system::Formulation;
 /// slightly perturbed geometry of the drifted state, which decides the branch by that perturbation
 /// (measured on `scenes/driven-four-bar.toml` with dopri5: steps of 1e-6 s, the rocker turning back
 /// 3e-5 rad before the line, i.e. a silent switch to the other assembly). When a step falls below
-/// `COLLAPSE` × the largest accepted step, `C_q` is checked ([`near_singular`], relative singular
+/// `COLLAPSE` × the largest accepted step, `C_q` is checked (the run's [`SingularityCheck`], relative singular
 /// value `NEAR`); at a nearly singular `C_q` the loop bridges the position with checked steps
 /// ([`bridge`]) or, when no checked step passes, stops with the time and the equations involved.
 /// A well-conditioned one (a stiff model) re-arms the check a factor 10 lower, so a stiff run pays
@@ -49,12 +50,13 @@ impl SingularPassGuard {
         n_q: usize,
         next: f64,
         method: &'static str,
+        singular: &mut SingularityCheck,
     ) -> Result<(), IntegrationError> {
         if next.is_nan() || next >= self.armed_below * self.largest {
             return Ok(());
         }
         self.armed_below = next / self.largest / 10.0;
-        match near_singular(f, t, y.split_at(n_q), Self::NEAR) {
+        match singular.near_singular(f.system().constraints(), t, y.split_at(n_q), Self::NEAR, RANK_TOLERANCE) {
             Some(involved) => Err(IntegrationError::SingularPass {
                 time: t,
                 method,

@@ -806,7 +806,10 @@ impl Integration {
                     }
                 }
             }
-            let collapse = a.guard.check(f, *t, y, n_q, outcome.next_step, method).err();
+            let collapse = a
+                .guard
+                .check(f, *t, y, n_q, outcome.next_step, method, &mut mon.branch.check)
+                .err();
             if outcome.accepted {
                 let t_new = if last { t_end } else { *t + a.h };
                 a.dense = Some((*t, a.h));

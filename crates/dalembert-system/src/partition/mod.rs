@@ -14,15 +14,15 @@
 //! of `C_qd` is estimated from the ratio of the factor's pivots; the embedding and amalgamated
 //! formulations re-partition when it exceeds a threshold.
 
+mod choice;
 mod handover;
 mod reduced_mass;
 mod transform;
+pub use choice::{PartitionChoice, KEPT_UP_TO};
 pub use handover::{MassOrthogonalProjection, HANDOVER_CONDITION};
 pub use transform::{VelocityTransform, DENSE_LIMIT};
 
-use crate::structure::column_rank;
 use crate::{ConstraintSet, ConstraintValues, MultibodySystem};
-use faer::Mat;
 
 /// A choice of dependent and independent coordinates and of independent equations.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -54,24 +54,15 @@ impl Partition {
         rank_tolerance: f64,
         rank: Option<usize>,
     ) -> Partition {
-        let jac = sys.jacobian_dense(values);
-        let n = jac.ncols();
-        // Independent rows: pivot columns of C_qᵀ.
-        let jt = jac.transpose().to_owned();
-        let (found, row_order) = column_rank(jt.as_ref(), rank_tolerance);
-        let rank = rank.map_or(found, |r| r.min(row_order.len()));
-        let rows: Vec<usize> = row_order[..rank].to_vec();
-        // Dependent coordinates: pivot columns of the selected rows.
-        let sel = Mat::from_fn(rank, n, |i, j| jac[(rows[i], j)]);
-        let (_, col_order) = column_rank(sel.as_ref(), rank_tolerance);
-        let dependent: Vec<usize> = col_order[..rank].to_vec();
-        let mut independent: Vec<usize> = col_order[rank..].to_vec();
-        independent.sort_unstable();
-        Partition {
-            dependent,
-            independent,
-            rows,
-        }
+        let mut out = Partition::default();
+        PartitionChoice::new(sys.num_equations(), sys.num_coordinates()).choose(
+            sys,
+            values,
+            rank_tolerance,
+            rank,
+            &mut out,
+        );
+        out
     }
 
     /// Number of independent coordinates (degrees of freedom).
@@ -91,15 +82,33 @@ pub struct Repartition {
     pub new: Vec<usize>,
 }
 
+/// How many re-partitions a tracker logs with their coordinates ([`PartitionTracker::log`]); later
+/// ones are counted only.
+pub const LOGGED_REPARTITIONS: usize = 8;
+
 /// Keeps a partition across evaluations and re-chooses it when `C_qd` becomes ill-conditioned.
-/// Its velocity transformation and scratch are allocated with the partition and reused: an
-/// evaluation or projection that keeps the partition allocates nothing.
+///
+/// Its first choice sets up the storage of the next ones: the choice's dense matrices
+/// ([`PartitionChoice`], for Jacobians up to [`KEPT_UP_TO`] entries), a spare partition and, for a
+/// dense `C_qd` factor, a spare velocity transformation laid out again in place
+/// ([`VelocityTransform::rebuild`]), and the log's entries. So an evaluation or projection
+/// allocates nothing, also when it re-partitions, except where `C_qd` is factored sparse (more
+/// than [`DENSE_LIMIT`] dependent coordinates: the new partition's symbolic analysis), the
+/// Jacobian exceeds [`KEPT_UP_TO`] entries, or the rank changes.
 #[derive(Debug)]
 pub struct PartitionTracker {
     current: Option<Partition>,
     vt: Option<VelocityTransform>,
-    /// Every re-partition so far (the first choice is not logged).
-    pub log: Vec<Repartition>,
+    /// The storage of the next choice and the workspace it replaces, swapped with the current ones
+    /// at a re-partition.
+    choice: Option<PartitionChoice>,
+    spare: Partition,
+    spare_vt: Option<VelocityTransform>,
+    /// The first [`LOGGED_REPARTITIONS`] re-partitions (the first choice is not logged), their
+    /// entries reserved at the first choice; [`PartitionTracker::count`] counts them all.
+    log: Vec<Repartition>,
+    logged: usize,
+    count: u64,
     /// Condition estimate of `C_qd` above which the partition is re-chosen.
     pub threshold: f64,
     /// Rank tolerance of the partition choice.
@@ -120,7 +129,12 @@ impl PartitionTracker {
         PartitionTracker {
             current: None,
             vt: None,
+            choice: None,
+            spare: Partition::default(),
+            spare_vt: None,
             log: Vec::new(),
+            logged: 0,
+            count: 0,
             threshold,
             rank_tolerance: 1e-9,
             preferred: None,
@@ -181,34 +195,103 @@ impl PartitionTracker {
         if let Some(p) = &self.current {
             let vt = self.vt.get_or_insert_with(|| VelocityTransform::new(p, sys));
             kept = vt.refactor(values) && vt.condition <= self.threshold;
+            if kept && self.choice.is_none() && self.log.is_empty() {
+                // A partition the user named, kept at its first evaluation.
+                let first = self.current.take();
+                let vt = self.vt.take();
+                if let (Some(first), Some(vt)) = (&first, &vt) {
+                    self.set_up_next(sys, first, vt);
+                }
+                self.current = first;
+                self.vt = vt;
+            }
         }
         if !kept {
             // A new partition keeps the number of independent equations of the one it replaces;
             // only where that is singular (a rank loss of the mechanism itself) is the rank found
             // again at this state.
             let same_rank = self.current.as_ref().map(|p| p.rows.len());
-            let mut fresh = Partition::choose_ranked(sys, values, self.rank_tolerance, same_rank);
-            let mut vt = VelocityTransform::new(&fresh, sys);
+            let mut fresh = std::mem::take(&mut self.spare);
+            match &mut self.choice {
+                Some(choice) => choice.choose(sys, values, self.rank_tolerance, same_rank, &mut fresh),
+                None => fresh = Partition::choose_ranked(sys, values, self.rank_tolerance, same_rank),
+            }
+            let mut vt = match self.spare_vt.take() {
+                Some(mut spare) => {
+                    if spare.rebuild(&fresh, sys) {
+                        spare
+                    } else {
+                        VelocityTransform::new(&fresh, sys)
+                    }
+                }
+                None => VelocityTransform::new(&fresh, sys),
+            };
             if !vt.refactor(values) && same_rank.is_some() {
                 fresh = Partition::choose(sys, values, self.rank_tolerance);
                 vt = VelocityTransform::new(&fresh, sys);
             }
             if !vt.refactor(values) {
+                self.spare = fresh;
+                self.spare_vt = Some(vt);
                 return None;
             }
             if let Some(old) = &self.current {
                 if old.independent != fresh.independent || old.rows.len() != fresh.rows.len() {
-                    self.log.push(Repartition {
-                        time: t,
-                        old: old.independent.clone(),
-                        new: fresh.independent.clone(),
-                    });
+                    self.count += 1;
+                    if let Some(entry) = self.log.get_mut(self.logged) {
+                        entry.time = t;
+                        entry.old.clear();
+                        entry.old.extend_from_slice(&old.independent);
+                        entry.new.clear();
+                        entry.new.extend_from_slice(&fresh.independent);
+                        self.logged += 1;
+                    }
                 }
             }
-            self.current = Some(fresh);
-            self.vt = Some(vt);
+            if self.log.is_empty() {
+                self.set_up_next(sys, &fresh, &vt);
+            }
+            if let Some(old) = self.current.replace(fresh) {
+                self.spare = old;
+            }
+            if let Some(old) = self.vt.replace(vt) {
+                self.spare_vt = Some(old);
+            }
         }
         self.last()
+    }
+
+    /// After the first choice: the storage of the next ones (see [`PartitionTracker`]).
+    fn set_up_next(&mut self, sys: &(impl ConstraintSet + ?Sized), first: &Partition, vt: &VelocityTransform) {
+        let (m, n) = (sys.num_equations(), sys.num_coordinates());
+        if m.saturating_mul(n) <= KEPT_UP_TO {
+            self.choice = Some(PartitionChoice::new(m, n));
+        }
+        self.spare = Partition {
+            dependent: Vec::with_capacity(n),
+            independent: Vec::with_capacity(n),
+            rows: Vec::with_capacity(m),
+        };
+        if self.spare_vt.is_none() && vt.is_dense() {
+            self.spare_vt = Some(VelocityTransform::new(first, sys));
+        }
+        self.log = (0..LOGGED_REPARTITIONS)
+            .map(|_| Repartition {
+                time: 0.0,
+                old: Vec::with_capacity(n),
+                new: Vec::with_capacity(n),
+            })
+            .collect();
+    }
+
+    /// Every re-partition so far (the first choice is not one).
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// The first [`LOGGED_REPARTITIONS`] re-partitions, with their times and coordinates.
+    pub fn log(&self) -> &[Repartition] {
+        &self.log[..self.logged]
     }
 
     /// The partition and velocity transformation of the last successful
@@ -248,13 +331,13 @@ impl PartitionTracker {
     ) -> Result<usize, crate::DynamicsError> {
         let sys = model.constraints();
         if self.handover.is_some() {
-            let before = self.log.len();
+            let before = self.count;
             sys.evaluate(t, q, qd, values);
             let singular = match self.factor(t, sys, values) {
                 None => true,
                 Some((_, vt)) => vt.condition > HANDOVER_CONDITION || vt.condition.is_nan(),
             };
-            stats.repartitions += (self.log.len() - before) as u64;
+            stats.repartitions += self.count - before;
             if let (true, Some(h)) = (singular, self.handover.as_mut()) {
                 // With redundant equations (kept under `RedundancyTreatment::MinimumNorm`) the
                 // saddle-point matrix is singular: partitioning, which projects on a maximal
@@ -279,9 +362,9 @@ impl PartitionTracker {
         tolerance: f64,
         stats: &mut crate::FormulationStats,
     ) -> Result<usize, crate::DynamicsError> {
-        let before = self.log.len();
+        let before = self.count;
         let it = self.project(t, sys, values, q, qd, tolerance)?;
-        stats.repartitions += (self.log.len() - before) as u64;
+        stats.repartitions += self.count - before;
         stats.newton_iterations += it as u64;
         Ok(it)
     }

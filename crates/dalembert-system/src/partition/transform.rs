@@ -24,6 +24,20 @@ use faer::Mat;
 /// pivoting); above it, by sparse LU.
 pub const DENSE_LIMIT: usize = 40;
 
+/// The slots of `partition`'s rows and columns (the independent ones in ascending order).
+fn mark_slots(partition: &Partition, row_slot: &mut [Option<usize>], col_slot: &mut [Result<usize, usize>]) {
+    row_slot.iter_mut().for_each(|s| *s = None);
+    for (i, &row) in partition.rows.iter().enumerate() {
+        row_slot[row] = Some(i);
+    }
+    for (k, &d) in partition.dependent.iter().enumerate() {
+        col_slot[d] = Ok(k);
+    }
+    for (j, &c) in partition.independent.iter().enumerate() {
+        col_slot[c] = Err(j);
+    }
+}
+
 /// Where one entry of the constraint pattern goes.
 #[derive(Debug, Clone, Copy)]
 enum Slot {
@@ -42,8 +56,9 @@ enum Factor {
     Sparse(Box<SparseLu>),
 }
 
-/// `B_i`, `γ_i` and the factorization of `C_qd` at one state: a workspace allocated when the
-/// partition changes and refilled in place at every state.
+/// `B_i`, `γ_i` and the factorization of `C_qd` at one state: a workspace refilled in place at
+/// every state, and laid out again in place for a new partition where its factor is dense
+/// ([`VelocityTransform::rebuild`]).
 #[derive(Debug)]
 pub struct VelocityTransform {
     /// `B_i` by rows, `n × (n − r)` row-major, its rows in partition order (the `r` dependent
@@ -62,6 +77,10 @@ pub struct VelocityTransform {
     /// used with the partition it was built for).
     dependent: Vec<usize>,
     rows: Vec<usize>,
+    /// For each equation its place among the partition's rows, for each coordinate its place
+    /// among the dependent (`Ok`) or independent (`Err`) ones.
+    row_slot: Vec<Option<usize>>,
+    col_slot: Vec<Result<usize, usize>>,
     /// Scratch of length `r`; one mass block's rows of `B_i` and of `M_b B_b`, compacted to their
     /// common column range (`s × (n − r)` each for the largest block size `s` met), and the
     /// block's rows that span more than one column.
@@ -76,19 +95,11 @@ pub struct VelocityTransform {
 impl VelocityTransform {
     /// A workspace for `partition` of the constraint set `sys`.
     pub fn new(partition: &Partition, sys: &(impl ConstraintSet + ?Sized)) -> Self {
-        let n = sys.num_coordinates();
+        let (n, m) = (sys.num_coordinates(), sys.num_equations());
         let (r, ni) = (partition.rows.len(), partition.independent.len());
-        let mut row_slot = vec![None; sys.num_equations()];
-        for (i, &row) in partition.rows.iter().enumerate() {
-            row_slot[row] = Some(i);
-        }
+        let mut row_slot = vec![None; m];
         let mut col_slot = vec![Err(0); n];
-        for (k, &d) in partition.dependent.iter().enumerate() {
-            col_slot[d] = Ok(k);
-        }
-        for (j, &c) in partition.independent.iter().enumerate() {
-            col_slot[c] = Err(j);
-        }
+        mark_slots(partition, &mut row_slot, &mut col_slot);
         let entries = sys.pattern().entries();
         let dependent_entries = || {
             entries
@@ -105,44 +116,83 @@ impl VelocityTransform {
             Some(lu) => Factor::Sparse(Box::new(lu)),
             None => Factor::Dense(SmallLu::new(r)),
         };
-        let slots = entries
-            .iter()
-            .map(|&(row, col)| match (row_slot[row], col_slot[col]) {
-                (Some(i), Ok(k)) => Slot::Dependent(match &factor {
-                    Factor::Dense(_) => i * r + k,
-                    Factor::Sparse(lu) => lu.position(i, k),
-                }),
-                (Some(i), Err(j)) => Slot::Independent(i, j),
-                (None, _) => Slot::Unused,
-            })
-            .collect();
-        let mut b = vec![0.0; n * ni];
-        let mut col_of = vec![0; n];
-        let mut support = vec![(0, 0); n];
-        for (k, &d) in partition.dependent.iter().enumerate() {
-            col_of[d] = k;
-        }
-        for (j, &c) in partition.independent.iter().enumerate() {
-            col_of[c] = r + j;
-            b[(r + j) * ni + j] = 1.0;
-            support[r + j] = (j, j + 1);
-        }
-        VelocityTransform {
-            b,
+        let mut vt = VelocityTransform {
+            b: vec![0.0; n * ni],
             ni,
-            col_of,
-            support,
+            col_of: vec![0; n],
+            support: vec![(0, 0); n],
             gamma: vec![0.0; n],
             factor,
-            slots,
+            slots: vec![Slot::Unused; entries.len()],
             dependent: partition.dependent.clone(),
             rows: partition.rows.clone(),
+            row_slot,
+            col_slot,
             g: vec![0.0; r],
             bb: vec![0.0; MAX_BLOCK * ni],
             wb: vec![0.0; MAX_BLOCK * ni],
             long: Vec::with_capacity(MAX_BLOCK),
             condition: f64::INFINITY,
+        };
+        vt.lay_out(entries);
+        vt
+    }
+
+    /// Makes this workspace the one of `partition` in place, without allocating, when it can: a
+    /// dense factor (up to [`DENSE_LIMIT`] dependent coordinates) of the same size, for the same
+    /// system. `false` (nothing changed) otherwise: a sparse factor's symbolic analysis belongs
+    /// to its partition's pattern, so a new partition needs [`VelocityTransform::new`].
+    pub fn rebuild(&mut self, partition: &Partition, sys: &(impl ConstraintSet + ?Sized)) -> bool {
+        let (r, ni) = (partition.rows.len(), partition.independent.len());
+        let same_size = r == self.rows.len()
+            && ni == self.ni
+            && self.col_slot.len() == sys.num_coordinates()
+            && self.row_slot.len() == sys.num_equations()
+            && self.slots.len() == sys.pattern().entries().len();
+        if !(same_size && matches!(self.factor, Factor::Dense(_))) {
+            return false;
         }
+        mark_slots(partition, &mut self.row_slot, &mut self.col_slot);
+        self.dependent.clear();
+        self.dependent.extend_from_slice(&partition.dependent);
+        self.rows.clear();
+        self.rows.extend_from_slice(&partition.rows);
+        self.condition = f64::INFINITY;
+        self.lay_out(sys.pattern().entries());
+        true
+    }
+
+    /// Where each pattern entry goes, and the identity rows of `B_i`, from the slots of the
+    /// partition's rows and columns.
+    fn lay_out(&mut self, entries: &[(usize, usize)]) {
+        let (r, ni) = (self.rows.len(), self.ni);
+        for (slot, &(row, col)) in self.slots.iter_mut().zip(entries) {
+            *slot = match (self.row_slot[row], self.col_slot[col]) {
+                (Some(i), Ok(k)) => Slot::Dependent(match &self.factor {
+                    Factor::Dense(_) => i * r + k,
+                    Factor::Sparse(lu) => lu.position(i, k),
+                }),
+                (Some(i), Err(j)) => Slot::Independent(i, j),
+                (None, _) => Slot::Unused,
+            };
+        }
+        self.b.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &d) in self.dependent.iter().enumerate() {
+            self.col_of[d] = k;
+        }
+        for (c, slot) in self.col_slot.iter().enumerate() {
+            if let Err(j) = *slot {
+                self.col_of[c] = r + j;
+                self.b[(r + j) * ni + j] = 1.0;
+                self.support[r + j] = (j, j + 1);
+            }
+        }
+    }
+
+    /// Whether `C_qd` is factored dense (then [`VelocityTransform::rebuild`] can lay out another
+    /// partition of the same size in place).
+    pub fn is_dense(&self) -> bool {
+        matches!(self.factor, Factor::Dense(_))
     }
 
     /// Number of independent coordinates (columns of `B_i`).

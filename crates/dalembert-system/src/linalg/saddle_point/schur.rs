@@ -78,12 +78,15 @@ impl SchurKkt {
         let n = pattern.cols();
         let m = pattern.rows();
         let massless = mass.zero_diagonal();
-        let massless_entries = pattern
+        let massless_entries: Vec<(usize, usize, usize)> = pattern
             .entries()
             .iter()
             .enumerate()
             .filter_map(|(e, &(r, c))| massless.iter().position(|&z| z == c).map(|k| (e, r, k)))
             .collect();
+        // At most one entry per massless Jacobian entry: sized here, so that the number of entries
+        // a state makes non-zero (round-off included) never grows it while stepping.
+        let decoupled = Vec::with_capacity(massless_entries.len());
         let p = massless.len() + m;
         let reduced = (!massless.is_empty()).then(|| SmallLu::new(p));
         let mut rows_of_body = vec![Vec::new(); mass.num_blocks()];
@@ -104,7 +107,7 @@ impl SchurKkt {
             massless_entries,
             reduced,
             tmp_r: vec![0.0; p],
-            decoupled: Vec::new(),
+            decoupled,
             counts: vec![0; p - m],
             condition: 1.0,
         }
