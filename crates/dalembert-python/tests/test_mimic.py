@@ -62,19 +62,10 @@ def reduced(model, data, g, damping, theta, rate):
     return a, m @ a + h
 
 
-# The amalgamated formulation's Schur complement B_iᵀ M B_i squares B_i's scale and loses digits
-# at some of these states (1.3e-8 of the largest). The embedding's reduced solve had the same
-# loss and is refined once (9.8e-13); the same refinement of the amalgamated solve met the bar
-# (9.7e-13) but moved the rounding of A02's singular passes enough to lose the branch at
-# h = 0.25 ms (tests/n_four_bar.rs), so it waits for #36's passage by construction.
-FORMULATIONS = [
-    "augmented",
-    "embedding",
-    pytest.param(
-        "amalgamated",
-        marks=pytest.mark.xfail(strict=True, reason="B_iᵀ M B_i loses digits on the Panda: 1.3e-8 (#36)"),
-    ),
-]
+# The embedding's and the amalgamated formulation's Schur complement B_iᵀ M B_i squares B_i's
+# scale and loses digits at some of these states (1.3e-8 of the largest without the refinement
+# step each takes: 9.8e-13 and 9.8e-13 with it).
+FORMULATIONS = ["augmented", "embedding", "amalgamated"]
 
 
 @pytest.mark.parametrize("formulation", FORMULATIONS)

@@ -167,6 +167,22 @@ impl DenseCholesky {
         .map(|_| ())
     }
 
+    /// After a successful [`DenseCholesky::factor`]: `(max L_kk / min L_kk)²`, a cheap estimate
+    /// of the condition number (a lower bound of it; 1 for an empty matrix).
+    pub fn condition_estimate(&self) -> f64 {
+        let n = self.a.nrows();
+        if n == 0 {
+            return 1.0;
+        }
+        let (mut small, mut big) = (f64::INFINITY, 0.0f64);
+        for k in 0..n {
+            let d = self.a[(k, k)].abs();
+            small = small.min(d);
+            big = big.max(d);
+        }
+        (big / small).powi(2)
+    }
+
     /// `x ← A⁻¹ x`.
     pub fn solve_vec(&mut self, x: &mut [f64]) {
         let n = x.len();

@@ -31,7 +31,8 @@ impl From<SingularKkt> for LinalgError {
 #[non_exhaustive]
 pub enum Backend {
     /// The tree factorization for systems without loops whose mass blocks are all positive definite,
-    /// at any size. Otherwise, up to the dense limit (`n + m` unknowns): the Schur complement when
+    /// at any size, and above the dense limit also with up to [`TREE_CUTS_UP_TO`] loop-closing
+    /// equations (a coupling between joint values, one spatial loop). Otherwise, up to the dense limit (`n + m` unknowns): the Schur complement when
     /// the mass blocks allow it (positive definite or diagonal), dense LU otherwise; above it the
     /// sparse Schur complement when every mass block is positive definite; with singular mass
     /// blocks the dense back ends up to twice the limit and the sparse LU above.
@@ -80,6 +81,16 @@ pub enum Backend {
 /// `scenes/slider-crank-3d.toml`); at 1e8 no shipped scene and no chain of 64 or 256 falls back
 /// (`dalembert simulate`, RK4 at 1 ms, 5 s).
 pub const SCHUR_FALLBACK_CONDITION: f64 = 1e8;
+
+/// Most loop-closing (cut) equations with which [`Backend::Auto`] still takes the tree back end for
+/// a system above the dense limit: one spatial loop (6 equations), or a few couplings between joint
+/// values. The cut equations' dense Schur complement costs one tree solve each, so a handful keeps
+/// the tree's linear cost; the Panda, whose second finger is coupled to the first (one cut
+/// equation), steps in 78–108 µs (RK4, 1 ms) where the sparse Schur complement took 142–171 µs
+/// (three runs of `cargo run --release --example backends -- scenes/robots/panda.urdf`,
+/// 2026-11-27). Closed chains with more loops (IFToMM A02's N-four-bar: 2 per loop) keep the
+/// sparse Schur complement their robustness figures were measured with.
+pub const TREE_CUTS_UP_TO: usize = 6;
 
 /// The saddle-point matrix of one system, factored by the back end chosen at construction.
 pub struct SaddlePoint {
@@ -143,9 +154,12 @@ fn positive_definite(mass: &BlockDiagonal) -> bool {
 pub fn resolve(backend: Backend, mass: &BlockDiagonal, pattern: &ConstraintPattern, dense_limit: usize) -> Backend {
     let (n, m) = (mass.dim(), pattern.rows());
     let spd = positive_definite(mass);
-    let loop_free = || tree::cut_rows(pattern, mass) == Some(0);
+    let cuts = tree::cut_rows(pattern, mass);
+    let loop_free = cuts == Some(0);
+    let few_cuts = cuts.is_some_and(|k| k <= TREE_CUTS_UP_TO);
     match backend {
-        Backend::Auto if spd && loop_free() => Backend::Tree,
+        Backend::Auto if spd && loop_free => Backend::Tree,
+        Backend::Auto if spd && few_cuts && n + m > dense_limit => Backend::Tree,
         Backend::Auto if n + m > dense_limit && spd => Backend::SparseSchur,
         Backend::Auto if n + m > 2 * dense_limit => Backend::Sparse,
         Backend::Auto if schur::applicable(mass, m) => Backend::Schur,
