@@ -315,6 +315,16 @@ pub fn solve_friction(
         joint: (0..k_len).map(name).collect::<Vec<_>>().join("', '"),
         what,
     };
+    if terms.iter().all(|term| term.mode == Mode::Free) {
+        // Every stop free and no friction joint: no force, and nothing to solve (what the
+        // iteration below would find, without its two solves of the identity).
+        for term in terms.iter_mut() {
+            term.force = 0.0;
+            term.sticks = false;
+            term.direction = 0.0;
+        }
+        return Ok(());
+    }
     for (k, term) in terms.iter().enumerate() {
         if term.mode == Mode::Free {
             // No force and no response: the element couples with nothing.
