@@ -34,7 +34,23 @@ fn counted() -> bool {
     COUNTED.try_with(|c| c.get()).unwrap_or(false)
 }
 
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+thread_local! {
+    /// The allocations of this thread while it is counted: a counter per thread, so that a
+    /// finished test's thread (still marked, sending its result to the harness after its lock is
+    /// released) cannot add to the next test's measurement. With one counter for all threads,
+    /// that send fell inside a measured loop on a loaded machine now and then ("0 allocations for
+    /// 50 iterations, 1 for 100", a different case each time).
+    static ALLOCATIONS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// This thread's allocations counted so far.
+fn allocations_so_far() -> usize {
+    ALLOCATIONS.with(|a| a.get())
+}
+
+fn count_one() {
+    let _ = ALLOCATIONS.try_with(|a| a.set(a.get() + 1));
+}
 
 /// The counter is shared: the tests of this file run one at a time.
 static SERIAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -49,7 +65,7 @@ fn grow(bytes: usize) {
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if counted() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+            count_one();
         }
         grow(layout.size());
         unsafe { System.alloc(layout) }
@@ -60,7 +76,7 @@ unsafe impl GlobalAlloc for Counting {
     }
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         if counted() {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+            count_one();
         }
         LIVE_BYTES.fetch_sub(layout.size(), Ordering::Relaxed);
         grow(new_size);
@@ -98,9 +114,9 @@ fn formulation(kind: &str, case: &Case, backend: Backend) -> Box<dyn Formulation
 
 fn allocations(case: &Case, kind: &str, backend: Backend, opts: &IntegratorOptions, t_end: f64) -> usize {
     let mut f = formulation(kind, case, backend);
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = allocations_so_far();
     integrate(f.as_mut(), 0.0, t_end, &case.q, &case.qd, opts, &mut |_| {}).unwrap();
-    ALLOCATIONS.load(Ordering::Relaxed) - before
+    allocations_so_far() - before
 }
 
 #[test]
@@ -294,10 +310,10 @@ fn stepping_allocates_nothing_after_setup() {
                         .unwrap(),
                     ),
                 };
-                let before = ALLOCATIONS.load(Ordering::Relaxed);
+                let before = allocations_so_far();
                 integrate(f.as_mut(), 0.0, t_end, &redundant.q, &redundant.qd, opts, &mut |_| {})
                     .unwrap_or_else(|e| panic!("redundant parallelogram, {kind}, {name}: {e}"));
-                ALLOCATIONS.load(Ordering::Relaxed) - before
+                allocations_so_far() - before
             };
             let (short, long) = (run(0.5), run(1.0));
             if long > short {
@@ -350,7 +366,7 @@ fn stepping_allocates_nothing_after_setup() {
 /// column read, one step.
 fn simulator_loop(scene: &dalembert::Scene, reaction: &str, input: Option<&str>, iterations: usize) -> usize {
     let mut sim = scene.simulator().unwrap();
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = allocations_so_far();
     for k in 1..=iterations {
         if let Some(name) = input {
             sim.set_input(name, (k as f64).sin()).unwrap();
@@ -359,7 +375,7 @@ fn simulator_loop(scene: &dalembert::Scene, reaction: &str, input: Option<&str>,
         sim.value(reaction).unwrap();
         sim.step().unwrap();
     }
-    ALLOCATIONS.load(Ordering::Relaxed) - before
+    allocations_so_far() - before
 }
 
 /// The simulator's loop (an input set, an advance to a time between two steps, a reaction read, a
@@ -427,12 +443,12 @@ fn loop_after_warm_up(scene: &dalembert::Scene, warm_up: usize, counted: usize) 
     for k in 1..=warm_up {
         round(&mut sim, k);
     }
-    let (before, repartitions) = (ALLOCATIONS.load(Ordering::Relaxed), sim.statistics().repartitions);
+    let (before, repartitions) = (allocations_so_far(), sim.statistics().repartitions);
     for k in warm_up + 1..=warm_up + counted {
         round(&mut sim, k);
     }
     (
-        ALLOCATIONS.load(Ordering::Relaxed) - before,
+        allocations_so_far() - before,
         sim.statistics().repartitions - repartitions,
     )
 }
@@ -491,12 +507,12 @@ fn re_partitions_and_singularity_checks_allocate_nothing() {
         let mut sim = scene.simulator().unwrap();
         let mut count = 0;
         for k in 1..=600 {
-            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            let before = allocations_so_far();
             sim.set_input("motor", 40.0 * (k as f64).sin()).unwrap();
             sim.advance_to(sim.time().max(k as f64 * 3.7e-3)).unwrap();
             sim.step().unwrap();
             if k > 50 {
-                count += ALLOCATIONS.load(Ordering::Relaxed) - before;
+                count += allocations_so_far() - before;
             }
         }
         if count > 0 {
@@ -571,11 +587,11 @@ fn a_run_with_sensitivities_allocates_nothing_per_step() {
                 let mut scene = scene.clone();
                 scene.settings.end = end;
                 let setup = scene.sensitivity_setup(&request).unwrap();
-                let before = ALLOCATIONS.load(Ordering::Relaxed);
+                let before = allocations_so_far();
                 scene
                     .run_sensitivities(setup, &mut |_, _| {}, &std::sync::atomic::AtomicBool::new(false))
                     .unwrap();
-                ALLOCATIONS.load(Ordering::Relaxed) - before
+                allocations_so_far() - before
             };
             let (short, long) = (count(0.2), count(0.4));
             if long > short {
@@ -606,9 +622,9 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
         let count = |end: f64| {
             let mut sim = scene.simulation();
             sim.end = end;
-            let before = ALLOCATIONS.load(Ordering::Relaxed);
+            let before = allocations_so_far();
             let stats = sim.run(&mut |_| {}).unwrap();
-            (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
+            (allocations_so_far() - before, stats.events)
         };
         let ((short, events_short), (long, events_long)) = (count(1.0), count(2.0));
         assert!(events_long > events_short, "{}: no contact event", entry.name);
@@ -651,9 +667,9 @@ fn switching_runs_growing(texts: &[&str], what: &str) -> Vec<String> {
                 let count = |end: f64| {
                     let mut sim = scene.simulation();
                     sim.end = end;
-                    let before = ALLOCATIONS.load(Ordering::Relaxed);
+                    let before = allocations_so_far();
                     let stats = sim.run(&mut |_| {}).unwrap();
-                    (ALLOCATIONS.load(Ordering::Relaxed) - before, stats.events)
+                    (allocations_so_far() - before, stats.events)
                 };
                 let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
                 assert!(events_long > events_short, "{formulation}, {}: no {what}", entry.name);
