@@ -59,22 +59,10 @@ impl StructureReport {
 /// Numerical rank and pivot order of a dense matrix's columns (full-pivot LU): the first `rank`
 /// entries of the returned order are independent columns.
 pub fn column_rank(a: faer::MatRef<'_, f64>, rank_tolerance: f64) -> (usize, Vec<usize>) {
-    if a.nrows() == 0 || a.ncols() == 0 {
-        return (0, (0..a.ncols()).collect());
-    }
-    let lu = a.full_piv_lu();
-    let u = lu.U();
-    let k = u.nrows().min(u.ncols());
-    let largest = (0..k).map(|i| u[(i, i)].abs()).fold(0.0, f64::max);
-    let rank = if largest == 0.0 || !largest.is_finite() {
-        0
-    } else {
-        (0..k)
-            .take_while(|&i| u[(i, i)].abs() > rank_tolerance * largest)
-            .count()
-    };
-    let order: Vec<usize> = lu.Q().arrays().0.to_vec();
-    (rank, order)
+    let mut lu = a.to_owned();
+    let mut pivot = crate::linalg::FullPivot::new(a.nrows(), a.ncols());
+    let rank = pivot.rank(lu.as_mut(), rank_tolerance);
+    (rank, pivot.order(a.ncols()).to_vec())
 }
 
 /// Most equations for which [`analyse_structure`] confirms the rank by singular values.

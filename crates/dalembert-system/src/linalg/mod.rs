@@ -19,6 +19,7 @@
 //! `shared/LINALG-NOTES.md` records what was verified about it.
 
 pub mod dense;
+pub mod full_pivot;
 pub mod pattern_lu;
 mod rows;
 pub mod saddle_point;
@@ -27,6 +28,7 @@ pub mod small_lu;
 pub mod sparse_lu;
 
 pub use dense::{DenseCholesky, DenseLu};
+pub use full_pivot::FullPivot;
 pub use pattern_lu::PatternLu;
 pub use saddle_point::{Backend, SaddlePoint};
 pub use small_lu::SmallLu;
