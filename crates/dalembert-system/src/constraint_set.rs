@@ -198,10 +198,17 @@ pub trait ConstraintSet: Send + Sync + std::fmt::Debug {
     /// `C_q` as a dense `m × n_v` matrix (analyses and fallbacks, never the stepping loop).
     fn jacobian_dense(&self, values: &ConstraintValues) -> faer::Mat<f64> {
         let mut a = faer::Mat::zeros(self.num_equations(), self.num_coordinates());
-        for (&(r, c), &v) in self.pattern().entries().iter().zip(&values.jacobian) {
-            a[(r, c)] += v;
-        }
+        self.jacobian_dense_into(values, a.as_mut());
         a
+    }
+
+    /// `C_q` written into the dense `m × n_v` storage `out` (a transposed view takes `C_qᵀ`).
+    /// Allocates nothing.
+    fn jacobian_dense_into(&self, values: &ConstraintValues, mut out: faer::MatMut<'_, f64>) {
+        out.fill(0.0);
+        for (&(r, c), &v) in self.pattern().entries().iter().zip(&values.jacobian) {
+            out[(r, c)] += v;
+        }
     }
 
     /// Velocity-level residual `Ċ = C_q v + C_t` into `out`.

@@ -53,10 +53,7 @@ impl JacobianSvd {
     /// Decomposes `C_q` of `sys` at `values` (whose dimensions must be those given to
     /// [`JacobianSvd::new`]); `false` when the decomposition fails to converge. Allocates nothing.
     pub fn decompose<S: ConstraintSet + ?Sized>(&mut self, sys: &S, values: &ConstraintValues) -> bool {
-        self.a.fill(0.0);
-        for (&(r, c), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
-            self.a[(r, c)] += v;
-        }
+        sys.jacobian_dense_into(values, self.a.as_mut());
         let n = self.s.nrows();
         let s = self.s.as_mut().col_mut(0).subrows_mut(0, n).as_diagonal_mut();
         svd(

@@ -53,10 +53,7 @@ impl PartitionChoice {
     ) {
         let (n, m) = (self.jt.nrows(), self.jt.ncols());
         // Independent rows: pivot columns of C_qᵀ.
-        self.jt.fill(0.0);
-        for (&(r, c), &v) in sys.pattern().entries().iter().zip(&values.jacobian) {
-            self.jt[(c, r)] += v;
-        }
+        sys.jacobian_dense_into(values, self.jt.as_mut().transpose_mut());
         let found = self.pivot.rank(self.jt.as_mut(), rank_tolerance);
         let rank = rank.map_or(found, |r| r.min(m));
         out.rows.clear();
