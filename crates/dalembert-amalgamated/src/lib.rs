@@ -324,6 +324,35 @@ impl Formulation for Amalgamated {
         dqdd: &mut [f64],
         dlambda: &mut [f64],
     ) -> Result<bool, DynamicsError> {
+        self.respond(t, g, None, dqdd, dlambda)
+    }
+
+    /// The last evaluation's factors with right-hand side `[g; −γ_h; 0]`, `γ_h` the particular
+    /// solution of `C_q x = h` from the dependent columns' factors (false for redundant
+    /// equations).
+    fn linear_response(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        h: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        self.respond(t, g, Some(h), dqdd, dlambda)
+    }
+}
+
+impl Amalgamated {
+    /// The last evaluation's factors with the right-hand side `[g; −γ_h; 0]` (`γ_h = 0` when `h`
+    /// is `None`), and the multipliers from the dependent columns.
+    fn respond(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        h: Option<&[f64]>,
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
         let Amalgamated {
             tracker,
             work,
@@ -332,6 +361,7 @@ impl Formulation for Amalgamated {
             model,
             ..
         } = self;
+        let m = model.constraints().num_equations();
         let Some((partition, vt)) = tracker.last() else {
             return Ok(false);
         };
@@ -342,6 +372,16 @@ impl Formulation for Amalgamated {
         }
         work.rhs.iter_mut().for_each(|v| *v = 0.0);
         work.rhs[..n].copy_from_slice(g);
+        if let Some(h) = h {
+            if partition.rows.len() < m || h.len() != m {
+                return Ok(false);
+            }
+            // γ_h in `dqdd`, overwritten by the solution below.
+            vt.particular(h, dqdd);
+            for (r, &v) in work.rhs[n..2 * n].iter_mut().zip(dqdd.iter()) {
+                *r = -v;
+            }
+        }
         amalgamated_solve(&data.mass, vt, &mut work.schur, &work.rhs, &mut work.sol, &mut work.tmp);
         dqdd.copy_from_slice(&work.sol[..n]);
         for (y, &d) in work.y.iter_mut().zip(&partition.dependent) {

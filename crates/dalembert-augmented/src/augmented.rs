@@ -69,6 +69,33 @@ impl std::fmt::Debug for Augmented {
 }
 
 impl Augmented {
+    /// The last factorization's solve with right-hand side `[g; h]` (`h = 0` when `None`): false
+    /// after a solve on an independent row set, which keeps its own, or when the solve's check
+    /// fails.
+    fn respond(&mut self, g: &[f64], h: Option<&[f64]>, dqdd: &mut [f64], dlambda: &mut [f64]) -> bool {
+        if self.independent.is_some() {
+            return false;
+        }
+        let n = g.len();
+        self.b[..n].copy_from_slice(g);
+        match h {
+            Some(h) => self.b[n..].copy_from_slice(h),
+            None => self.b[n..].iter_mut().for_each(|v| *v = 0.0),
+        }
+        let solved = checked_solve(
+            &mut self.solver,
+            (&self.data.mass, self.model.constraints().pattern(), &self.data.values),
+            &self.b,
+            (&mut self.x, &mut self.r),
+            self.options.residual_tolerance,
+        );
+        if solved {
+            dqdd.copy_from_slice(&self.x[..n]);
+            dlambda.copy_from_slice(&self.x[n..]);
+        }
+        solved
+    }
+
     /// Sets up the formulation: workspaces, and for the sparse back ends the symbolic analysis.
     pub fn new(model: Arc<dyn MultibodySystem>, options: AugmentedOptions) -> Result<Self, DynamicsError> {
         let n = model.layout().n_v();
@@ -295,23 +322,22 @@ impl Formulation for Augmented {
         dqdd: &mut [f64],
         dlambda: &mut [f64],
     ) -> Result<bool, DynamicsError> {
-        if self.independent.is_some() {
+        Ok(self.respond(g, None, dqdd, dlambda))
+    }
+
+    /// `[M C_qᵀ; C_q 0] [Δq̈; Δλ] = [g; h]` with the last factorization (false as for
+    /// [`Formulation::force_response`], and for a tree solved outright).
+    fn linear_response(
+        &mut self,
+        _t: f64,
+        g: &[f64],
+        h: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        if self.model.kinematic_tree().is_some() || h.len() != self.b.len() - g.len() {
             return Ok(false);
         }
-        let n = g.len();
-        self.b[..n].copy_from_slice(g);
-        self.b[n..].iter_mut().for_each(|v| *v = 0.0);
-        let solved = checked_solve(
-            &mut self.solver,
-            (&self.data.mass, self.model.constraints().pattern(), &self.data.values),
-            &self.b,
-            (&mut self.x, &mut self.r),
-            self.options.residual_tolerance,
-        );
-        if solved {
-            dqdd.copy_from_slice(&self.x[..n]);
-            dlambda.copy_from_slice(&self.x[n..]);
-        }
-        Ok(solved)
+        Ok(self.respond(g, Some(h), dqdd, dlambda))
     }
 }

@@ -304,6 +304,13 @@ pub fn run(a: Args) -> Result<(), String> {
             k => format!(", {k} steps ended at an event (a contact, a stick or slip, an impact)"),
         }
     );
+    if stats.tangents_carried + stats.tangents_differenced > 0 {
+        outln!(
+            "tangents     {} steps carried through the method's stages, {} taken again on the changed models (docs/sensitivities.md)",
+            stats.tangents_carried,
+            stats.tangents_differenced
+        );
+    }
     outln!(
         "time         {:.3} ms in the integration loop ({:.2} µs per step)",
         stats.wall_time.as_secs_f64() * 1e3,

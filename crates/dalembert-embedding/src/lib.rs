@@ -340,6 +340,34 @@ impl Formulation for Embedding {
         dqdd: &mut [f64],
         dlambda: &mut [f64],
     ) -> Result<bool, DynamicsError> {
+        self.respond(t, g, None, dqdd, dlambda)
+    }
+
+    /// The last evaluation's solve with `g` for `Q_e` and `h` for the constraints' right-hand
+    /// side: its particular solution `γ_h` from the dependent columns' factors, then as
+    /// [`Formulation::force_response`] with `g − M γ_h` (false for redundant equations).
+    fn linear_response(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        h: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        self.respond(t, g, Some(h), dqdd, dlambda)
+    }
+}
+
+impl Embedding {
+    /// The last evaluation's factors with the right-hand side `[g; h]` (`h = 0` when `None`).
+    fn respond(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        h: Option<&[f64]>,
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
         let Embedding {
             tracker,
             work,
@@ -348,6 +376,7 @@ impl Formulation for Embedding {
             model,
             ..
         } = self;
+        let m = model.constraints().num_equations();
         let Some((partition, vt)) = tracker.last() else {
             return Ok(false);
         };
@@ -356,7 +385,18 @@ impl Formulation for Embedding {
         if work.ni != ni || work.lam_r.len() != r || work.rhs_full.len() != g.len() {
             return Ok(false);
         }
+        // `dqdd` holds `γ_h` until `B_i q̈_i` is added to it.
         work.rhs_full.copy_from_slice(g);
+        match h {
+            None => dqdd.iter_mut().for_each(|v| *v = 0.0),
+            Some(h) => {
+                if r < m || h.len() != m {
+                    return Ok(false);
+                }
+                vt.particular(h, dqdd);
+                data.mass.mul_add(-1.0, dqdd, &mut work.rhs_full);
+            }
+        }
         match &mut work.elimination {
             None => {
                 vt.mul_transpose(&work.rhs_full, &mut work.sol[..ni]);
@@ -368,7 +408,6 @@ impl Formulation for Embedding {
                 work.lam_r.copy_from_slice(&work.sol[ni..ni + r]);
             }
         }
-        dqdd.iter_mut().for_each(|v| *v = 0.0);
         vt.mul_add(&work.sol[..ni], dqdd);
         if work.elimination.is_none() {
             work.f.copy_from_slice(g);

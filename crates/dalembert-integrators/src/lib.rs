@@ -48,4 +48,4 @@ pub use options::IntegratorOptions;
 pub use registry::{method_names, Applies, Build, Method, MethodEntry, Parameter, TradeAxis, MAX_PARAMETERS, METHODS};
 pub use stabilization::Stabilization;
 pub use statistics::Statistics;
-pub use stepper::{Setup, StepControl, StepOutcome, Stepper};
+pub use stepper::{Setup, StepControl, StepOutcome, Stepper, TangentField};

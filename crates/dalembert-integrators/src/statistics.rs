@@ -27,6 +27,14 @@ pub struct Statistics {
     /// Events (a contact beginning or ending) a step was shortened to end at
     /// ([`dalembert_system::MultibodySystem::events`]).
     pub events: u64,
+    /// Steps of a run with sensitivities whose tangents the method carried through its stages,
+    /// solved with the run's own factorizations (fixed-step explicit methods,
+    /// `docs/sensitivities.md`).
+    pub tangents_carried: u64,
+    /// Steps of a run with sensitivities whose tangents were found by taking the step again on
+    /// each parameter's changed models (every other method, and a step the formulation could not
+    /// solve a tangent on: redundant equations).
+    pub tangents_differenced: u64,
     /// Wall time of the integration loop (excluding the observer's own time is not attempted).
     pub wall_time: Duration,
     /// Largest `‖C‖∞` after any accepted step.
@@ -72,6 +80,8 @@ impl Statistics {
             handovers: self.handovers + later.handovers,
             bridges: self.bridges + later.bridges,
             events: self.events + later.events,
+            tangents_carried: self.tangents_carried + later.tangents_carried,
+            tangents_differenced: self.tangents_differenced + later.tangents_differenced,
             wall_time: self.wall_time + later.wall_time,
             max_constraint_violation: self.max_constraint_violation.max(later.max_constraint_violation),
             max_velocity_violation: self.max_velocity_violation.max(later.max_velocity_violation),

@@ -78,6 +78,24 @@ pub trait Stepper: Send {
         Ok(false)
     }
 
+    /// [`Stepper::step`] carrying the run's sensitivities `S = ∂y/∂p` through the step with it:
+    /// each stage's tangent derivative `f_y S + f_p` from `tangents` right after the stage's
+    /// evaluation (whose factorization it reuses), combined by the method's own weights, and the
+    /// step's new tangents handed to [`TangentField::stepped`]. `Ok(None)` (nothing done) when
+    /// the method does not carry tangents; the loop then differences whole steps instead
+    /// (`docs/sensitivities.md`). Default: does not.
+    fn step_tangents(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+        tangents: &mut dyn TangentField,
+    ) -> Result<Option<StepOutcome>, IntegrationError> {
+        let _ = (f, t, h, y, tangents);
+        Ok(None)
+    }
+
     /// Dense output at fraction `theta ∈ [0, 1]` of the last accepted step, into `out`. Called only
     /// for [`StepControl::Adaptive`] methods.
     fn interpolate(&self, theta: f64, out: &mut [f64]) {
@@ -100,4 +118,36 @@ pub trait Stepper: Send {
     fn work(&self) -> FormulationStats {
         FormulationStats::default()
     }
+}
+
+/// The sensitivities a run carries, as a method that steps them with its state sees them
+/// ([`Stepper::step_tangents`]): for tangent `j`, `S_j = ∂y/∂p_j` at the step's start and the
+/// derivative of the first-order form `ẏ = [T(q) v; v̇]` along it.
+pub trait TangentField {
+    /// The number of tangents.
+    fn count(&self) -> usize;
+
+    /// Tangent `j` at the start of the step.
+    fn tangent(&self, j: usize) -> &[f64];
+
+    /// `out = f_y(t, y) s + f_p(t, y)` for tangent `j`, right after `f` was evaluated at
+    /// `(t, y)` (`qdd`, `lambda` its results, `baumgarte` the gains it was given): the change of
+    /// the accelerations solved with that evaluation's factorization. `Ok(false)` where it
+    /// cannot (the step's tangents are then found otherwise).
+    #[allow(clippy::too_many_arguments)]
+    fn derivative(
+        &mut self,
+        f: &mut dyn Formulation,
+        j: usize,
+        t: f64,
+        y: &[f64],
+        baumgarte: Option<Baumgarte>,
+        solution: (&[f64], &[f64]),
+        s: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, IntegrationError>;
+
+    /// Tangent `j` at the end of the step the method took from `(t, h)` (before the loop's
+    /// normalization and projection of the state `y` it ended at).
+    fn stepped(&mut self, j: usize, t: f64, h: f64, y: &[f64], s: &[f64]);
 }

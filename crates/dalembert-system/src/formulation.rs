@@ -318,6 +318,24 @@ pub trait Formulation: Send {
         Ok(false)
     }
 
+    /// After [`Formulation::accelerations`] at a state: the solution of the linearized equations
+    /// `[M C_qᵀ; C_q 0] [Δq̈; Δλ] = [g; h]` (`g` length `n`, `h` length `m`) with the same
+    /// factorization, as [`Formulation::force_response`] with a constraint right-hand side too.
+    /// A run's sensitivities take the change of the accelerations along a tangent from it
+    /// (`docs/sensitivities.md`). Returns false where the formulation cannot (redundant
+    /// equations, a tree solved outright); the caller then differences whole evaluations.
+    /// Default false.
+    fn linear_response(
+        &mut self,
+        _t: f64,
+        _g: &[f64],
+        _h: &[f64],
+        _dqdd: &mut [f64],
+        _dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        Ok(false)
+    }
+
     /// A run starts (or starts again) at `(t, q, v)`: a formulation whose law has modes (joint
     /// friction: stick or slip) takes them from this state. Default: nothing.
     fn start_events(&mut self, _t: f64, _q: &[f64], _v: &[f64]) {}

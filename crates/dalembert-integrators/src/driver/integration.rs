@@ -546,6 +546,7 @@ impl Integration {
     /// The statistics of the run so far (wall time: the run's own work, without the caller's).
     pub fn statistics(&self, f: &dyn Formulation) -> Statistics {
         let mut s = self.mon.statistics(f, self.stepper.work());
+        (s.tangents_carried, s.tangents_differenced) = self.tangents.counts();
         s.wall_time = self.busy;
         s
     }
@@ -601,7 +602,7 @@ impl Integration {
             tangents.mark(y);
             events.mark(y);
             let mut h = g.hh;
-            let mut outcome = stepper.step(f, ts, h, y)?;
+            let mut outcome = tangents.step(stepper.as_mut(), f, ts, h, y)?;
             // An event inside the step (a contact beginning or ending, a slip stopping, an
             // impact): the step again, to end there (the rest of the output interval is then
             // spanned anew from it), first where the event's tangent at the step's start says,
@@ -624,6 +625,7 @@ impl Integration {
                             // The event at the step's start changed the law: the step again,
                             // and its events looked for anew.
                             stepper.state_changed();
+                            tangents.discard();
                             outcome = stepper.step(f, ts, h, y)?;
                             restarted = true;
                             continue 'locate;
@@ -632,6 +634,7 @@ impl Integration {
                     }
                     events.restore(y);
                     stepper.state_changed();
+                    tangents.discard();
                     h = theta * full;
                     outcome = stepper.step(f, ts, h, y)?;
                     located = true;

@@ -14,9 +14,9 @@
 //! either side come from its own dense output (adaptive methods) or its state at the step's end.
 
 use super::{normalize, project};
-use crate::stepper::{Setup, StepControl, Stepper};
+use crate::stepper::{Setup, StepControl, StepOutcome, Stepper, TangentField};
 use crate::{IntegrationError, IntegratorOptions, Stabilization};
-use dalembert_system::{Baumgarte, Formulation};
+use dalembert_system::{Baumgarte, BlockDiagonal, ConstraintValues, Formulation};
 
 /// One parameter's perturbed models, given to [`super::Integration::with_sensitivities`].
 pub struct Perturbed {
@@ -55,6 +55,52 @@ struct Tangent {
     delta: f64,
     s: Vec<f64>,
     sides: [Side; 2],
+    /// The tangent at the end of the step a method carried it through
+    /// ([`Stepper::step_tangents`]), when `carried` is that step's start and size.
+    next: Vec<f64>,
+    carried: Option<(f64, f64)>,
+    work: Work,
+}
+
+/// The storage of a stage's tangent derivative ([`TangentField::derivative`]), sized with the
+/// run.
+struct Work {
+    /// A side's state `y ± δ s`.
+    y: Vec<f64>,
+    mass: BlockDiagonal,
+    values: ConstraintValues,
+    cdot: Vec<f64>,
+    rhs: Vec<f64>,
+    /// Each side's dynamic residual `M q̈ + C_qᵀ λ − Q`, constraint residual `C_q q̈ − γ` and
+    /// position rates `T(q) v`.
+    r: [Vec<f64>; 2],
+    c: [Vec<f64>; 2],
+    rates: [Vec<f64>; 2],
+    g: Vec<f64>,
+    h: Vec<f64>,
+    dqdd: Vec<f64>,
+    dlambda: Vec<f64>,
+}
+
+impl Work {
+    fn new(f: &dyn Formulation, len: usize, n_q: usize) -> Self {
+        let system = f.system();
+        let (n_v, m) = (len - n_q, system.num_equations());
+        Work {
+            y: vec![0.0; len],
+            mass: system.mass_storage(),
+            values: system.constraints().values(),
+            cdot: vec![0.0; m],
+            rhs: vec![0.0; m],
+            r: [vec![0.0; n_v], vec![0.0; n_v]],
+            c: [vec![0.0; m], vec![0.0; m]],
+            rates: [vec![0.0; n_q], vec![0.0; n_q]],
+            g: vec![0.0; n_v],
+            h: vec![0.0; m],
+            dqdd: vec![0.0; n_v],
+            dlambda: vec![0.0; m],
+        }
+    }
 }
 
 /// The tangents a run keeps (none for a plain run). Allocated with the run; nothing while
@@ -68,6 +114,10 @@ pub(super) struct Tangents {
     /// True when the sides' `shown` states are at the time shown (dense output); otherwise their
     /// `y` are.
     shown_between: bool,
+    n_q: usize,
+    /// Steps whose tangents were carried by the method and differenced as whole steps.
+    carried: u64,
+    differenced: u64,
 }
 
 impl Tangents {
@@ -121,14 +171,18 @@ impl Tangents {
             };
             let plus = side(p.plus, p.y_plus)?;
             let minus = side(p.minus, p.y_minus)?;
-            let s = (plus.y.iter().zip(&minus.y))
+            let s: Vec<f64> = (plus.y.iter().zip(&minus.y))
                 .map(|(a, b)| (a - b) / (2.0 * p.delta))
                 .collect();
+            let work = Work::new(plus.f.as_ref(), y0.len(), n_q);
             tangents.push(Tangent {
                 name: p.name,
                 delta: p.delta,
+                next: s.clone(),
                 s,
                 sides: [plus, minus],
+                carried: None,
+                work,
             });
         }
         Ok(Tangents {
@@ -136,6 +190,9 @@ impl Tangents {
             start: vec![0.0; y0.len()],
             adaptive: entry.control == StepControl::Adaptive,
             shown_between: false,
+            n_q,
+            carried: 0,
+            differenced: 0,
         })
     }
 
@@ -149,7 +206,36 @@ impl Tangents {
         if !self.is_empty() {
             self.start.copy_from_slice(y);
         }
+        self.discard();
         self.shown_between = false;
+    }
+
+    /// Forgets the tangents a method carried through the step in progress: the step is taken
+    /// again (to end at an event), and [`Tangents::follow`] then follows the step taken last.
+    pub fn discard(&mut self) {
+        for tangent in &mut self.tangents {
+            tangent.carried = None;
+        }
+    }
+
+    /// The run's step of a fixed-step method from `(t, y)`, of size `h`, carrying the tangents
+    /// through it where the method can ([`Stepper::step_tangents`]); [`Tangents::follow`] then
+    /// takes them, or differences the step where they were not carried.
+    pub fn step(
+        &mut self,
+        stepper: &mut dyn Stepper,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+    ) -> Result<StepOutcome, IntegrationError> {
+        if self.is_empty() || self.adaptive {
+            return stepper.step(f, t, h, y);
+        }
+        match stepper.step_tangents(f, t, h, y, self)? {
+            Some(outcome) => Ok(outcome),
+            None => stepper.step(f, t, h, y),
+        }
     }
 
     /// Follows the run's accepted step of size `h` from `t` (begun at the state [`Tangents::mark`]
@@ -157,8 +243,23 @@ impl Tangents {
     /// method is then told that its state changed, as the run's is).
     pub fn follow(&mut self, t: f64, h: f64, n_q: usize, projected: bool) -> Result<(), IntegrationError> {
         let (start, adaptive) = (&self.start, self.adaptive);
+        let mut all_carried = true;
         for tangent in &mut self.tangents {
-            let Tangent { name, delta, s, sides } = tangent;
+            let Tangent {
+                name,
+                delta,
+                s,
+                sides,
+                next,
+                carried,
+                ..
+            } = tangent;
+            if carried.take() == Some((t, h)) {
+                // Carried through the step by the method; the sides' states were set then.
+                s.copy_from_slice(next);
+                continue;
+            }
+            all_carried = false;
             for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
                 for i in 0..start.len() {
                     side.y[i] = start[i] + sign * *delta * s[i];
@@ -188,7 +289,18 @@ impl Tangents {
                 s[i] = (plus.y[i] - minus.y[i]) / (2.0 * *delta);
             }
         }
+        if !self.tangents.is_empty() {
+            match all_carried {
+                true => self.carried += 1,
+                false => self.differenced += 1,
+            }
+        }
         Ok(())
+    }
+
+    /// The steps whose tangents a method carried, and those differenced as whole steps.
+    pub fn counts(&self) -> (u64, u64) {
+        (self.carried, self.differenced)
     }
 
     /// Shows each side at fraction `theta` of the last step (dense output of an adaptive method),
@@ -225,5 +337,96 @@ impl Tangents {
     /// The sensitivity `∂y/∂p` of tangent `j` at the run's own state (after the last step).
     pub fn tangent(&self, j: usize) -> &[f64] {
         &self.tangents[j].s
+    }
+}
+
+impl TangentField for Tangents {
+    fn count(&self) -> usize {
+        self.tangents.len()
+    }
+
+    fn tangent(&self, j: usize) -> &[f64] {
+        &self.tangents[j].s
+    }
+
+    /// The dynamic and constraint residuals of the two sides' models at `y ± δ s`, with the
+    /// run's `q̈` and `λ` held, differenced: `−(R₊ − R₋) / 2δ` is the right-hand side whose
+    /// solution with the run's factorization ([`Formulation::linear_response`]) is the change of
+    /// `q̈` along `(s, 1)`; the position rates `T(q) v` are differenced the same way
+    /// (`docs/sensitivities.md`, (S5)).
+    fn derivative(
+        &mut self,
+        f: &mut dyn Formulation,
+        j: usize,
+        t: f64,
+        y: &[f64],
+        baumgarte: Option<Baumgarte>,
+        (qdd, lambda): (&[f64], &[f64]),
+        s: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, IntegrationError> {
+        let n_q = self.n_q;
+        let Tangent {
+            delta, sides, work, ..
+        } = &mut self.tangents[j];
+        let delta = *delta;
+        for (k, (side, sign)) in sides.iter().zip([1.0, -1.0]).enumerate() {
+            for i in 0..y.len() {
+                work.y[i] = y[i] + sign * delta * s[i];
+            }
+            let (q, v) = work.y.split_at(n_q);
+            let system = side.f.system();
+            let constraints = system.constraints();
+            system.dynamics_residual(t, (q, v), (qdd, lambda), (&mut work.mass, &mut work.values), &mut work.r[k]);
+            constraints.jacobian_mul(&work.values, qdd, &mut work.c[k]);
+            if baumgarte.is_some() {
+                constraints.velocity_residual(&work.values, v, &mut work.cdot);
+            }
+            Baumgarte::apply(baumgarte, &work.values.gamma, &work.values.c, &work.cdot, &mut work.rhs);
+            for (c, r) in work.c[k].iter_mut().zip(&work.rhs) {
+                *c -= r;
+            }
+            system.position_rates(q, v, &mut work.rates[k]);
+        }
+        let scale = -1.0 / (2.0 * delta);
+        for (g, (a, b)) in work.g.iter_mut().zip(work.r[0].iter().zip(&work.r[1])) {
+            *g = scale * (a - b);
+        }
+        for (h, (a, b)) in work.h.iter_mut().zip(work.c[0].iter().zip(&work.c[1])) {
+            *h = scale * (a - b);
+        }
+        if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
+            return Ok(false);
+        }
+        let (rates, vdot) = out.split_at_mut(n_q);
+        for (o, (a, b)) in rates.iter_mut().zip(work.rates[0].iter().zip(&work.rates[1])) {
+            *o = (a - b) / (2.0 * delta);
+        }
+        vdot.copy_from_slice(&work.dqdd);
+        Ok(vdot.iter().all(|v| v.is_finite()))
+    }
+
+    /// Each side's state `y ± δ s` at the step's end, normalized as a side's own step is, and
+    /// the tangent their difference.
+    fn stepped(&mut self, j: usize, t: f64, h: f64, y: &[f64], s: &[f64]) {
+        let n_q = self.n_q;
+        let Tangent {
+            delta,
+            sides,
+            next,
+            carried,
+            ..
+        } = &mut self.tangents[j];
+        for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+            for i in 0..y.len() {
+                side.y[i] = y[i] + sign * *delta * s[i];
+            }
+            normalize(side.f.as_ref(), &mut side.y, n_q);
+        }
+        let [plus, minus] = &*sides;
+        for i in 0..next.len() {
+            next[i] = (plus.y[i] - minus.y[i]) / (2.0 * *delta);
+        }
+        *carried = Some((t, h));
     }
 }

@@ -264,6 +264,23 @@ impl VelocityTransform {
         }
     }
 
+    /// The particular solution `γ` of `C_q x = rhs` that [`VelocityTransform::compute`] writes
+    /// (zero on the independent coordinates, `C_qd⁻¹ rhs_R` on the dependent ones, `rhs` of
+    /// length `m`) into `out` (length `n`), for another right-hand side: `B_i` and the transform's
+    /// own `γ` are left as they are. Allocates nothing.
+    pub fn particular(&mut self, rhs: &[f64], out: &mut [f64]) {
+        for (g, &row) in self.g.iter_mut().zip(&self.rows) {
+            *g = rhs[row];
+        }
+        let mut g = std::mem::take(&mut self.g);
+        self.solve_dependent(&mut g);
+        self.g = g;
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &d) in self.dependent.iter().enumerate() {
+            out[d] = self.g[k];
+        }
+    }
+
     /// Solves `C_qd x = y` (length `r`) in place.
     pub fn solve_dependent(&mut self, y: &mut [f64]) {
         match &mut self.factor {
