@@ -102,6 +102,14 @@ pub trait Stepper: Send {
         let _ = (theta, out);
     }
 
+    /// Dense output of tangent `j` ([`Stepper::step_tangents`]) at fraction `theta` of the last
+    /// accepted step, into `out`; false when that step did not carry the tangents. Default
+    /// false.
+    fn interpolate_tangent(&self, j: usize, theta: f64, out: &mut [f64]) -> bool {
+        let _ = (j, theta, out);
+        false
+    }
+
     /// The loop changed the state after the last step (a projection): anything the method kept
     /// about it is stale.
     fn state_changed(&mut self) {}
@@ -129,6 +137,17 @@ pub trait TangentField {
 
     /// Tangent `j` at the start of the step.
     fn tangent(&self, j: usize) -> &[f64];
+
+    /// The change `δ` of tangent `j`'s parameter: a method that differences a map of its own
+    /// along the tangent (`(g(y + δ s) − g(y − δ s)) / 2δ`) takes the same.
+    fn delta(&self, j: usize) -> f64;
+
+    /// The run's step begins at `(t, y)`, `f` just evaluated there: where the run's state was
+    /// projected after the last step, each tangent is made to hold the projected state's
+    /// constraints too (the derivative of the projection, solved with that evaluation's
+    /// factorization). Called before the first [`TangentField::derivative`] of a step. Returns
+    /// false where the formulation cannot solve it.
+    fn begin(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64]) -> Result<bool, IntegrationError>;
 
     /// `out = f_y(t, y) s + f_p(t, y)` for tangent `j`, right after `f` was evaluated at
     /// `(t, y)` (`qdd`, `lambda` its results, `baumgarte` the gains it was given): the change of

@@ -407,7 +407,7 @@ impl Integration {
         if let Some((ts, h)) = dense.filter(|&(ts, _)| t >= ts) {
             let theta = ((t - ts) / h).clamp(0.0, 1.0);
             self.stepper.interpolate(theta, &mut self.shown);
-            self.tangents.show(theta, n_q);
+            self.tangents.show(self.stepper.as_ref(), theta, n_q);
         } else if (self.t - t).abs() <= tolerance(t) || self.t_prev.is_nan() {
             self.shown_is_run = true;
             self.tangents.show_run();
@@ -789,7 +789,7 @@ impl Integration {
             }
             tangents.mark(y);
             events.mark(y);
-            let outcome = stepper.step(f, *t, a.h, y)?;
+            let outcome = tangents.step(stepper.as_mut(), f, *t, a.h, y)?;
             if outcome.accepted && !events.located {
                 // A contact beginning or ending inside the step: the step again, to end there.
                 if let Some(theta) = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q) {

@@ -59,6 +59,8 @@ struct Tangent {
     /// ([`Stepper::step_tangents`]), when `carried` is that step's start and size.
     next: Vec<f64>,
     carried: Option<(f64, f64)>,
+    /// True when the run's state was projected after the last step and the tangent not yet.
+    project: bool,
     work: Work,
 }
 
@@ -80,6 +82,8 @@ struct Work {
     h: Vec<f64>,
     dqdd: Vec<f64>,
     dlambda: Vec<f64>,
+    /// Positions moved along a correction (velocity coordinates), each way.
+    q_moved: [Vec<f64>; 2],
 }
 
 impl Work {
@@ -99,6 +103,7 @@ impl Work {
             h: vec![0.0; m],
             dqdd: vec![0.0; n_v],
             dlambda: vec![0.0; m],
+            q_moved: [vec![0.0; n_q], vec![0.0; n_q]],
         }
     }
 }
@@ -118,6 +123,10 @@ pub(super) struct Tangents {
     /// Steps whose tangents were carried by the method and differenced as whole steps.
     carried: u64,
     differenced: u64,
+    /// True when the last step's tangents were carried by the method.
+    last_carried: bool,
+    /// True when the run projects its state after each step.
+    projects: bool,
 }
 
 impl Tangents {
@@ -182,6 +191,7 @@ impl Tangents {
                 s,
                 sides: [plus, minus],
                 carried: None,
+                project: false,
                 work,
             });
         }
@@ -193,6 +203,8 @@ impl Tangents {
             n_q,
             carried: 0,
             differenced: 0,
+            last_carried: false,
+            projects: stabilization.projection_tolerance().is_some(),
         })
     }
 
@@ -218,7 +230,7 @@ impl Tangents {
         }
     }
 
-    /// The run's step of a fixed-step method from `(t, y)`, of size `h`, carrying the tangents
+    /// The run's step from `(t, y)`, of size `h`, carrying the tangents
     /// through it where the method can ([`Stepper::step_tangents`]); [`Tangents::follow`] then
     /// takes them, or differences the step where they were not carried.
     pub fn step(
@@ -229,7 +241,7 @@ impl Tangents {
         h: f64,
         y: &mut [f64],
     ) -> Result<StepOutcome, IntegrationError> {
-        if self.is_empty() || self.adaptive {
+        if self.is_empty() {
             return stepper.step(f, t, h, y);
         }
         match stepper.step_tangents(f, t, h, y, self)? {
@@ -242,9 +254,11 @@ impl Tangents {
     /// kept), where `projected` says whether the run's state was projected after it (each side's
     /// method is then told that its state changed, as the run's is).
     pub fn follow(&mut self, t: f64, h: f64, n_q: usize, projected: bool) -> Result<(), IntegrationError> {
-        let (start, adaptive) = (&self.start, self.adaptive);
+        let (start, adaptive, projects) = (&self.start, self.adaptive, self.projects);
         let mut all_carried = true;
         for tangent in &mut self.tangents {
+            // A fixed-step run's projection is not reported to `follow`: its stabilization says.
+            tangent.project = projected || (projects && !adaptive);
             let Tangent {
                 name,
                 delta,
@@ -255,8 +269,10 @@ impl Tangents {
                 ..
             } = tangent;
             if carried.take() == Some((t, h)) {
-                // Carried through the step by the method; the sides' states were set then.
+                // Carried through the step by the method; the sides' states were set then, and
+                // what their own methods kept of a step is stale.
                 s.copy_from_slice(next);
+                sides.iter_mut().for_each(|side| side.stepper.state_changed());
                 continue;
             }
             all_carried = false;
@@ -295,6 +311,7 @@ impl Tangents {
                 false => self.differenced += 1,
             }
         }
+        self.last_carried = all_carried;
         Ok(())
     }
 
@@ -305,9 +322,26 @@ impl Tangents {
 
     /// Shows each side at fraction `theta` of the last step (dense output of an adaptive method),
     /// normalized but not projected, as the sides' steps are.
-    pub fn show(&mut self, theta: f64, n_q: usize) {
-        for tangent in &mut self.tangents {
-            for side in &mut tangent.sides {
+    /// After a step the run's method carried the tangents through, each side is the run's dense
+    /// output `± δ` the tangent's (`run`, the run's method).
+    pub fn show(&mut self, run: &dyn Stepper, theta: f64, n_q: usize) {
+        let last_carried = self.last_carried;
+        for (j, tangent) in self.tangents.iter_mut().enumerate() {
+            let Tangent { delta, sides, work, .. } = tangent;
+            if last_carried && run.interpolate_tangent(j, theta, &mut work.y) {
+                let [plus, minus] = sides;
+                run.interpolate(theta, &mut plus.shown);
+                for i in 0..work.y.len() {
+                    let (y, s) = (plus.shown[i], *delta * work.y[i]);
+                    plus.shown[i] = y + s;
+                    minus.shown[i] = y - s;
+                }
+                for side in sides.iter_mut() {
+                    normalize(side.f.as_ref(), &mut side.shown, n_q);
+                }
+                continue;
+            }
+            for side in sides.iter_mut() {
                 side.stepper.interpolate(theta, &mut side.shown);
                 normalize(side.f.as_ref(), &mut side.shown, n_q);
             }
@@ -340,6 +374,92 @@ impl Tangents {
     }
 }
 
+/// The largest change of a coordinate, relative to `1 + ‖y‖∞`, of a difference along a tangent:
+/// central differences' truncation `(10⁻⁶)²` and round-off `10⁻¹⁶ / 10⁻⁶` stay near `10⁻¹⁰`
+/// (measured against whole runs, `docs/sensitivities.md`: `10⁻⁷` lets round-off accumulate to
+/// 2e-7 over a 10 s four-bar, `10⁻⁵` truncation to 7e-5 on the spatial slider-crank).
+const STATE_STEP: f64 = 1e-6;
+
+/// The step `ε` of a difference along the tangent `s` at the state `y`: its largest change of a
+/// coordinate [`STATE_STEP`]` (1 + ‖y‖∞)` however large the tangent grows
+/// (`docs/sensitivities.md`, (S5)). `None` for a zero tangent.
+fn state_step(y: &[f64], s: &[f64]) -> Option<f64> {
+    let largest = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let size = largest(s);
+    (size > 0.0 && size.is_finite()).then(|| STATE_STEP * (1.0 + largest(y)) / size)
+}
+
+/// The largest change of a coordinate, relative to `1 + ‖y‖∞`, for which a stage's derivative
+/// differences the two changed models at `y ± δ s` in one go (two residual evaluations); beyond
+/// it the tangent's own direction and the parameter are differenced apart (four), so that the
+/// truncation stays below `(10⁻⁴)²` of the residual's curvature however large the tangent grows
+/// (`docs/sensitivities.md`, (S5)).
+const COMBINED_UP_TO: f64 = 1e-4;
+
+/// True when the change `δ s` of the state is small enough for the one difference along
+/// `(s, 1)` ([`COMBINED_UP_TO`]).
+fn combined(delta: f64, y: &[f64], s: &[f64]) -> bool {
+    let largest = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    delta * largest(s) <= COMBINED_UP_TO * (1.0 + largest(y))
+}
+
+/// The residuals `(M q̈ + C_qᵀ λ − Q, C_q q̈ − γ)` of `system` at `y` (`γ` with the Baumgarte
+/// terms when given), with `(q̈, λ)` held, into `r` and `c`.
+#[allow(clippy::too_many_arguments)]
+fn residuals(
+    system: &dyn dalembert_system::MultibodySystem,
+    t: f64,
+    y: &[f64],
+    n_q: usize,
+    baumgarte: Option<Baumgarte>,
+    (qdd, lambda): (&[f64], &[f64]),
+    work: &mut Work,
+    k: usize,
+) {
+    let (q, v) = y.split_at(n_q);
+    let constraints = system.constraints();
+    system.dynamics_residual(
+        t,
+        (q, v),
+        (qdd, lambda),
+        (&mut work.mass, &mut work.values),
+        &mut work.r[k],
+    );
+    constraints.jacobian_mul(&work.values, qdd, &mut work.c[k]);
+    if baumgarte.is_some() {
+        constraints.velocity_residual(&work.values, v, &mut work.cdot);
+    }
+    Baumgarte::apply(baumgarte, &work.values.gamma, &work.values.c, &work.cdot, &mut work.rhs);
+    for (c, r) in work.c[k].iter_mut().zip(&work.rhs) {
+        *c -= r;
+    }
+}
+
+/// The constraints `C` (or `Ċ = C_q v + C_t`, `velocities`) of `system` at `y` into `out`.
+fn constraint_residual(
+    system: &dyn dalembert_system::MultibodySystem,
+    t: f64,
+    (y, n_q): (&[f64], usize),
+    velocities: bool,
+    values: &mut ConstraintValues,
+    out: &mut [f64],
+) {
+    let (q, v) = y.split_at(n_q);
+    let constraints = system.constraints();
+    constraints.evaluate(t, q, v, values);
+    match velocities {
+        false => out.copy_from_slice(&values.c),
+        true => constraints.velocity_residual(values, v, out),
+    }
+}
+
+/// `out ← scale (a − b)` added to `out` (`add`) or written.
+fn difference(out: &mut [f64], a: &[f64], b: &[f64], scale: f64, add: bool) {
+    for (o, (a, b)) in out.iter_mut().zip(a.iter().zip(b)) {
+        *o = if add { *o } else { 0.0 } + scale * (a - b);
+    }
+}
+
 impl TangentField for Tangents {
     fn count(&self) -> usize {
         self.tangents.len()
@@ -349,10 +469,83 @@ impl TangentField for Tangents {
         &self.tangents[j].s
     }
 
-    /// The dynamic and constraint residuals of the two sides' models at `y ± δ s`, with the
-    /// run's `q̈` and `λ` held, differenced: `−(R₊ − R₋) / 2δ` is the right-hand side whose
-    /// solution with the run's factorization ([`Formulation::linear_response`]) is the change of
-    /// `q̈` along `(s, 1)`; the position rates `T(q) v` are differenced the same way
+    fn delta(&self, j: usize) -> f64 {
+        self.tangents[j].delta
+    }
+
+    /// The derivative of the run's projection along each tangent that has not followed it:
+    /// positions first, `S_q ← S_q ⊕ x` with `[M C_qᵀ; C_q 0] [x; μ] = [0; −(C_q S_q + C_p)]`,
+    /// then velocities the same way with `Ċ = C_q v + C_t`; the derivatives along the tangent by
+    /// differences on the run's model with the step `ε` of [`state_step`], those along the
+    /// parameter by the two changed models at the run's state (`docs/sensitivities.md`, (S6)).
+    fn begin(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64]) -> Result<bool, IntegrationError> {
+        let n_q = self.n_q;
+        for tangent in &mut self.tangents {
+            if !tangent.project {
+                continue;
+            }
+            let Tangent {
+                delta, sides, work, s, ..
+            } = tangent;
+            let delta = *delta;
+            for velocities in [false, true] {
+                work.h.iter_mut().for_each(|h| *h = 0.0);
+                if let Some(eps) = state_step(y, s) {
+                    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                        for i in 0..y.len() {
+                            work.y[i] = y[i] + sign * eps * s[i];
+                        }
+                        constraint_residual(
+                            f.system(),
+                            t,
+                            (&work.y, n_q),
+                            velocities,
+                            &mut work.values,
+                            &mut work.c[k],
+                        );
+                    }
+                    difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
+                }
+                for (k, side) in sides.iter().enumerate() {
+                    let c = &mut work.c[k];
+                    constraint_residual(side.f.system(), t, (y, n_q), velocities, &mut work.values, c);
+                }
+                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
+                work.g.iter_mut().for_each(|g| *g = 0.0);
+                if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
+                    return Ok(false);
+                }
+                let (s_q, s_v) = s.split_at_mut(n_q);
+                if velocities {
+                    s_v.iter_mut().zip(&work.dqdd).for_each(|(a, x)| *a += x);
+                } else {
+                    // The correction `x` is in velocity coordinates: its change of the
+                    // positions is `d(q ⊕ ε x)/dε`, differenced.
+                    let largest = work.dqdd.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                    if largest > 0.0 {
+                        let eps = STATE_STEP * (1.0 + y[..n_q].iter().fold(0.0f64, |a, x| a.max(x.abs()))) / largest;
+                        let system = f.system();
+                        for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                            work.q_moved[k].copy_from_slice(&y[..n_q]);
+                            system.integrate_positions(&mut work.q_moved[k], &work.dqdd, sign * eps);
+                        }
+                        let [plus, minus] = &work.q_moved;
+                        for i in 0..n_q {
+                            s_q[i] += (plus[i] - minus[i]) / (2.0 * eps);
+                        }
+                    }
+                }
+            }
+            tangent.project = false;
+        }
+        Ok(true)
+    }
+
+    /// The change of `q̈` along `(s, 1)`: the right-hand side `−(R_y s + R_p)` of the dynamic and
+    /// constraint residuals `R` with the run's `q̈` and `λ` held, solved with the run's
+    /// factorization ([`Formulation::linear_response`]). `R_y s` by central differences on the
+    /// run's model with the step `ε` of [`state_step`], `R_p` by the two changed models at the
+    /// run's state (`(R₊ − R₋) / 2δ`); the position rates `T(q) v` along `s` the same way
     /// (`docs/sensitivities.md`, (S5)).
     fn derivative(
         &mut self,
@@ -361,53 +554,68 @@ impl TangentField for Tangents {
         t: f64,
         y: &[f64],
         baumgarte: Option<Baumgarte>,
-        (qdd, lambda): (&[f64], &[f64]),
+        solution: (&[f64], &[f64]),
         s: &[f64],
         out: &mut [f64],
     ) -> Result<bool, IntegrationError> {
         let n_q = self.n_q;
-        let Tangent {
-            delta, sides, work, ..
-        } = &mut self.tangents[j];
+        let Tangent { delta, sides, work, .. } = &mut self.tangents[j];
         let delta = *delta;
-        for (k, (side, sign)) in sides.iter().zip([1.0, -1.0]).enumerate() {
-            for i in 0..y.len() {
-                work.y[i] = y[i] + sign * delta * s[i];
+        let (rates, vdot) = out.split_at_mut(n_q);
+        if combined(delta, y, s) {
+            // One difference along `(s, 1)`: the two changed models at `y ± δ s`.
+            for (k, (side, sign)) in sides.iter().zip([1.0, -1.0]).enumerate() {
+                for i in 0..y.len() {
+                    work.y[i] = y[i] + sign * delta * s[i];
+                }
+                let moved = std::mem::take(&mut work.y);
+                residuals(side.f.system(), t, &moved, n_q, baumgarte, solution, work, k);
+                let (q, v) = moved.split_at(n_q);
+                side.f.system().position_rates(q, v, &mut work.rates[k]);
+                work.y = moved;
             }
-            let (q, v) = work.y.split_at(n_q);
-            let system = side.f.system();
-            let constraints = system.constraints();
-            system.dynamics_residual(t, (q, v), (qdd, lambda), (&mut work.mass, &mut work.values), &mut work.r[k]);
-            constraints.jacobian_mul(&work.values, qdd, &mut work.c[k]);
-            if baumgarte.is_some() {
-                constraints.velocity_residual(&work.values, v, &mut work.cdot);
+            difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / delta, false);
+            difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, false);
+            difference(rates, &work.rates[0], &work.rates[1], 0.5 / delta, false);
+            if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
+                return Ok(false);
             }
-            Baumgarte::apply(baumgarte, &work.values.gamma, &work.values.c, &work.cdot, &mut work.rhs);
-            for (c, r) in work.c[k].iter_mut().zip(&work.rhs) {
-                *c -= r;
+            vdot.copy_from_slice(&work.dqdd);
+            return Ok(vdot.iter().chain(rates.iter()).all(|v| v.is_finite()));
+        }
+        work.g.iter_mut().for_each(|g| *g = 0.0);
+        work.h.iter_mut().for_each(|h| *h = 0.0);
+        rates.iter_mut().for_each(|r| *r = 0.0);
+        if let Some(eps) = state_step(y, s) {
+            for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                for i in 0..y.len() {
+                    work.y[i] = y[i] + sign * eps * s[i];
+                }
+                let moved = std::mem::take(&mut work.y);
+                residuals(f.system(), t, &moved, n_q, baumgarte, solution, work, k);
+                let (q, v) = moved.split_at(n_q);
+                f.system().position_rates(q, v, &mut work.rates[k]);
+                work.y = moved;
             }
-            system.position_rates(q, v, &mut work.rates[k]);
+            difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / eps, false);
+            difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
+            difference(rates, &work.rates[0], &work.rates[1], 0.5 / eps, false);
         }
-        let scale = -1.0 / (2.0 * delta);
-        for (g, (a, b)) in work.g.iter_mut().zip(work.r[0].iter().zip(&work.r[1])) {
-            *g = scale * (a - b);
+        for (k, side) in sides.iter().enumerate() {
+            residuals(side.f.system(), t, y, n_q, baumgarte, solution, work, k);
         }
-        for (h, (a, b)) in work.h.iter_mut().zip(work.c[0].iter().zip(&work.c[1])) {
-            *h = scale * (a - b);
-        }
+        difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / delta, true);
+        difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
         if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
             return Ok(false);
         }
-        let (rates, vdot) = out.split_at_mut(n_q);
-        for (o, (a, b)) in rates.iter_mut().zip(work.rates[0].iter().zip(&work.rates[1])) {
-            *o = (a - b) / (2.0 * delta);
-        }
         vdot.copy_from_slice(&work.dqdd);
-        Ok(vdot.iter().all(|v| v.is_finite()))
+        Ok(vdot.iter().chain(rates.iter()).all(|v| v.is_finite()))
     }
 
-    /// Each side's state `y ± δ s` at the step's end, normalized as a side's own step is, and
-    /// the tangent their difference.
+    /// The tangent at the step's end through the normalization of the positions (unit Euler
+    /// parameters; the same map on every model), differenced with the step `ε` of
+    /// [`state_step`]; each side's state `y ± δ S` for its output samples.
     fn stepped(&mut self, j: usize, t: f64, h: f64, y: &[f64], s: &[f64]) {
         let n_q = self.n_q;
         let Tangent {
@@ -417,15 +625,23 @@ impl TangentField for Tangents {
             carried,
             ..
         } = &mut self.tangents[j];
+        next.copy_from_slice(s);
+        if let Some(eps) = state_step(y, s) {
+            // The sides' states hold `y ± ε s` until they are set below.
+            for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
+                for i in 0..y.len() {
+                    side.y[i] = y[i] + sign * eps * s[i];
+                }
+                normalize(side.f.as_ref(), &mut side.y, n_q);
+            }
+            let [plus, minus] = &*sides;
+            difference(&mut next[..n_q], &plus.y[..n_q], &minus.y[..n_q], 0.5 / eps, false);
+        }
         for (side, sign) in sides.iter_mut().zip([1.0, -1.0]) {
             for i in 0..y.len() {
-                side.y[i] = y[i] + sign * *delta * s[i];
+                side.y[i] = y[i] + sign * *delta * next[i];
             }
             normalize(side.f.as_ref(), &mut side.y, n_q);
-        }
-        let [plus, minus] = &*sides;
-        for i in 0..next.len() {
-            next[i] = (plus.y[i] - minus.y[i]) / (2.0 * *delta);
         }
         *carried = Some((t, h));
     }

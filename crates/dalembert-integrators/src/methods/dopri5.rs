@@ -4,9 +4,9 @@
 
 use super::first_order::derivative;
 use crate::registry::{no_advice, positive, Applies, MethodEntry, Parameter, TradeAxis};
-use crate::stepper::{Setup, StepControl, StepOutcome, Stepper};
+use crate::stepper::{Setup, StepControl, StepOutcome, Stepper, TangentField};
 use crate::{IntegrationError, Method};
-use dalembert_system::{Baumgarte, DynamicsError, Formulation};
+use dalembert_system::{Baumgarte, Formulation};
 
 /// The registry entry.
 pub(crate) static ENTRY: MethodEntry = MethodEntry {
@@ -72,7 +72,7 @@ impl Stepper for Stepping {
         h: f64,
         y: &mut [f64],
     ) -> Result<StepOutcome, IntegrationError> {
-        let a = self.dp.attempt(f, t, h, y, self.baumgarte)?;
+        let (a, _) = self.dp.attempt(f, t, h, y, self.baumgarte, None)?;
         let accepted = a.error <= 1.0;
         if accepted {
             self.dp.accept(h, a.error, y);
@@ -84,6 +84,31 @@ impl Stepper for Stepping {
         })
     }
 
+    /// The step with the tangents carried through its stages; they do not take part in the
+    /// error control (the run's steps are the state's, `docs/sensitivities.md`).
+    fn step_tangents(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        h: f64,
+        y: &mut [f64],
+        tangents: &mut dyn TangentField,
+    ) -> Result<Option<StepOutcome>, IntegrationError> {
+        let (a, carried) = self.dp.attempt(f, t, h, y, self.baumgarte, Some(&mut *tangents))?;
+        let accepted = a.error <= 1.0;
+        if accepted {
+            self.dp.accept(h, a.error, y);
+            if carried {
+                self.dp.accept_tangents(t, h, y, tangents);
+            }
+        }
+        Ok(Some(StepOutcome {
+            accepted,
+            error: a.error,
+            next_step: a.next_step,
+        }))
+    }
+
     fn step_unchecked(
         &mut self,
         f: &mut dyn Formulation,
@@ -91,7 +116,7 @@ impl Stepper for Stepping {
         h: f64,
         y: &mut [f64],
     ) -> Result<bool, IntegrationError> {
-        let a = self.dp.attempt(f, t, h, y, self.baumgarte)?;
+        let (a, _) = self.dp.attempt(f, t, h, y, self.baumgarte, None)?;
         if !a.error.is_finite() {
             return Ok(false);
         }
@@ -101,6 +126,16 @@ impl Stepper for Stepping {
 
     fn interpolate(&self, theta: f64, out: &mut [f64]) {
         self.dp.interpolate(theta, out);
+    }
+
+    fn interpolate_tangent(&self, j: usize, theta: f64, out: &mut [f64]) -> bool {
+        match self.dp.tangent_cont.get(j) {
+            Some(cont) if self.dp.tangents_carried => {
+                interpolate(cont, theta, out);
+                true
+            }
+            _ => false,
+        }
     }
 
     /// The stored last stage stays valid after a normalization (it moves `q` by the order of the
@@ -176,6 +211,16 @@ struct Dopri5 {
     previous_error: f64,
     /// `k[0]` holds `f(t, y)` for the current `y` (first same as last).
     fsal_valid: bool,
+    /// Each tangent's stage derivatives and the continuous-extension coefficients of its last
+    /// carried step (sized at the first step of a run with tangents).
+    tangent_k: Vec<[Vec<f64>; 7]>,
+    tangent_cont: Vec<[Vec<f64>; 5]>,
+    /// A tangent at a stage.
+    s_tmp: Vec<f64>,
+    /// `tangent_k[j][0]` holds the tangents' derivative at the current `y` (first same as last).
+    tangent_fsal: bool,
+    /// True when the last accepted step carried the tangents (their dense output is valid).
+    tangents_carried: bool,
 }
 
 /// Outcome of one attempted step.
@@ -200,15 +245,82 @@ impl Dopri5 {
             atol,
             previous_error: 1e-4,
             fsal_valid: false,
+            tangent_k: Vec::new(),
+            tangent_cont: Vec::new(),
+            s_tmp: vec![0.0; len],
+            tangent_fsal: false,
+            tangents_carried: false,
         }
     }
 
     /// Marks the stored derivative stale (after the state was changed from outside, e.g. projected).
     pub fn invalidate(&mut self) {
         self.fsal_valid = false;
+        self.tangent_fsal = false;
+    }
+
+    /// The tangents' derivatives at stage `s` (state `at`, time `ts`), right after the run's
+    /// evaluation there: each tangent's stage value `S + h Σ A[s][l] K_l` and its derivative.
+    /// Returns false where the field cannot.
+    #[allow(clippy::too_many_arguments)]
+    fn tangent_stage(
+        &mut self,
+        f: &mut dyn Formulation,
+        field: &mut dyn TangentField,
+        s: usize,
+        (ts, h): (f64, f64),
+        at: &[f64],
+        stab: Option<Baumgarte>,
+    ) -> Result<bool, IntegrationError> {
+        let Dopri5 {
+            tangent_k,
+            s_tmp,
+            qdd,
+            lambda,
+            ..
+        } = self;
+        for (j, k) in tangent_k.iter_mut().enumerate().take(field.count()) {
+            let start = field.tangent(j);
+            for i in 0..s_tmp.len() {
+                let mut acc = 0.0;
+                for l in 0..s {
+                    acc += A[s][l] * k[l][i];
+                }
+                s_tmp[i] = start[i] + h * acc;
+            }
+            if !field.derivative(f, j, ts, at, stab, (qdd, lambda), s_tmp, &mut k[s])? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// After [`Dopri5::accept`] of a step whose stages carried the tangents: each tangent at the
+    /// step's end (handed to the field), its continuous extension, and its last stage kept as the
+    /// next step's first.
+    pub fn accept_tangents(&mut self, t: f64, h: f64, y: &[f64], field: &mut dyn TangentField) {
+        for j in 0..field.count() {
+            let (k, cont) = (&mut self.tangent_k[j], &mut self.tangent_cont[j]);
+            let start = field.tangent(j);
+            for i in 0..start.len() {
+                let mut acc = 0.0;
+                for l in 0..6 {
+                    acc += A[6][l] * k[l][i];
+                }
+                self.s_tmp[i] = start[i] + h * acc;
+            }
+            extension(cont, h, k, start, &self.s_tmp);
+            k.swap(0, 6);
+            field.stepped(j, t, h, y, &self.s_tmp);
+        }
+        self.tangent_fsal = true;
+        self.tangents_carried = true;
     }
 
     /// Attempts a step of size `h` from `(t, y)`; the candidate is kept until [`Dopri5::accept`].
+    ///
+    /// With `tangents`, each stage's tangents are carried right after its evaluation
+    /// ([`Dopri5::tangent_stage`]); returns whether they were carried through every stage.
     pub fn attempt(
         &mut self,
         f: &mut dyn Formulation,
@@ -216,11 +328,30 @@ impl Dopri5 {
         h: f64,
         y: &[f64],
         stab: Option<Baumgarte>,
-    ) -> Result<Attempt, DynamicsError> {
+        mut tangents: Option<&mut dyn TangentField>,
+    ) -> Result<(Attempt, bool), IntegrationError> {
         let len = y.len();
-        if !self.fsal_valid {
-            derivative(f, t, y, stab, &mut self.qdd, &mut self.lambda, &mut self.k[0])?;
+        let count = tangents.as_ref().map_or(0, |field| field.count());
+        if self.tangent_k.len() < count {
+            // The first step of a run with tangents.
+            self.tangent_k
+                .resize_with(count, || std::array::from_fn(|_| vec![0.0; len]));
+            self.tangent_cont
+                .resize_with(count, || std::array::from_fn(|_| vec![0.0; len]));
+            self.tangent_fsal = false;
+        }
+        let mut carried = tangents.is_some();
+        let fresh = !self.fsal_valid;
+        if fresh || (carried && !self.tangent_fsal) {
+            // The tangents' first stage needs the factorization at `(t, y)`: evaluated again
+            // there when the run's first stage was kept (outputs evaluate in between).
+            let out = if fresh { &mut self.k[0] } else { &mut self.y_new };
+            derivative(f, t, y, stab, &mut self.qdd, &mut self.lambda, out)?;
             self.fsal_valid = true;
+            if let Some(field) = tangents.as_deref_mut() {
+                carried = field.begin(f, t, y)? && self.tangent_stage(f, field, 0, (t, h), y, stab)?;
+                self.tangent_fsal = carried;
+            }
         }
         for s in 1..7 {
             for i in 0..len {
@@ -241,10 +372,17 @@ impl Dopri5 {
                 &mut self.lambda,
                 &mut rest[0],
             )?;
+            if let (true, Some(field)) = (carried, tangents.as_deref_mut()) {
+                let y_tmp = std::mem::take(&mut self.y_tmp);
+                let stage = self.tangent_stage(f, field, s, (t + C[s] * h, h), &y_tmp, stab);
+                self.y_tmp = y_tmp;
+                carried = stage?;
+            }
             if s == 6 {
                 self.y_new.copy_from_slice(&self.y_tmp);
             }
         }
+        self.tangent_fsal &= carried;
         // Error estimate, scaled by atol + rtol·max(|y|, |y_new|), RMS norm.
         let mut sum = 0.0;
         for i in 0..len {
@@ -264,42 +402,57 @@ impl Dopri5 {
             h * (0.9 * error.powf(-0.2)).clamp(0.2, 1.0)
         };
         if !error.is_finite() {
-            return Ok(Attempt {
+            let failed = Attempt {
                 error: f64::INFINITY,
                 next_step: 0.2 * h,
-            });
+            };
+            return Ok((failed, false));
         }
-        Ok(Attempt { error, next_step })
+        Ok((Attempt { error, next_step }, carried))
     }
 
     /// Accepts the last attempt: prepares dense output over `[t, t + h]` and moves `y` forward.
+    /// The tangents' first stage and dense output are stale until [`Dopri5::accept_tangents`].
     pub fn accept(&mut self, h: f64, error: f64, y: &mut [f64]) {
-        let [c1, c2, c3, c4, c5] = &mut self.cont;
-        for i in 0..y.len() {
-            let diff = self.y_new[i] - y[i];
-            let bspl = h * self.k[0][i] - diff;
-            c1[i] = y[i];
-            c2[i] = diff;
-            c3[i] = bspl;
-            c4[i] = diff - h * self.k[6][i] - bspl;
-            let mut d = 0.0;
-            for s in 0..7 {
-                d += D[s] * self.k[s][i];
-            }
-            c5[i] = h * d;
-        }
+        extension(&mut self.cont, h, &self.k, y, &self.y_new);
         y.copy_from_slice(&self.y_new);
         // First same as last: the last stage is f at the new point.
         self.k.swap(0, 6);
         self.previous_error = error.max(1e-4);
+        self.tangent_fsal = false;
+        self.tangents_carried = false;
     }
 
     /// Dense output at fraction `theta ∈ [0, 1]` of the last accepted step.
     pub fn interpolate(&self, theta: f64, out: &mut [f64]) {
-        let t1 = 1.0 - theta;
-        let [c1, c2, c3, c4, c5] = &self.cont;
-        for i in 0..out.len() {
-            out[i] = c1[i] + theta * (c2[i] + t1 * (c3[i] + theta * (c4[i] + t1 * c5[i])));
+        interpolate(&self.cont, theta, out);
+    }
+}
+
+/// The continuous-extension coefficients of a step of size `h` from `y` to `y_new` with stage
+/// derivatives `k` (Hairer, Nørsett & Wanner's dense output of order 4).
+fn extension(cont: &mut [Vec<f64>; 5], h: f64, k: &[Vec<f64>; 7], y: &[f64], y_new: &[f64]) {
+    let [c1, c2, c3, c4, c5] = cont;
+    for i in 0..y.len() {
+        let diff = y_new[i] - y[i];
+        let bspl = h * k[0][i] - diff;
+        c1[i] = y[i];
+        c2[i] = diff;
+        c3[i] = bspl;
+        c4[i] = diff - h * k[6][i] - bspl;
+        let mut d = 0.0;
+        for s in 0..7 {
+            d += D[s] * k[s][i];
         }
+        c5[i] = h * d;
+    }
+}
+
+/// The continuous extension `cont` at fraction `theta` of its step.
+fn interpolate(cont: &[Vec<f64>; 5], theta: f64, out: &mut [f64]) {
+    let t1 = 1.0 - theta;
+    let [c1, c2, c3, c4, c5] = cont;
+    for i in 0..out.len() {
+        out[i] = c1[i] + theta * (c2[i] + t1 * (c3[i] + theta * (c4[i] + t1 * c5[i])));
     }
 }

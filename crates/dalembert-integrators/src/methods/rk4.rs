@@ -100,6 +100,10 @@ impl Rk4 {
             };
             derivative(f, ts, at, b, qdd, lambda, &mut rest[0])?;
             if let (true, Some(field)) = (carried, tangents.as_deref_mut()) {
+                if stage == 0 && !field.begin(f, t, y)? {
+                    carried = false;
+                    continue;
+                }
                 for (j, tkj) in tk.iter_mut().enumerate().take(count) {
                     let (done, rest) = tkj.split_at_mut(stage);
                     let s = field.tangent(j);
