@@ -20,9 +20,13 @@ pub(super) struct Work {
     /// position rates `T(q) v`.
     r: [Vec<f64>; 2],
     c: [Vec<f64>; 2],
+    /// Each side's `Ċ` (the projection's derivative).
+    cv: [Vec<f64>; 2],
     rates: [Vec<f64>; 2],
     g: Vec<f64>,
     h: Vec<f64>,
+    /// The velocity constraints' right-hand side of the projection's derivative.
+    hv: Vec<f64>,
     dqdd: Vec<f64>,
     dlambda: Vec<f64>,
     /// Positions moved along a correction (velocity coordinates), each way.
@@ -41,9 +45,11 @@ impl Work {
             rhs: vec![0.0; m],
             r: [vec![0.0; n_v], vec![0.0; n_v]],
             c: [vec![0.0; m], vec![0.0; m]],
+            cv: [vec![0.0; m], vec![0.0; m]],
             rates: [vec![0.0; n_q], vec![0.0; n_q]],
             g: vec![0.0; n_v],
             h: vec![0.0; m],
+            hv: vec![0.0; m],
             dqdd: vec![0.0; n_v],
             dlambda: vec![0.0; m],
             q_moved: [vec![0.0; n_q], vec![0.0; n_q]],
@@ -112,22 +118,19 @@ fn residuals(
     }
 }
 
-/// The constraints `C` (or `Ċ = C_q v + C_t`, `velocities`) of `system` at `y` into `out`.
-fn constraint_residual(
+/// The constraints `C` and `Ċ = C_q v + C_t` of `system` at `y` into `(c, cdot)`.
+fn constraint_residuals(
     system: &dyn dalembert_system::MultibodySystem,
     t: f64,
     (y, n_q): (&[f64], usize),
-    velocities: bool,
     values: &mut ConstraintValues,
-    out: &mut [f64],
+    (c, cdot): (&mut [f64], &mut [f64]),
 ) {
     let (q, v) = y.split_at(n_q);
     let constraints = system.constraints();
     constraints.evaluate(t, q, v, values);
-    match velocities {
-        false => out.copy_from_slice(&values.c),
-        true => constraints.velocity_residual(values, v, out),
-    }
+    c.copy_from_slice(&values.c);
+    constraints.velocity_residual(values, v, cdot);
 }
 
 /// `out ← scale (a − b)` added to `out` (`add`) or written.
@@ -165,51 +168,53 @@ impl TangentField for Tangents {
                 delta, sides, work, s, ..
             } = tangent;
             let delta = *delta;
-            for velocities in [false, true] {
-                work.h.iter_mut().for_each(|h| *h = 0.0);
-                if let Some(eps) = state_step(y, s) {
-                    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
-                        for i in 0..y.len() {
-                            work.y[i] = y[i] + sign * eps * s[i];
-                        }
-                        constraint_residual(
-                            f.system(),
-                            t,
-                            (&work.y, n_q),
-                            velocities,
-                            &mut work.values,
-                            &mut work.c[k],
-                        );
+            // `C` and `Ċ` along the tangent, from the same evaluations: the velocity residual is
+            // taken along the tangent before its position correction, which changes it by the
+            // order of that correction times the residual's curvature (the order the
+            // linearization at the projected state already leaves).
+            work.h.iter_mut().for_each(|h| *h = 0.0);
+            work.hv.iter_mut().for_each(|h| *h = 0.0);
+            if let Some(eps) = state_step(y, s) {
+                for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                    for i in 0..y.len() {
+                        work.y[i] = y[i] + sign * eps * s[i];
                     }
-                    difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
+                    let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
+                    constraint_residuals(f.system(), t, (&work.y, n_q), &mut work.values, (c, cv));
                 }
-                for (k, side) in sides.iter().enumerate() {
-                    let c = &mut work.c[k];
-                    constraint_residual(side.f.system(), t, (y, n_q), velocities, &mut work.values, c);
-                }
-                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
-                work.g.iter_mut().for_each(|g| *g = 0.0);
-                if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
+                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
+                difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / eps, false);
+            }
+            for (k, side) in sides.iter().enumerate() {
+                let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
+                constraint_residuals(side.f.system(), t, (y, n_q), &mut work.values, (c, cv));
+            }
+            difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
+            difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / delta, true);
+            work.g.iter_mut().for_each(|g| *g = 0.0);
+            for velocities in [false, true] {
+                let h = if velocities { &work.hv } else { &work.h };
+                if !f.linear_response(t, &work.g, h, &mut work.dqdd, &mut work.dlambda)? {
                     return Ok(false);
                 }
                 let (s_q, s_v) = s.split_at_mut(n_q);
                 if velocities {
                     s_v.iter_mut().zip(&work.dqdd).for_each(|(a, x)| *a += x);
-                } else {
-                    // The correction `x` is in velocity coordinates: its change of the
-                    // positions is `d(q ⊕ ε x)/dε`, differenced.
-                    let largest = work.dqdd.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-                    if largest > 0.0 {
-                        let eps = STATE_STEP * (1.0 + y[..n_q].iter().fold(0.0f64, |a, x| a.max(x.abs()))) / largest;
-                        let system = f.system();
-                        for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
-                            work.q_moved[k].copy_from_slice(&y[..n_q]);
-                            system.integrate_positions(&mut work.q_moved[k], &work.dqdd, sign * eps);
-                        }
-                        let [plus, minus] = &work.q_moved;
-                        for i in 0..n_q {
-                            s_q[i] += (plus[i] - minus[i]) / (2.0 * eps);
-                        }
+                    continue;
+                }
+                // The correction `x` is in velocity coordinates: its change of the positions is
+                // `d(q ⊕ ε x)/dε`, differenced.
+                let largest = work.dqdd.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                if largest > 0.0 {
+                    let eps = STATE_STEP * (1.0 + y[..n_q].iter().fold(0.0f64, |a, x| a.max(x.abs()))) / largest;
+                    let system = f.system();
+                    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                        work.q_moved[k].copy_from_slice(&y[..n_q]);
+                        system.integrate_positions(&mut work.q_moved[k], &work.dqdd, sign * eps);
+                    }
+                    let [plus, minus] = &work.q_moved;
+                    for i in 0..n_q {
+                        s_q[i] += (plus[i] - minus[i]) / (2.0 * eps);
                     }
                 }
             }
