@@ -140,6 +140,67 @@ fn difference(out: &mut [f64], a: &[f64], b: &[f64], scale: f64, add: bool) {
     }
 }
 
+/// Where a stage's residuals are differenced: the time, the state, the run's gains and its
+/// solution `(q̈, λ)`.
+struct Along<'a> {
+    t: f64,
+    y: &'a [f64],
+    n_q: usize,
+    baumgarte: Option<Baumgarte>,
+    solution: (&'a [f64], &'a [f64]),
+}
+
+impl Along<'_> {
+    /// `−(R(y + e s) − R(y − e s)) / 2d` into `work.g` and `work.h` (added to them with `add`),
+    /// `models[0]` at the `+` side and `models[1]` at the `−` side, `(s, e)` the direction and the
+    /// state's step, `d` the divisor (`e`, or the parameter's change between the two models); the
+    /// position rates' difference into `rates` when given.
+    fn difference(
+        &self,
+        work: &mut Work,
+        models: [&dyn dalembert_system::MultibodySystem; 2],
+        (s, e, d): (&[f64], f64, f64),
+        rates: Option<&mut [f64]>,
+        add: bool,
+    ) {
+        self.evaluate(work, models, (s, e), rates.is_some());
+        difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / d, add);
+        difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / d, add);
+        if let Some(rates) = rates {
+            difference(rates, &work.rates[0], &work.rates[1], 0.5 / d, add);
+        }
+    }
+
+    /// The residuals (and, with `rates`, the position rates) of `models[k]` at `y ± e s`.
+    fn evaluate(
+        &self,
+        work: &mut Work,
+        models: [&dyn dalembert_system::MultibodySystem; 2],
+        (s, e): (&[f64], f64),
+        rates: bool,
+    ) {
+        let Along {
+            t,
+            y,
+            n_q,
+            baumgarte,
+            solution,
+        } = *self;
+        for (k, (model, sign)) in models.into_iter().zip([1.0, -1.0]).enumerate() {
+            let mut moved = std::mem::take(&mut work.y);
+            for i in 0..y.len() {
+                moved[i] = y[i] + sign * e * s[i];
+            }
+            residuals(model, t, &moved, n_q, baumgarte, solution, work, k);
+            if rates {
+                let (q, v) = moved.split_at(n_q);
+                model.position_rates(q, v, &mut work.rates[k]);
+            }
+            work.y = moved;
+        }
+    }
+}
+
 impl TangentField for Tangents {
     fn count(&self) -> usize {
         self.tangents.len()
@@ -244,50 +305,28 @@ impl TangentField for Tangents {
         let Tangent { delta, sides, work, .. } = &mut self.tangents[j];
         let delta = *delta;
         let (rates, vdot) = out.split_at_mut(n_q);
+        let at = Along {
+            t,
+            y,
+            n_q,
+            baumgarte,
+            solution,
+        };
+        let models = [sides[0].f.system(), sides[1].f.system()];
         if combined(delta, y, s) {
             // One difference along `(s, 1)`: the two changed models at `y ± δ s`.
-            for (k, (side, sign)) in sides.iter().zip([1.0, -1.0]).enumerate() {
-                for i in 0..y.len() {
-                    work.y[i] = y[i] + sign * delta * s[i];
+            at.difference(work, models, (s, delta, delta), Some(rates), false);
+        } else {
+            match state_step(y, s) {
+                Some(eps) => at.difference(work, [f.system(); 2], (s, eps, eps), Some(&mut *rates), false),
+                None => {
+                    (work.g.iter_mut().chain(work.h.iter_mut())).for_each(|v| *v = 0.0);
+                    rates.iter_mut().for_each(|r| *r = 0.0);
                 }
-                let moved = std::mem::take(&mut work.y);
-                residuals(side.f.system(), t, &moved, n_q, baumgarte, solution, work, k);
-                let (q, v) = moved.split_at(n_q);
-                side.f.system().position_rates(q, v, &mut work.rates[k]);
-                work.y = moved;
             }
-            difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / delta, false);
-            difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, false);
-            difference(rates, &work.rates[0], &work.rates[1], 0.5 / delta, false);
-            if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
-                return Ok(false);
-            }
-            vdot.copy_from_slice(&work.dqdd);
-            return Ok(vdot.iter().chain(rates.iter()).all(|v| v.is_finite()));
+            // The parameter at the run's state (the position rates do not depend on it).
+            at.difference(work, models, (s, 0.0, delta), None, true);
         }
-        work.g.iter_mut().for_each(|g| *g = 0.0);
-        work.h.iter_mut().for_each(|h| *h = 0.0);
-        rates.iter_mut().for_each(|r| *r = 0.0);
-        if let Some(eps) = state_step(y, s) {
-            for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
-                for i in 0..y.len() {
-                    work.y[i] = y[i] + sign * eps * s[i];
-                }
-                let moved = std::mem::take(&mut work.y);
-                residuals(f.system(), t, &moved, n_q, baumgarte, solution, work, k);
-                let (q, v) = moved.split_at(n_q);
-                f.system().position_rates(q, v, &mut work.rates[k]);
-                work.y = moved;
-            }
-            difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / eps, false);
-            difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
-            difference(rates, &work.rates[0], &work.rates[1], 0.5 / eps, false);
-        }
-        for (k, side) in sides.iter().enumerate() {
-            residuals(side.f.system(), t, y, n_q, baumgarte, solution, work, k);
-        }
-        difference(&mut work.g, &work.r[0], &work.r[1], -0.5 / delta, true);
-        difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
         if !f.linear_response(t, &work.g, &work.h, &mut work.dqdd, &mut work.dlambda)? {
             return Ok(false);
         }
