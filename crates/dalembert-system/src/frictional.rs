@@ -383,6 +383,23 @@ impl Formulation for Frictional {
         self.inner.set_extra_force(extra)
     }
 
+    /// The inner formulation's, while every element is a free limit: the last evaluation was then
+    /// the inner one's alone, with its factorization (a run's sensitivities, which stop where a
+    /// limit is reached). False with friction or a held limit.
+    fn linear_response(
+        &mut self,
+        t: f64,
+        g: &[f64],
+        h: &[f64],
+        dqdd: &mut [f64],
+        dlambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        if self.frictions > 0 || self.terms.iter().any(|term| term.mode != Mode::Free) {
+            return Ok(false);
+        }
+        self.inner.linear_response(t, g, h, dqdd, dlambda)
+    }
+
     /// Each friction element's mode from its slip rate at `(q, v)`: stuck within its stick
     /// speed, otherwise slipping in the rate's direction. Each limit is free, or held where it
     /// starts at a bound (within [`LIMIT_SLACK`]) not moving away from it.
