@@ -2,6 +2,7 @@
 //! tangent solved with the run's own factorization, the tangent through the run's projection and
 //! normalization (`docs/sensitivities.md`, (S5) and (S6)).
 
+use super::super::inf_norm;
 use super::{normalize, Tangent, Tangents};
 use crate::stepper::TangentField;
 use crate::IntegrationError;
@@ -67,9 +68,8 @@ const STATE_STEP: f64 = 1e-6;
 /// coordinate [`STATE_STEP`]` (1 + ‖y‖∞)` however large the tangent grows
 /// (`docs/sensitivities.md`, (S5)). `None` for a zero tangent.
 fn state_step(y: &[f64], s: &[f64]) -> Option<f64> {
-    let largest = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    let size = largest(s);
-    (size > 0.0 && size.is_finite()).then(|| STATE_STEP * (1.0 + largest(y)) / size)
+    let size = inf_norm(s);
+    (size > 0.0 && size.is_finite()).then(|| STATE_STEP * (1.0 + inf_norm(y)) / size)
 }
 
 /// The largest change of a coordinate, relative to `1 + ‖y‖∞`, for which a stage's derivative
@@ -82,8 +82,7 @@ const COMBINED_UP_TO: f64 = 1e-4;
 /// True when the change `δ s` of the state is small enough for the one difference along
 /// `(s, 1)` ([`COMBINED_UP_TO`]).
 fn combined(delta: f64, y: &[f64], s: &[f64]) -> bool {
-    let largest = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    delta * largest(s) <= COMBINED_UP_TO * (1.0 + largest(y))
+    delta * inf_norm(s) <= COMBINED_UP_TO * (1.0 + inf_norm(y))
 }
 
 /// The residuals `(M q̈ + C_qᵀ λ − Q, C_q q̈ − γ)` of `system` at `y` (`γ` with the Baumgarte
@@ -265,9 +264,7 @@ impl TangentField for Tangents {
                 }
                 // The correction `x` is in velocity coordinates: its change of the positions is
                 // `d(q ⊕ ε x)/dε`, differenced.
-                let largest = work.dqdd.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-                if largest > 0.0 {
-                    let eps = STATE_STEP * (1.0 + y[..n_q].iter().fold(0.0f64, |a, x| a.max(x.abs()))) / largest;
+                if let Some(eps) = state_step(&y[..n_q], &work.dqdd) {
                     let system = f.system();
                     for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
                         work.q_moved[k].copy_from_slice(&y[..n_q]);
