@@ -237,30 +237,33 @@ impl FrictionWork {
     }
 }
 
-/// The normal load `μ |L λ|` of `spec` and its gradient `μ (Lλ)ᵀ L / |Lλ|` dotted with `dl`.
-/// The friction bound `μ_k N_k + f₀_k` at the multipliers `lambda`.
-fn load(spec: &JointFriction, lambda: &[f64]) -> f64 {
-    spec.constant
-        + spec.coefficient
-            * spec
-                .load_rows
-                .iter()
-                .map(|&r| lambda[r] * lambda[r])
-                .sum::<f64>()
-                .sqrt()
+/// The friction bound `μ_k N_k + f₀_k` of `spec` at the multipliers `lambda`, and its
+/// gradient's direction: `∂(μ N)/∂λ = (μ / N) L_kᵀ L_k λ`, kept as the factor `μ / N` (zero at
+/// `N = 0`) over the load rows' multipliers, so that its product with each response costs the
+/// load rows' length and no division.
+struct Load {
+    bound: f64,
+    factor: f64,
 }
 
-fn load_change(spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
-    let norm = spec
-        .load_rows
-        .iter()
-        .map(|&r| lambda[r] * lambda[r])
-        .sum::<f64>()
-        .sqrt();
-    if norm == 0.0 {
-        return 0.0;
+impl Load {
+    fn at(spec: &JointFriction, lambda: &[f64]) -> Load {
+        let norm = spec
+            .load_rows
+            .iter()
+            .map(|&r| lambda[r] * lambda[r])
+            .sum::<f64>()
+            .sqrt();
+        Load {
+            bound: spec.constant + spec.coefficient * norm,
+            factor: if norm == 0.0 { 0.0 } else { spec.coefficient / norm },
+        }
     }
-    spec.coefficient * spec.load_rows.iter().map(|&r| lambda[r] * dl[r]).sum::<f64>() / norm
+
+    /// The bound's change along the multipliers' change `dl`.
+    fn change(&self, spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
+        self.factor * spec.load_rows.iter().map(|&r| lambda[r] * dl[r]).sum::<f64>()
+    }
 }
 
 /// Solves (F1)–(F3) for every friction element in its mode, and (L1)–(L2) of
@@ -399,7 +402,7 @@ pub fn solve_friction(
                 }
                 Mode::Slip(sign) => Law::Slip(sign),
                 Mode::Stick => {
-                    let bound = load(&frictions[k], &work.lambda);
+                    let bound = Load::at(&frictions[k], &work.lambda).bound;
                     if hold.abs() <= bound && !stays_loose {
                         Law::Hold
                     } else if stays_loose && work.direction[k] != 0.0 {
@@ -429,15 +432,15 @@ pub fn solve_friction(
                 }
                 Law::Slip(sign) => {
                     let spec = &frictions[k];
-                    let bound = load(spec, &work.lambda);
+                    let load = Load::at(spec, &work.lambda);
                     let w = term.row.dot(v);
-                    work.residual[k] = term.force + spec.viscous * w + sign * bound;
-                    for j in 0..k_len {
+                    work.residual[k] = term.force + spec.viscous * w + sign * load.bound;
+                    for (j, other) in terms.iter().enumerate() {
                         let e = if j == k { 1.0 } else { 0.0 };
-                        work.jacobian[row + j] = e + sign * load_change(spec, &work.lambda, &terms[j].dlambda);
+                        work.jacobian[row + j] = e + sign * load.change(spec, &work.lambda, &other.dlambda);
                     }
-                    scale = scale.max(term.force.abs()).max(bound);
-                    let slope = load_change(spec, &work.lambda, &term.dlambda).abs();
+                    scale = scale.max(term.force.abs()).max(load.bound);
+                    let slope = load.change(spec, &work.lambda, &term.dlambda).abs();
                     if slope >= 1.0 {
                         return Err(fail(
                             k,
@@ -514,34 +517,45 @@ enum Law {
 /// Solves `A x = b` in place (`A` row-major `n × n`, overwritten by its LU factors; `b` by `x`)
 /// by Gaussian elimination with partial pivoting. False when `A` is singular.
 pub(crate) fn solve_dense(a: &mut [f64], b: &mut [f64], n: usize) -> bool {
+    let a = &mut a[..n * n];
     let largest = a.iter().fold(0.0f64, |m, x| m.max(x.abs()));
     for c in 0..n {
-        let p = (c..n)
-            .max_by(|&i, &j| a[i * n + c].abs().total_cmp(&a[j * n + c].abs()))
-            .unwrap_or(c);
-        let pivot = a[p * n + c].abs();
+        let (mut p, mut pivot) = (c, a[c * n + c].abs());
+        for i in c + 1..n {
+            let v = a[i * n + c].abs();
+            if v > pivot || v.is_nan() {
+                (p, pivot) = (i, v);
+            }
+        }
         if pivot.is_nan() || pivot <= 1e-14 * largest {
             return false;
         }
         if p != c {
-            for j in 0..n {
+            // The columns left of `c` are not read again (the right-hand side is eliminated
+            // alongside), so only the rest of the rows is swapped.
+            for j in c..n {
                 a.swap(c * n + j, p * n + j);
             }
             b.swap(c, p);
         }
-        for i in c + 1..n {
-            let f = a[i * n + c] / a[c * n + c];
+        let (upper, lower) = a.split_at_mut((c + 1) * n);
+        let pivot_row = &upper[c * n + c..c * n + n];
+        let bc = b[c];
+        for (i, row) in lower.chunks_exact_mut(n).enumerate() {
+            let row = &mut row[c..];
+            let f = row[0] / pivot_row[0];
             if f != 0.0 {
-                for j in c..n {
-                    a[i * n + j] -= f * a[c * n + j];
+                for (x, y) in row.iter_mut().zip(pivot_row) {
+                    *x -= f * y;
                 }
-                b[i] -= f * b[c];
+                b[c + 1 + i] -= f * bc;
             }
         }
     }
     for c in (0..n).rev() {
-        let s: f64 = (c + 1..n).map(|j| a[c * n + j] * b[j]).sum();
-        b[c] = (b[c] - s) / a[c * n + c];
+        let row = &a[c * n..c * n + n];
+        let s: f64 = (c + 1..n).map(|j| row[j] * b[j]).sum();
+        b[c] = (b[c] - s) / row[c];
     }
     b.iter().all(|x| x.is_finite())
 }
