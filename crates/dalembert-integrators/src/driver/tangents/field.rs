@@ -215,9 +215,11 @@ impl TangentField for Tangents {
 
     /// The derivative of the run's projection along each tangent that has not followed it:
     /// positions first, `S_q ← S_q ⊕ x` with `[M C_qᵀ; C_q 0] [x; μ] = [0; −(C_q S_q + C_p)]`,
-    /// then velocities the same way with `Ċ = C_q v + C_t`; the derivatives along the tangent by
-    /// differences on the run's model with the step `ε` of [`state_step`], those along the
-    /// parameter by the two changed models at the run's state (`docs/sensitivities.md`, (S6)).
+    /// then velocities the same way with `Ċ = C_q v + C_t`; `C_q S_q + C_p` (and `Ċ`'s) by one
+    /// difference of the two changed models at `y ± δ s` while that change is small
+    /// ([`COMBINED_UP_TO`]), as a stage's derivative takes it, and otherwise along the tangent
+    /// on the run's model with the step `ε` of [`state_step`] and along the parameter by the two
+    /// changed models at the run's state (`docs/sensitivities.md`, (S6)).
     fn begin(&mut self, f: &mut dyn Formulation, t: f64, y: &[f64]) -> Result<bool, IntegrationError> {
         let n_q = self.n_q;
         for tangent in &mut self.tangents {
@@ -234,23 +236,39 @@ impl TangentField for Tangents {
             // linearization at the projected state already leaves).
             work.h.iter_mut().for_each(|h| *h = 0.0);
             work.hv.iter_mut().for_each(|h| *h = 0.0);
-            if let Some(eps) = state_step(y, s) {
-                for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+            if combined(delta, y, s) {
+                // One difference along `(s, 1)`: the two changed models at `y ± δ s`, as a
+                // stage's derivative takes it (two evaluations of the constraints instead of four).
+                for (k, (side, sign)) in sides.iter().zip([1.0, -1.0]).enumerate() {
                     for i in 0..y.len() {
-                        work.y[i] = y[i] + sign * eps * s[i];
+                        work.y[i] = y[i] + sign * delta * s[i];
                     }
                     let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
-                    constraint_residuals(f.system(), t, (&work.y, n_q), &mut work.values, (c, cv));
+                    constraint_residuals(side.f.system(), t, (&work.y, n_q), &mut work.values, (c, cv));
                 }
-                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
-                difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / eps, false);
+                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, false);
+                difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / delta, false);
+            } else {
+                // The tangent's own direction on the run's model, then the parameter by the two
+                // changed models at the run's state.
+                if let Some(eps) = state_step(y, s) {
+                    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
+                        for i in 0..y.len() {
+                            work.y[i] = y[i] + sign * eps * s[i];
+                        }
+                        let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
+                        constraint_residuals(f.system(), t, (&work.y, n_q), &mut work.values, (c, cv));
+                    }
+                    difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
+                    difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / eps, false);
+                }
+                for (k, side) in sides.iter().enumerate() {
+                    let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
+                    constraint_residuals(side.f.system(), t, (y, n_q), &mut work.values, (c, cv));
+                }
+                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
+                difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / delta, true);
             }
-            for (k, side) in sides.iter().enumerate() {
-                let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
-                constraint_residuals(side.f.system(), t, (y, n_q), &mut work.values, (c, cv));
-            }
-            difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
-            difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / delta, true);
             work.g.iter_mut().for_each(|g| *g = 0.0);
             for velocities in [false, true] {
                 let h = if velocities { &work.hv } else { &work.h };
