@@ -19,7 +19,8 @@
 //! mass matrix as the metric), removed again as full steps succeed.
 //!
 //! Where this ends at an unstable equilibrium or at none, it starts again from where the scene's
-//! motion with kinetic damping comes to rest ([`crate::relaxation`]).
+//! motion with kinetic damping comes to rest ([`crate::relaxation`]): first loosely, then, while
+//! it still ends unstable, more nearly at rest ([`crate::relaxation::SHARES`]).
 //!
 //! At the equilibrium, the reduced stiffness `K_r = Bᵀ K B` relative to the reduced mass (`B` the
 //! velocity transformation of coordinate partitioning: the admissible motions) says whether it is
@@ -140,18 +141,28 @@ impl Scene {
     /// [`Scene::equilibrium`] with the limits free.
     fn equilibrium_without_limits(&self) -> Result<Equilibrium, EquilibriumError> {
         let first = self.equilibrium_from(&self.q);
-        let settled = match &first {
+        match &first {
             Ok(eq) if eq.unstable_directions.is_empty() => return first,
             // Also where a free direction with a net force was found: it may be free only where
             // Newton's method stopped (a top lying horizontal has no stiffness along its fall).
-            _ => crate::relaxation::settled(self),
+            _ => {}
+        }
+        let Some(mut relaxation) = crate::relaxation::Relaxation::new(self) else {
+            return first;
         };
-        match settled {
-            Some(q) => match self.equilibrium_from(&q) {
-                Ok(eq) if eq.unstable_directions.is_empty() || first.is_err() => Ok(eq),
-                _ => first,
-            },
-            None => first,
+        // Newton's method from the relaxed positions, relaxed further each time it still ends
+        // at an unstable equilibrium or at none.
+        let mut last = None;
+        for share in crate::relaxation::SHARES {
+            let Some(q) = relaxation.until(share) else { break };
+            match self.equilibrium_from(&q) {
+                Ok(eq) if eq.unstable_directions.is_empty() => return Ok(eq),
+                other => last = Some(other),
+            }
+        }
+        match last {
+            Some(Ok(eq)) if first.is_err() => Ok(eq),
+            _ => first,
         }
     }
 

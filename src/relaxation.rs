@@ -1,4 +1,4 @@
-//! Where a scene comes to rest: its motion with kinetic damping (`settled`), the start that
+//! Where a scene comes to rest: its motion with kinetic damping (`Relaxation`), the start that
 //! [`crate::Scene::equilibrium`] takes when Newton's method from the scene's own position ends at
 //! an unstable equilibrium or at none.
 //!
@@ -6,9 +6,10 @@
 //! stepped; each time the kinetic
 //! energy passes a peak, the velocities are set to zero there (kinetic damping: the state then
 //! holds the least potential energy along that swing). The energy removed falls toward a minimum
-//! of the potential, a stable equilibrium, and never toward a maximum. Stops when a peak's kinetic
-//! energy is below `1e-10` of the energy removed so far (at rest to that share), or after
-//! [`MAX_STEPS`]. Drivers would move with time, so a driven model is not relaxed.
+//! of the potential, a stable equilibrium, and never toward a maximum. `Relaxation::until`
+//! stops when a peak's kinetic energy is below a share of the energy removed so far (at rest to
+//! that share, [`SHARES`]), or after [`MAX_STEPS`] in all, and goes on from there when asked for a
+//! smaller share. Drivers would move with time, so a driven model is not relaxed.
 
 use crate::Scene;
 
@@ -18,40 +19,73 @@ pub const MAX_STEPS: usize = 50_000;
 /// The relative and absolute tolerances of the relaxation's Dormand–Prince steps.
 pub const RELAXATION_TOLERANCE: f64 = 1e-4;
 
-/// The positions where `scene`'s motion with kinetic damping comes to rest, or `None` when it
-/// cannot be run (a driven model, a failed step).
-pub(crate) fn settled(scene: &Scene) -> Option<Vec<f64>> {
-    if !scene.model.kind().driver_names().is_empty() {
-        return None;
-    }
-    let system = scene.model.as_system();
-    // The scene's formulation, with Dormand–Prince at loose tolerances and projection: only the
-    // way down matters, not its accuracy, and the adaptive step grows to what stability allows.
-    let mut relaxing = scene.clone();
-    let settings = &mut relaxing.settings;
-    settings.method = dalembert_integrators::Method::dopri5(RELAXATION_TOLERANCE, RELAXATION_TOLERANCE);
-    settings.stabilization = dalembert_integrators::Stabilization::projection();
-    let mut sim = relaxing.simulator().ok()?;
-    let zero = vec![0.0; scene.qd.len()];
-    let (mut rising, mut last) = (false, 0.0f64);
-    let mut removed = 0.0f64;
-    for _ in 0..MAX_STEPS {
-        sim.step().ok()?;
-        let (q, qd) = sim.state();
-        let kinetic = system.kinetic_energy(q, qd);
-        if kinetic < last && rising {
-            // Past a peak: stop the motion here.
-            removed += last;
-            let q = q.to_vec();
-            sim.set_state(&q, &zero).ok()?;
-            if last <= 1e-10 * removed {
-                return Some(q);
-            }
-            (rising, last) = (false, 0.0);
-            continue;
+/// The shares of the energy removed so far below which a peak's kinetic energy lets
+/// [`crate::Scene::equilibrium`] try Newton's method from the relaxed positions, in turn: a
+/// loosely relaxed start usually lies in the stable equilibrium's basin already, and only where
+/// Newton's method still ends at an unstable one does the relaxation go on to the next share
+/// (the last, `1e-10`, at rest to round-off of the energy).
+pub const SHARES: [f64; 4] = [1e-2, 1e-4, 1e-7, 1e-10];
+
+/// A scene's motion with kinetic damping, stepped until it comes to rest to a share of the
+/// energy it lost ([`Relaxation::until`]), and resumed from there for a smaller share.
+pub(crate) struct Relaxation<'a> {
+    sim: crate::Simulator,
+    system: &'a dyn dalembert_system::MultibodySystem,
+    zero: Vec<f64>,
+    rising: bool,
+    last: f64,
+    removed: f64,
+    steps: usize,
+}
+
+impl<'a> Relaxation<'a> {
+    /// The relaxation of `scene`, or `None` when it cannot be run (a driven model).
+    pub(crate) fn new(scene: &'a Scene) -> Option<Self> {
+        if !scene.model.kind().driver_names().is_empty() {
+            return None;
         }
-        rising = kinetic > last;
-        last = kinetic;
+        // The scene's formulation, with Dormand–Prince at loose tolerances and projection: only
+        // the way down matters, not its accuracy, and the adaptive step grows to what stability
+        // allows.
+        let mut relaxing = scene.clone();
+        let settings = &mut relaxing.settings;
+        settings.method = dalembert_integrators::Method::dopri5(RELAXATION_TOLERANCE, RELAXATION_TOLERANCE);
+        settings.stabilization = dalembert_integrators::Stabilization::projection();
+        Some(Relaxation {
+            sim: relaxing.simulator().ok()?,
+            system: scene.model.as_system(),
+            zero: vec![0.0; scene.qd.len()],
+            rising: false,
+            last: 0.0,
+            removed: 0.0,
+            steps: 0,
+        })
     }
-    Some(sim.state().0.to_vec())
+
+    /// Steps on until a peak's kinetic energy is below `share` of the energy removed so far, and
+    /// returns the positions there (those reached after [`MAX_STEPS`] in all); `None` when a step
+    /// fails.
+    pub(crate) fn until(&mut self, share: f64) -> Option<Vec<f64>> {
+        while self.steps < MAX_STEPS {
+            self.steps += 1;
+            self.sim.step().ok()?;
+            let (q, qd) = self.sim.state();
+            let kinetic = self.system.kinetic_energy(q, qd);
+            if kinetic < self.last && self.rising {
+                // Past a peak: stop the motion here.
+                self.removed += self.last;
+                let q = q.to_vec();
+                self.sim.set_state(&q, &self.zero).ok()?;
+                let at_rest = self.last <= share * self.removed;
+                (self.rising, self.last) = (false, 0.0);
+                if at_rest {
+                    return Some(q);
+                }
+                continue;
+            }
+            self.rising = kinetic > self.last;
+            self.last = kinetic;
+        }
+        Some(self.sim.state().0.to_vec())
+    }
 }
