@@ -132,6 +132,28 @@ fn constraint_residuals(
     constraints.velocity_residual(values, v, cdot);
 }
 
+/// `−(C(y + e s) − C(y − e s)) / 2d` into `work.h` and the same of `Ċ` into `work.hv` (added to
+/// them with `add`), `models[0]` at the `+` side and `models[1]` at the `−` side: the projection's
+/// right-hand sides along `s` ([`TangentField::begin`]), as [`Along::difference`] takes a
+/// stage's.
+fn constraints_difference(
+    work: &mut Work,
+    models: [&dyn dalembert_system::MultibodySystem; 2],
+    (t, y, n_q): (f64, &[f64], usize),
+    (s, e, d): (&[f64], f64, f64),
+    add: bool,
+) {
+    for (k, (model, sign)) in models.into_iter().zip([1.0, -1.0]).enumerate() {
+        for i in 0..y.len() {
+            work.y[i] = y[i] + sign * e * s[i];
+        }
+        let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
+        constraint_residuals(model, t, (&work.y, n_q), &mut work.values, (c, cv));
+    }
+    difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / d, add);
+    difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / d, add);
+}
+
 /// `out ← scale (a − b)` added to `out` (`add`) or written.
 fn difference(out: &mut [f64], a: &[f64], b: &[f64], scale: f64, add: bool) {
     for (o, (a, b)) in out.iter_mut().zip(a.iter().zip(b)) {
@@ -236,38 +258,20 @@ impl TangentField for Tangents {
             // linearization at the projected state already leaves).
             work.h.iter_mut().for_each(|h| *h = 0.0);
             work.hv.iter_mut().for_each(|h| *h = 0.0);
+            let at = (t, y, n_q);
             if combined(delta, y, s) {
                 // One difference along `(s, 1)`: the two changed models at `y ± δ s`, as a
                 // stage's derivative takes it (two evaluations of the constraints instead of four).
-                for (k, (side, sign)) in sides.iter().zip([1.0, -1.0]).enumerate() {
-                    for i in 0..y.len() {
-                        work.y[i] = y[i] + sign * delta * s[i];
-                    }
-                    let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
-                    constraint_residuals(side.f.system(), t, (&work.y, n_q), &mut work.values, (c, cv));
-                }
-                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, false);
-                difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / delta, false);
+                let models = [sides[0].f.system(), sides[1].f.system()];
+                constraints_difference(work, models, at, (s, delta, delta), false);
             } else {
                 // The tangent's own direction on the run's model, then the parameter by the two
                 // changed models at the run's state.
                 if let Some(eps) = state_step(y, s) {
-                    for (k, sign) in [1.0, -1.0].into_iter().enumerate() {
-                        for i in 0..y.len() {
-                            work.y[i] = y[i] + sign * eps * s[i];
-                        }
-                        let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
-                        constraint_residuals(f.system(), t, (&work.y, n_q), &mut work.values, (c, cv));
-                    }
-                    difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / eps, false);
-                    difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / eps, false);
+                    constraints_difference(work, [f.system(); 2], at, (s, eps, eps), false);
                 }
-                for (k, side) in sides.iter().enumerate() {
-                    let (c, cv) = (&mut work.c[k], &mut work.cv[k]);
-                    constraint_residuals(side.f.system(), t, (y, n_q), &mut work.values, (c, cv));
-                }
-                difference(&mut work.h, &work.c[0], &work.c[1], -0.5 / delta, true);
-                difference(&mut work.hv, &work.cv[0], &work.cv[1], -0.5 / delta, true);
+                let models = [sides[0].f.system(), sides[1].f.system()];
+                constraints_difference(work, models, at, (s, 0.0, delta), true);
             }
             work.g.iter_mut().for_each(|g| *g = 0.0);
             for velocities in [false, true] {
