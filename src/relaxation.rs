@@ -16,6 +16,12 @@ use crate::Scene;
 /// The most steps a relaxation takes.
 pub const MAX_STEPS: usize = 50_000;
 
+/// The share of the energy removed below which the kinetic energy counts as none at all: the
+/// motion has stopped (held against a stop, or balanced) and no peak will come. Far below every
+/// share of [`SHARES`]; right after the velocities are set to zero, the next step's kinetic
+/// energy is of the order of `(F h)² / m`, far above it unless the forces balance.
+pub const AT_REST: f64 = 1e-20;
+
 /// The relative and absolute tolerances of the relaxation's Dormand–Prince steps.
 pub const RELAXATION_TOLERANCE: f64 = 1e-4;
 
@@ -71,6 +77,10 @@ impl<'a> Relaxation<'a> {
             self.sim.step().ok()?;
             let (q, qd) = self.sim.state();
             let kinetic = self.system.kinetic_energy(q, qd);
+            if kinetic <= AT_REST * self.removed {
+                // At rest (against a stop, or balanced): no peak is coming.
+                return Some(q.to_vec());
+            }
             if kinetic < self.last && self.rising {
                 // Past a peak: stop the motion here.
                 self.removed += self.last;

@@ -60,11 +60,22 @@ fn print_equilibrium(scene: &Scene, eq: &Equilibrium) {
     } else {
         format!("neutral along {}", eq.free_directions.join("; "))
     };
+    let stiffness = if eq.stiffness.is_empty() {
+        "no free motion".to_string()
+    } else {
+        let values: Vec<String> = eq.stiffness.iter().map(|x| shortest(*x)).collect();
+        format!("reduced stiffness over mass: {} 1/s²", values.join(", "))
+    };
     outln!(
-        "equilibrium  found in {} Newton iteration(s); {verdict} (reduced stiffness over mass: {} 1/s²)",
+        "equilibrium  found in {} Newton iteration(s); {verdict} ({stiffness})",
         eq.iterations,
-        eq.stiffness.iter().map(|x| shortest(*x)).collect::<Vec<_>>().join(", ")
     );
+    if !eq.held.is_empty() {
+        outln!(
+            "held         at a bound of the limits of '{}' (their stops' forces: the .limit columns)",
+            eq.held.join("', '")
+        );
+    }
     outln!("positions    {}", pairs(&eq.positions));
     if !eq.reactions.is_empty() {
         outln!("reactions    {}", pairs(&eq.reactions));

@@ -251,8 +251,10 @@ impl PyScene {
     /// a dict from the position columns (`rod.x`, …, as in the CSV) to their values, with
     /// `reactions` (a dict of the reaction and effort columns), `stable`, `free_directions`,
     /// `unstable_directions`, `stiffness` (the eigenvalues of the reduced stiffness relative to
-    /// the reduced mass, 1/s²) and `iterations`. Raises ValueError naming the cause when there is
-    /// none (a net force along a direction nothing resists) or Newton's method does not converge.
+    /// the reduced mass, 1/s²), `held` (the joints whose limits it rests against, held at a bound
+    /// by their stops' forces: the `<joint>.limit` reactions) and `iterations`. Raises ValueError
+    /// naming the cause when there is none (a net force along a direction nothing resists) or
+    /// Newton's method does not converge.
     fn equilibrium<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let scene = self.inner.clone();
         let eq = py
@@ -756,6 +758,7 @@ fn equilibrium_dict<'py>(py: Python<'py>, eq: &dalembert::Equilibrium) -> PyResu
     d.set_item("stable", eq.stable)?;
     d.set_item("free_directions", &eq.free_directions)?;
     d.set_item("unstable_directions", &eq.unstable_directions)?;
+    d.set_item("held", &eq.held)?;
     d.set_item("stiffness", &eq.stiffness)?;
     d.set_item("iterations", eq.iterations)?;
     Ok(d)

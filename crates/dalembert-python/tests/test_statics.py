@@ -77,3 +77,32 @@ def test_a_scene_at_its_equilibrium_starts_there_at_rest():
         assert abs(run[column][0] - eq[column]) < 1e-12
         assert np.abs(run[column] - eq[column]).max() < 1e-9
     assert np.abs(run["lower.omega"]).max() < 1e-9
+
+
+ROD_ON_A_STOP = """
+[scene]
+gravity = [0.0, -9.81]
+
+[[bodies]]
+name = "rod"
+mass = 1.0
+shape = { rod = 1.0 }
+position = [0.5, 0.0]
+
+[[joints]]
+name = "pin"
+type = "revolute"
+bodies = ["ground", "rod"]
+at = [0.0, 0.0]
+limits = [-0.5, 0.5]
+"""
+
+
+def test_a_rod_rests_on_its_stop_with_the_torque_its_weight_needs():
+    # Hanging straight down lies beyond the stops: the rod rests on the lower one, which
+    # carries its weight's torque m g (L/2) cos 0.5 (1e-10 of the weight: the residual's
+    # tolerance); the angle at the bound to Newton's 1e-12.
+    eq = dalembert.Scene.from_toml(ROD_ON_A_STOP).equilibrium()
+    assert eq["held"] == ["pin"]
+    assert abs(eq["rod.angle"] + 0.5) < 1e-12
+    assert abs(eq["reactions"]["pin.limit"] - G * 0.5 * math.cos(0.5)) < 1e-10 * G

@@ -22,6 +22,9 @@
 //! motion with kinetic damping comes to rest ([`crate::relaxation`]): first loosely, then, while
 //! it still ends unstable, more nearly at rest ([`crate::relaxation::SHARES`]).
 //!
+//! A joint limit the equilibrium lies beyond is held at its bound, its stop's force one more
+//! multiplier, by an active set ([`Scene::equilibrium`]; `docs/statics.md`, "Joint limits").
+//!
 //! At the equilibrium, the reduced stiffness `K_r = Bᵀ K B` relative to the reduced mass (`B` the
 //! velocity transformation of coordinate partitioning: the admissible motions) says whether it is
 //! stable; a direction in which the stiffness vanishes is a neutral mechanism, reported with the
@@ -35,6 +38,9 @@ use dalembert_system::linalg::PatternLu;
 use dalembert_system::{ConstraintSet, MultibodySystem, Partition, ResidualTangent, TangentAt, VelocityTransform};
 use nalgebra::DMatrix;
 use thiserror::Error;
+
+mod held;
+use held::{Held, HeldRows};
 
 /// Why no equilibrium was found (one line naming the cause).
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -93,6 +99,13 @@ pub struct Equilibrium {
     pub stable: bool,
     /// Newton iterations taken.
     pub iterations: usize,
+    /// The joint limits the equilibrium rests against, each held at a bound by its stop's force
+    /// (the reaction column `<joint>.limit`): their names.
+    pub held: Vec<String>,
+    /// Each limit's force there (the system's limits; zero where free).
+    pub(crate) limit_forces: Vec<f64>,
+    /// The limits held, with their bounds.
+    held_limits: Vec<Held>,
     /// The reduced matrices there (for the modes: computed once).
     pub(crate) reduced: Reduced,
 }
@@ -125,22 +138,66 @@ impl Scene {
     /// The static equilibrium where the scene comes to rest (see the module documentation):
     /// Newton's method from the scene's position, and where that ends at an unstable equilibrium
     /// or finds none, from the position where the scene's motion with kinetic damping comes to
-    /// rest ([`crate::relaxation`]).
+    /// rest ([`crate::relaxation`]); against the joint limits it lies beyond, held at their
+    /// bounds ([`Equilibrium::held`]).
+    ///
+    /// ```
+    /// // A rod pinned at its end, its stops 0.5 rad either side of horizontal: it rests on the
+    /// // lower one, which carries its weight's torque m g (L/2) cos 0.5.
+    /// let scene = dalembert::Scene::from_toml(
+    ///     r#"
+    ///     [scene]
+    ///     gravity = [0.0, -9.81]
+    ///     [[bodies]]
+    ///     name = "rod"
+    ///     mass = 1.0
+    ///     shape = { rod = 1.0 }
+    ///     position = [0.5, 0.0]
+    ///     [[joints]]
+    ///     name = "pin"
+    ///     type = "revolute"
+    ///     bodies = ["ground", "rod"]
+    ///     at = [0.0, 0.0]
+    ///     limits = [-0.5, 0.5]
+    ///     "#,
+    ///     "rod",
+    /// )?;
+    /// let eq = scene.equilibrium()?;
+    /// assert_eq!(eq.held, ["pin"]);
+    /// let torque = eq.reactions.iter().find(|(c, _)| c == "pin.limit").map(|c| c.1);
+    /// assert!((torque.unwrap() - 9.81 * 0.5 * 0.5f64.cos()).abs() < 1e-9);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
-        let eq = self.equilibrium_without_limits()?;
-        // The equilibrium holds where every limit is free there.
-        match dalembert_system::limit::limit_reached(self.model.system().as_ref(), 0.0, &eq.q) {
-            None => Ok(eq),
-            Some((l, s)) => Err(EquilibriumError::Model(format!(
-                "the equilibrium found lies at or beyond the limits [{}, {}] of {} '{}' (its value there {s}): an equilibrium against a bound is not built yet (docs/limits.md)",
-                l.lower, l.upper, l.element, l.name
-            ))),
+        let mut eq = self.first_equilibrium()?;
+        // Against the joint limits: the free equilibrium holds where every limit is free there;
+        // otherwise the limit reached is held at its bound and the equilibrium found again, and
+        // a held limit whose stop would pull lets go, until neither happens (an active set).
+        let system = self.model.as_system();
+        let limits = system.limits().len();
+        let mut held = eq.held_limits.clone();
+        for _ in 0..=2 * limits {
+            let largest = (eq.lambda.iter().chain(&eq.limit_forces)).fold(0.0f64, |a, x| a.max(x.abs()));
+            let tolerance = dalembert_system::friction::RELEASE_SHARE * largest;
+            match held::next(system, &eq.q, &held, &eq.limit_forces, tolerance) {
+                None => return Ok(eq),
+                Some(next) => held = next,
+            }
+            eq = self.equilibrium_from(&eq.q, &held)?;
         }
+        let names: Vec<&str> = held.iter().map(|h| system.limits()[h.limit].name.as_str()).collect();
+        Err(EquilibriumError::Model(format!(
+            "the limits of '{}' were held and let go again without settling on a set that holds (docs/statics.md, \"Joint limits\")",
+            names.join("', '")
+        )))
     }
 
-    /// [`Scene::equilibrium`] with the limits free.
-    fn equilibrium_without_limits(&self) -> Result<Equilibrium, EquilibriumError> {
-        let first = self.equilibrium_from(&self.q);
+    /// The equilibrium the active set of [`Scene::equilibrium`] starts from: Newton's method
+    /// from the scene's position with every limit free, and where that ends unstable or at none,
+    /// from where the scene's motion with kinetic damping comes to rest, with the limits it
+    /// rests against held there.
+    fn first_equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
+        let first = self.equilibrium_from(&self.q, &[]);
         match &first {
             Ok(eq) if eq.unstable_directions.is_empty() => return first,
             // Also where a free direction with a net force was found: it may be free only where
@@ -155,7 +212,7 @@ impl Scene {
         let mut last = None;
         for share in crate::relaxation::SHARES {
             let Some(q) = relaxation.until(share) else { break };
-            match self.equilibrium_from(&q) {
+            match self.equilibrium_from(&q, &held::reached(self.model.as_system(), &q)) {
                 Ok(eq) if eq.unstable_directions.is_empty() => return Ok(eq),
                 other => last = Some(other),
             }
@@ -166,8 +223,10 @@ impl Scene {
         }
     }
 
-    /// Newton's method on the static equations from positions `q0` (assembled).
-    fn equilibrium_from(&self, q0: &[f64]) -> Result<Equilibrium, EquilibriumError> {
+    /// Newton's method on the static equations from positions `q0` (assembled), with the limits
+    /// `held` held at their bounds (their coordinates' equations `s(q) = bound` added to the
+    /// independent constraint equations, their multipliers after those).
+    fn equilibrium_from(&self, q0: &[f64], held: &[Held]) -> Result<Equilibrium, EquilibriumError> {
         let system = self.model.as_system();
         let sys = system.constraints();
         let (n, m) = (system.layout().n_v(), system.num_equations());
@@ -177,6 +236,11 @@ impl Scene {
         let structure = self.structure().map_err(|e| EquilibriumError::Model(e.to_string()))?;
         let rows = structure.independent_rows;
         let r = rows.len();
+        let a = held.len();
+        let mut held_rows = HeldRows::new(system, q0, held);
+        let held_entries: usize = held_rows.cols.iter().map(Vec::len).sum();
+        let at_held =
+            || (held_rows.cols.iter().enumerate()).flat_map(|(j, cols)| cols.iter().map(move |&c| (n + r + j, c)));
         let mut slot = vec![usize::MAX; m];
         rows.iter().enumerate().for_each(|(k, &row)| slot[row] = k);
         let mut tangent = ResidualTangent::new(system);
@@ -191,11 +255,13 @@ impl Scene {
             .collect();
         let at_kept = |e: &usize| (slot[pattern.entries()[*e].0], pattern.entries()[*e].1);
         entries.extend(kept.iter().map(at_kept).map(|(k, c)| (n + k, c)));
+        entries.extend(at_held());
         entries.extend(kept.iter().map(at_kept).map(|(k, c)| (c, n + k)));
-        let mut lu = PatternLu::new(n + r, entries, PatternLu::DENSE_LIMIT)
+        entries.extend(at_held().map(|(k, c)| (c, k)));
+        let mut lu = PatternLu::new(n + r + a, entries, PatternLu::DENSE_LIMIT)
             .map_err(|e| EquilibriumError::Model(e.to_string()))?;
-        // `C_q`'s values on the independent rows.
-        let mut jacobian = vec![0.0; kept.len()];
+        // `C_q`'s values on the independent rows, then the held limits' rows.
+        let mut jacobian = vec![0.0; kept.len() + held_entries];
         let kept_jacobian = |values: &dalembert_system::ConstraintValues, out: &mut [f64]| {
             out.iter_mut().zip(&kept).for_each(|(o, &e)| *o = values.jacobian[e]);
         };
@@ -203,9 +269,9 @@ impl Scene {
         let (zero_v, zero_a) = (vec![0.0; n], vec![0.0; n]);
         let mut q = q0.to_vec();
         // The independent equations' multipliers, and all of them (the others 0).
-        let mut lambda = vec![0.0; r];
+        let mut lambda = vec![0.0; r + a];
         let mut full = vec![0.0; m];
-        let mut f = vec![0.0; n + r];
+        let mut f = vec![0.0; n + r + a];
         // Scales: the generalized forces at the start, the positions' size.
         let mut q_force = vec![0.0; n];
         system.applied_forces(t, &q, &zero_v, &mut q_force);
@@ -215,29 +281,36 @@ impl Scene {
             full.fill(0.0);
             rows.iter().zip(lambda).for_each(|(&row, &l)| full[row] = l);
         };
+        let independent = r;
         let residual = |q: &[f64],
                         lambda: &[f64],
                         full: &mut [f64],
                         mass: &mut _,
                         values: &mut dalembert_system::ConstraintValues,
+                        held_rows: &mut HeldRows,
                         f: &mut [f64]| {
             scatter(lambda, full);
             let (r, c) = f.split_at_mut(n);
             system.dynamics_residual(t, (q, &zero_v), (&zero_a, full), (mass, values), r);
             c.iter_mut().zip(&rows).for_each(|(ci, &row)| *ci = values.c[row]);
+            // The held limits: their forces along their rows, their coordinates at the bounds.
+            let same = held_rows.at(system, q, held, &mut c[independent..]);
+            held_rows.add(&lambda[independent..], r);
             let force = r.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-            let violation = values.c.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            let violation = (values.c.iter().chain(&c[independent..])).fold(0.0f64, |a, x| a.max(x.abs()));
             let merit = r.iter().map(|x| (x / force_scale).powi(2)).sum::<f64>()
                 + c.iter().map(|x| (x / length_scale).powi(2)).sum::<f64>();
-            (force, violation, merit)
+            // A held limit's row that moved to other coordinates leaves the matrix's pattern.
+            (force, violation, if same { merit } else { f64::INFINITY })
         };
-        let mut step = vec![0.0; n + r];
+        let mut step = vec![0.0; n + r + a];
         // The first multipliers: those of the motion at rest here, `[M C_qᵀ; C_q 0] [q̈; λ] =
         // [Q; 0]`, so that the first tangent has the constraints' geometric stiffness (with λ = 0
         // a pendulum has none).
         sys.evaluate(t, &q, &zero_v, &mut values);
         {
             kept_jacobian(&values, &mut jacobian);
+            held_rows.values(&mut jacobian[kept.len()..]);
             fill(&mut lu, None, tangent.dr_dq().len(), 1.0, &mass, &jacobian);
             if lu.factor().is_ok() {
                 step[..n].copy_from_slice(&q_force);
@@ -248,7 +321,8 @@ impl Scene {
                 }
             }
         }
-        let (mut force, mut violation, mut merit) = residual(&q, &lambda, &mut full, &mut mass, &mut values, &mut f);
+        let (mut force, mut violation, mut merit) =
+            residual(&q, &lambda, &mut full, &mut mass, &mut values, &mut held_rows, &mut f);
         let (mut q_try, mut lambda_try) = (q.clone(), lambda.clone());
         let mut iterations = 0;
         // The regularization `μ M` added to `K` (1/s²): 0 while Newton's steps decrease the
@@ -280,8 +354,9 @@ impl Scene {
             };
             tangent.differentiate(system, &mut mass, &mut scratch, &at);
             system.mass(&q, &mut mass);
-            // `values` holds the constraint values at `q` (from its residual).
+            // `values` and the held rows hold their values at `q` (from its residual).
             kept_jacobian(&values, &mut jacobian);
+            held_rows.values(&mut jacobian[kept.len()..]);
             fill(
                 &mut lu,
                 Some(tangent.dr_dq()),
@@ -313,7 +388,15 @@ impl Scene {
                 for (l, (l0, d)) in lambda_try.iter_mut().zip(lambda.iter().zip(&step[n..])) {
                     *l = l0 + alpha * d;
                 }
-                let trial = residual(&q_try, &lambda_try, &mut full, &mut mass, &mut values, &mut f);
+                let trial = residual(
+                    &q_try,
+                    &lambda_try,
+                    &mut full,
+                    &mut mass,
+                    &mut values,
+                    &mut held_rows,
+                    &mut f,
+                );
                 let decreased = if polished {
                     trial.2 <= merit
                 } else {
@@ -337,22 +420,37 @@ impl Scene {
                 break;
             } else {
                 // Back at (q, λ): its residual and constraint values again, and a larger μ.
-                (force, violation, merit) = residual(&q, &lambda, &mut full, &mut mass, &mut values, &mut f);
+                (force, violation, merit) =
+                    residual(&q, &lambda, &mut full, &mut mass, &mut values, &mut held_rows, &mut f);
                 mu = if mu == 0.0 { mu_unit * 1e-6 } else { mu * 10.0 };
             }
         }
+        // The held limits' forces along their joints (`F = −μ`: the residual carries `+g μ`).
+        let mut limit_forces = vec![0.0; system.limits().len()];
+        for (h, mu) in held.iter().zip(&lambda[r..]) {
+            limit_forces[h.limit] = -mu;
+        }
         scatter(&lambda, &mut full);
+        let held_mu = lambda[r..].to_vec();
         let mut lambda = full;
         if r < m {
             // Redundant equations: the multipliers of least norm that balance the applied forces,
             // as the minimum-norm treatment gives them in a run.
             sys.evaluate(t, &q, &zero_v, &mut values);
             system.applied_forces(t, &q, &zero_v, &mut q_force);
+            // The held limits' forces act as applied ones on the constraints.
+            let pushed: Vec<f64> = held_mu.iter().map(|mu| -mu).collect();
+            held_rows.add(&pushed, &mut q_force);
             if let Some(l) = dalembert_system::structure::minimum_norm_multipliers(sys, &values, &q_force) {
                 lambda = l;
             }
         }
-        let reduced = reduced_matrices(system, t, &q, &lambda, &mut tangent)?;
+        let mut reduced = reduced_matrices(system, t, &q, &lambda, &mut tangent)?;
+        if a > 0 {
+            // A held limit keeps its joint: the admissible motions are those that keep it.
+            held_rows.at(system, &q, held, &mut vec![0.0; a]);
+            reduced = held::restrict(reduced, &held_rows.dense(n));
+        }
         let (stiffness, shapes) = relative_stiffness(&reduced);
         // Eigenvalues (1/s²) below FREE_TOLERANCE of the largest, or of the model's own scale
         // (force per length and mass), are zero.
@@ -368,7 +466,10 @@ impl Scene {
         let free_directions = directions(&|x| free(x));
         let unstable_directions = directions(&|x| x < 0.0 && !free(x));
         let stable = free_directions.is_empty() && unstable_directions.is_empty();
-        let (positions, reactions) = self.columns_at(&q, &lambda);
+        let (positions, reactions) = self.columns_at(&q, &lambda, &limit_forces);
+        let limits = system.limits();
+        let held_limits = held.to_vec();
+        let held = held.iter().map(|h| limits[h.limit].name.clone()).collect();
         Ok(Equilibrium {
             q,
             lambda,
@@ -379,12 +480,15 @@ impl Scene {
             unstable_directions,
             stable,
             iterations,
+            held,
+            limit_forces,
+            held_limits,
             reduced,
         })
     }
 
     /// The position and reaction columns of an output row at rest at `(q, λ)`.
-    fn columns_at(&self, q: &[f64], lambda: &[f64]) -> (Named, Named) {
+    fn columns_at(&self, q: &[f64], lambda: &[f64], limit: &[f64]) -> (Named, Named) {
         let n = self.model.num_velocities();
         let zero = vec![0.0; n];
         let mut rows = Rows::new(&self.model);
@@ -397,7 +501,7 @@ impl Scene {
                 qdd: &zero,
                 lambda,
                 friction: &[],
-                limit: &[],
+                limit,
                 impact_loss: 0.0,
                 constraint_violation: 0.0,
                 velocity_violation: 0.0,
