@@ -34,11 +34,11 @@ pub(crate) struct HeldRows {
     pub cols: Vec<Vec<usize>>,
 }
 
-/// The coordinate `raw` of `limit` measured nearest to `bound` (a coordinate within a turn is
-/// followed across it: bounds may lie beyond ±π).
-fn coordinate(limit: &JointLimit, raw: f64, bound: f64) -> f64 {
+/// The coordinate `raw` of `limit` on the turn nearest to `near` (a coordinate measured within a
+/// turn, `(−π, π]`, is followed across it: bounds may lie beyond ±π); others as they are.
+fn coordinate(limit: &JointLimit, raw: f64, near: f64) -> f64 {
     if limit.within_turn {
-        unwrap_angle(bound, raw)
+        unwrap_angle(near, raw)
     } else {
         raw
     }
@@ -140,7 +140,14 @@ fn at_bounds(system: &dyn MultibodySystem, q: &[f64], within: f64) -> Vec<(f64, 
     (0..limits.len())
         .filter_map(|k| {
             let limit = &limits[k];
-            let s = system.limit_row(k, 0.0, q, &v, &mut row);
+            let raw = system.limit_row(k, 0.0, q, &v, &mut row);
+            // A coordinate within a turn, measured on the turn nearest the middle of the range.
+            let middle = 0.5 * (limit.lower + limit.upper);
+            let s = if middle.is_finite() {
+                coordinate(limit, raw, middle)
+            } else {
+                raw
+            };
             let (below, above) = (limit.lower - s, s - limit.upper);
             let (beyond, bound) = if below >= above {
                 (below, limit.lower)
