@@ -32,6 +32,8 @@ pub(crate) struct HeldRows {
     rows: Vec<SlipRow>,
     /// Each row's velocity coordinates, in the order of its entries.
     pub cols: Vec<Vec<usize>>,
+    /// Zero velocities (a row's rate is not read at rest).
+    rest: Vec<f64>,
 }
 
 /// The coordinate `raw` of `limit` on the turn nearest to `near` (a coordinate measured within a
@@ -47,13 +49,13 @@ fn coordinate(limit: &JointLimit, raw: f64, near: f64) -> f64 {
 impl HeldRows {
     /// The rows of `held` at `q`.
     pub fn new(system: &dyn MultibodySystem, q: &[f64], held: &[Held]) -> Self {
-        let v = vec![0.0; system.layout().n_v()];
+        let rest = vec![0.0; system.layout().n_v()];
         let mut rows = vec![SlipRow::default(); held.len()];
         for (row, h) in rows.iter_mut().zip(held) {
-            system.limit_row(h.limit, 0.0, q, &v, row);
+            system.limit_row(h.limit, 0.0, q, &rest, row);
         }
         let cols = rows.iter().map(|r| r.entries().iter().map(|e| e.0).collect()).collect();
-        HeldRows { rows, cols }
+        HeldRows { rows, cols, rest }
     }
 
     /// Refreshes the rows at `q` and writes each coordinate's distance from its bound into
@@ -61,10 +63,9 @@ impl HeldRows {
     /// between two fixed bodies, whose row keeps its coordinates).
     pub fn at(&mut self, system: &dyn MultibodySystem, q: &[f64], held: &[Held], violation: &mut [f64]) -> bool {
         let limits = system.limits();
-        let rates = vec![0.0; system.layout().n_v()];
         let mut same = true;
         for (((row, h), cols), out) in self.rows.iter_mut().zip(held).zip(&self.cols).zip(violation) {
-            let raw = system.limit_row(h.limit, 0.0, q, &rates, row);
+            let raw = system.limit_row(h.limit, 0.0, q, &self.rest, row);
             *out = coordinate(&limits[h.limit], raw, h.bound) - h.bound;
             same &= row.entries().len() == cols.len() && row.entries().iter().zip(cols).all(|(e, &c)| e.0 == c);
         }
