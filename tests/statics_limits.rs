@@ -151,3 +151,43 @@ fn a_double_pendulum_on_a_stop_swings_about_its_lower_pin_alone() {
         modes.frequencies[0]
     );
 }
+
+#[test]
+fn a_spatial_rod_rests_on_the_stop_of_its_revolute_joint_as_the_planar_one() {
+    // The rod of the first test as a spatial body (its inertia about the pin's axis m L²/12) on a
+    // revolute joint about −y, gravity along −z: its fall is a negative angle, as the planar
+    // one's. The spatial row (body-frame angular velocities, the angle from the joint frames)
+    // turns with the rod, so Newton's tangent lacks the stop's geometric stiffness; the
+    // equilibrium is the same: on the lower stop with m g (L/2) cos 0.5, the pin carrying the
+    // weight along z. Same tolerances.
+    let text = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08333333333333333, 0.08333333333333333]\n\
+        position = [0.5, 0.0, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
+        axis = [0.0, -1.0, 0.0]\nlimits = [-0.5, 0.5]\n";
+    let eq = Scene::from_toml(text, "spatial rod").unwrap().equilibrium().unwrap();
+    assert_eq!(eq.held, ["pin"]);
+    // On the stop: the centre of mass 0.5 rad below the horizontal.
+    let (s, c) = 0.5f64.sin_cos();
+    assert!(
+        (named(&eq.positions, "rod.x") - 0.5 * c).abs() < 1e-12,
+        "{:?}",
+        eq.positions
+    );
+    assert!(
+        (named(&eq.positions, "rod.z") + 0.5 * s).abs() < 1e-12,
+        "{:?}",
+        eq.positions
+    );
+    assert!(
+        (named(&eq.reactions, "pin.limit") - G * 0.5 * c).abs() < 1e-10 * G,
+        "{:?}",
+        eq.reactions
+    );
+    assert!(
+        (named(&eq.reactions, "pin.fz").abs() - G).abs() < 1e-10 * G,
+        "{:?}",
+        eq.reactions
+    );
+    assert!(eq.stable && eq.stiffness.is_empty());
+}
