@@ -16,6 +16,15 @@ fn named(list: &[(String, f64)], name: &str) -> f64 {
         .1
 }
 
+/// Asserts that column `name` of `list` is `want` within `tolerance`.
+fn assert_near(list: &[(String, f64)], name: &str, want: f64, tolerance: f64) {
+    let got = named(list, name);
+    assert!(
+        (got - want).abs() < tolerance,
+        "{name} = {got}, expected {want}: {list:?}"
+    );
+}
+
 /// A uniform rod (1 kg, 1 m) pinned at its end at the origin, lying along `direction` (±1: along
 /// ±x), with stops `[-0.5, 0.5]` rad from there; `points` places the pin by local points instead
 /// of a global one.
@@ -79,21 +88,9 @@ fn a_slider_rests_against_the_stop_at_the_foot_of_its_incline() {
     );
     let eq = Scene::from_toml(&toml, "incline").unwrap().equilibrium().unwrap();
     assert_eq!(eq.held, ["guide"]);
-    assert!(
-        (named(&eq.reactions, "guide.q") + 0.2).abs() < 1e-12,
-        "{:?}",
-        eq.reactions
-    );
-    assert!(
-        (named(&eq.positions, "slider.x") + 0.2 * c).abs() < 1e-12,
-        "{:?}",
-        eq.positions
-    );
-    assert!(
-        (named(&eq.reactions, "guide.limit") - 2.0 * G * s).abs() < 1e-10 * G,
-        "{:?}",
-        eq.reactions
-    );
+    assert_near(&eq.reactions, "guide.q", -0.2, 1e-12);
+    assert_near(&eq.positions, "slider.x", -(0.2 * c), 1e-12);
+    assert_near(&eq.reactions, "guide.limit", 2.0 * G * s, 1e-10 * G);
     assert!(
         (named(&eq.reactions, "guide.fy").abs() - 2.0 * G).abs() < 1e-10 * G,
         "{:?}",
@@ -119,29 +116,13 @@ fn a_double_pendulum_on_a_stop_swings_about_its_lower_pin_alone() {
     let modes = scene.modes().unwrap();
     let eq = &modes.equilibrium;
     assert_eq!(eq.held, ["shoulder"]);
-    assert!(
-        (named(&eq.reactions, "shoulder.q") + 0.5).abs() < 1e-12,
-        "{:?}",
-        eq.reactions
-    );
+    assert_near(&eq.reactions, "shoulder.q", -0.5, 1e-12);
     let torque = G * (0.5 * 0.5f64.cos() + 0.5f64.cos());
-    assert!(
-        (named(&eq.reactions, "shoulder.limit") - torque).abs() < 1e-10 * G,
-        "{:?}",
-        eq.reactions
-    );
+    assert_near(&eq.reactions, "shoulder.limit", torque, 1e-10 * G);
     // The lower rod hangs straight down from the upper's end.
     let end = (0.5f64.cos(), -(0.5f64.sin()));
-    assert!(
-        (named(&eq.positions, "lower.x") - end.0).abs() < 1e-12,
-        "{:?}",
-        eq.positions
-    );
-    assert!(
-        (named(&eq.positions, "lower.y") - (end.1 - 0.5)).abs() < 1e-12,
-        "{:?}",
-        eq.positions
-    );
+    assert_near(&eq.positions, "lower.x", end.0, 1e-12);
+    assert_near(&eq.positions, "lower.y", end.1 - 0.5, 1e-12);
     assert!(eq.stable);
     assert_eq!(modes.frequencies.len(), 1);
     let expected = (1.5 * G).sqrt() / (2.0 * std::f64::consts::PI);
@@ -169,21 +150,9 @@ fn a_spatial_rod_rests_on_the_stop_of_its_revolute_joint_as_the_planar_one() {
     assert_eq!(eq.held, ["pin"]);
     // On the stop: the centre of mass 0.5 rad below the horizontal.
     let (s, c) = 0.5f64.sin_cos();
-    assert!(
-        (named(&eq.positions, "rod.x") - 0.5 * c).abs() < 1e-12,
-        "{:?}",
-        eq.positions
-    );
-    assert!(
-        (named(&eq.positions, "rod.z") + 0.5 * s).abs() < 1e-12,
-        "{:?}",
-        eq.positions
-    );
-    assert!(
-        (named(&eq.reactions, "pin.limit") - G * 0.5 * c).abs() < 1e-10 * G,
-        "{:?}",
-        eq.reactions
-    );
+    assert_near(&eq.positions, "rod.x", 0.5 * c, 1e-12);
+    assert_near(&eq.positions, "rod.z", -(0.5 * s), 1e-12);
+    assert_near(&eq.reactions, "pin.limit", G * 0.5 * c, 1e-10 * G);
     assert!(
         (named(&eq.reactions, "pin.fz").abs() - G).abs() < 1e-10 * G,
         "{:?}",
