@@ -6,6 +6,8 @@
 //! element and its line, or, for what carries no dynamics here (assets, sites, lights,
 //! contacts), skipped with a note.
 
+mod actuators;
+
 use super::tree::{
     combined, quoted, scene_of, Inertial, Kind, Link, LinkVisual, Pose, Read, Shape, Tree, TreeJoint, V3,
 };
@@ -638,97 +640,48 @@ impl<'s, 'a> Reader<'s, 'a> {
             self.notes
                 .push("equality constraints are exact here (MuJoCo's are soft: solref and solimp play no part)".into());
         }
-        // Motors: a named input each, the torque about its hinge.
+        // Actuators: a named input each, a torque about its hinge (a force along its slide).
         if let Some(act) = root.children().find(|c| c.has_tag_name("actuator")) {
             for c in act.children().filter(Node::is_element) {
-                if c.tag_name().name() != "motor" {
-                    return Err(self.err(
-                        c,
-                        format!(
-                            "<actuator> <{}> is outside the subset (motor is read)",
-                            c.tag_name().name()
-                        ),
-                    ));
-                }
-                self.attributes(
-                    c,
-                    &[
-                        "name",
-                        "joint",
-                        "gear",
-                        "class",
-                        "ctrlrange",
-                        "ctrllimited",
-                        "forcerange",
-                        "forcelimited",
-                    ],
-                    &[],
-                )?;
-                // MuJoCo clamps the control to `ctrlrange` and the motor's force (the control:
-                // its gain is 1) to `forcerange`, each where limited ("auto": where the range is
-                // given), before the gear.
-                let mut range = [f64::NEG_INFINITY, f64::INFINITY];
-                for (key, limited) in [("ctrlrange", "ctrllimited"), ("forcerange", "forcelimited")] {
-                    let given = self.numbers::<2>(c, key)?;
-                    let on = match self.value(c, limited).unwrap_or("auto") {
-                        "true" => true,
-                        "false" => false,
-                        "auto" => given.is_some(),
-                        other => {
-                            return Err(self.err(
-                                c,
-                                format!("<motor> {limited}=\"{other}\": expected true, false or auto"),
-                            ))
-                        }
-                    };
-                    match (on, given) {
-                        (true, None) => return Err(self.err(c, format!("<motor> {limited}=\"true\" needs {key}"))),
-                        (true, Some([lo, hi])) => {
-                            if lo.is_nan() || hi.is_nan() || lo > hi {
-                                return Err(self.err(
-                                    c,
-                                    format!("<motor> {key}=\"{lo} {hi}\": the first bound is above the second"),
-                                ));
-                            }
-                            range = [range[0].max(lo), range[1].min(hi)];
-                        }
-                        _ => {}
-                    }
-                }
-                if range[0] > range[1] {
-                    return Err(self.err(c, "<motor>: ctrlrange and forcerange do not overlap"));
-                }
+                let law = self.actuator_law(c)?;
+                let tag = c.tag_name().name();
                 let target = self
                     .value(c, "joint")
-                    .ok_or_else(|| self.err(c, "<motor> needs 'joint'"))?;
+                    .ok_or_else(|| self.err(c, format!("<{tag}> needs 'joint'")))?;
                 let j = joints
                     .iter()
                     .find(|j| j.file_name == target && j.kind != Kind::Fixed)
-                    .ok_or_else(|| self.err(c, format!("<motor> joint=\"{target}\": no such joint")))?;
-                let gear = self.numbers::<1>(c, "gear")?.map_or(1.0, |[g]| g);
-                if !gear.is_finite() {
-                    return Err(self.err(c, format!("<motor> gear=\"{gear}\" is not a finite number")));
-                }
+                    .ok_or_else(|| self.err(c, format!("<{tag}> joint=\"{target}\": no such joint")))?;
                 let input = self.value(c, "name").unwrap_or(target);
-                // The force is gear × the input: a torque about a hinge, a force along a slide.
-                let limited = |f: Function| {
-                    if range[0].is_finite() || range[1].is_finite() {
-                        f.range(range[0], range[1])
+                // The element is named after the actuator, or `<name>-actuator` where a body or a
+                // joint has the name (Menagerie's Kinova names its actuators after their joints).
+                let taken = links.iter().any(|l| l.name == input) || joints.iter().any(|j| j.name == input);
+                let element = if taken {
+                    format!("{input}-actuator")
+                } else {
+                    input.to_string()
+                };
+                let gear = law.gear;
+                let held = |f: Function, [lo, hi]: [f64; 2]| {
+                    if lo.is_finite() || hi.is_finite() {
+                        f.range(lo, hi)
                     } else {
                         f
                     }
                 };
-                let value = limited(Function::input(input).gain(gear));
-                model = model.force(match j.kind {
-                    Kind::Revolute => force(input, "torque").set("joint", j.name.as_str()).set("value", value),
-                    Kind::Prismatic => {
+                model = model.force(match (j.kind, law.servo()) {
+                    // A motor: the force is gear × the input, held within both ranges (its gain is 1).
+                    (Kind::Revolute, false) if law.gain == 1.0 => force(&element, "torque")
+                        .set("joint", j.name.as_str())
+                        .set("value", held(Function::input(input).gain(gear), law.motor_range())),
+                    (Kind::Prismatic, false) if law.gain == 1.0 => {
                         let frame = tree.world[j.child];
                         let (point, axis) = (frame.p, frame.r * j.axis);
                         let bodies = [body_name(j.parent), body_name(j.child)];
                         // Along the axis, between a point of the parent LEVER behind the joint
                         // and the joint's point on the child: a tension pulls them together, so
                         // the push along the axis is the actuator's negative.
-                        force(input, "spring-damper")
+                        force(&element, "spring-damper")
                             .set("bodies", bodies)
                             .set(
                                 "at",
@@ -738,12 +691,39 @@ impl<'s, 'a> Reader<'s, 'a> {
                                 ],
                             )
                             .set("stiffness", 0.0)
-                            .set("actuator", limited(Function::input(input).gain(-gear)))
+                            .set("actuator", held(Function::input(input).gain(-gear), law.motor_range()))
+                    }
+                    (Kind::Revolute, _) => {
+                        // τ = gear clamp(g ū + b₁ gear θ + b₂ gear θ̇, forcerange), ū the control
+                        // held in ctrlrange: a servo with k = −b₁ gear², c = −b₂ gear², the
+                        // target g ū / (−b₁ gear) (or, with b₁ = 0, the torque gear g ū) and
+                        // the range gear × forcerange.
+                        let [_, b1, b2] = law.bias;
+                        let mut range = law.force_range.map(|r| r * gear);
+                        if range[0] > range[1] {
+                            range.swap(0, 1);
+                        }
+                        let control = |gain: f64| held(Function::input(input).gain(gain), law.ctrl_range);
+                        let mut servo = force(&element, "servo")
+                            .set("joint", j.name.as_str())
+                            .set("stiffness", -b1 * gear * gear)
+                            .set("damping", -b2 * gear * gear);
+                        servo = if b1 != 0.0 {
+                            servo.set("target", control(law.gain / (-b1 * gear)))
+                        } else {
+                            servo.set("value", control(law.gain * gear))
+                        };
+                        if range[0].is_finite() || range[1].is_finite() {
+                            servo = servo.set("range", range);
+                        }
+                        servo
                     }
                     _ => {
                         return Err(self.err(
                             c,
-                            format!("<motor> on joint '{target}': motors on hinge and slide joints are read"),
+                            format!(
+                                "<{tag}> on joint '{target}': motors act on hinge and slide joints, and the other actuators on hinges"
+                            ),
                         ))
                     }
                 });

@@ -202,7 +202,8 @@ impl Scene {
 
     /// What to do about a run's failure `e`, where the scene's settings are the likely cause: a
     /// rank-deficient constraint Jacobian under `redundant = "error"` (the default) gets the
-    /// setting that solves on an independent set. `None` otherwise.
+    /// setting that solves on an independent set; a servo thrown half a turn from its target, a
+    /// smaller or adaptive step. `None` otherwise.
     pub fn advice(&self, e: &SimulationError) -> Option<&'static str> {
         use dalembert_integrators::IntegrationError;
         let dynamics = match e {
@@ -213,6 +214,13 @@ impl Scene {
             },
             _ => return None,
         };
+        if let dalembert_system::DynamicsError::ForceElement { what, .. } = dynamics {
+            // A servo whose joint runs half a turn from its target within a run that started
+            // near it has, almost always, been thrown there by a step its gains make unstable.
+            return what.contains("from its target").then_some(
+                "a servo's joint thrown this far from its target within a few steps is the sign of a step too large for its gains (an explicit method needs h below about 2.8 J/c for a servo damping c on an inertia J): use dopri5, whose steps adapt, or a smaller step",
+            );
+        }
         let redundant = matches!(dynamics, dalembert_system::DynamicsError::RedundantConstraints { .. });
         (redundant && self.settings.redundancy == RedundancyTreatment::Error).then_some(
             "if the mechanism moves with these equations dependent (a redundant joint, as in Bricard's loop or a parallelogram with a third crank), set redundant = \"minimum-norm\" in [simulation] (--redundant minimum-norm; redundant=\"minimum-norm\" in Python): the run then solves on an independent set and shares the reactions by least norm",

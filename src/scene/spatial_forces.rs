@@ -40,6 +40,10 @@ pub(crate) struct ForceDef {
     pub free_length: Option<f64>,
     pub free_angle: Option<f64>,
     pub actuator: Option<FunctionDef>,
+    /// A servo's target angle (rad): a number or a function.
+    pub target: Option<ValueDef<3>>,
+    /// A servo's torque range `[lo, hi]` (N·m).
+    pub range: Option<[f64; 2]>,
     pub radius: Option<f64>,
     pub radii: Option<[f64; 2]>,
     /// A `box-plane` element's edge lengths along its body's axes.
@@ -184,6 +188,8 @@ impl ForceDef {
             ("free_length", self.free_length.is_some()),
             ("free_angle", self.free_angle.is_some()),
             ("actuator", self.actuator.is_some()),
+            ("target", self.target.is_some()),
+            ("range", self.range.is_some()),
             ("radius", self.radius.is_some()),
             ("radii", self.radii.is_some()),
             ("size", self.size.is_some()),
@@ -313,6 +319,27 @@ pub(crate) fn force(
                 free_angle: d.free_angle.unwrap_or(0.0),
             }
         }
+        "servo" => {
+            check(d.only(&["joint", "stiffness", "damping", "target", "value", "range"]))?;
+            let function = |v: &Option<ValueDef<3>>, key: &str| {
+                v.as_ref()
+                    .map(|v| scalar(v, key, ctx.inputs))
+                    .transpose()
+                    .map_err(|m| err(&m))
+            };
+            Force::JointServo {
+                name,
+                joint: d
+                    .joint
+                    .clone()
+                    .ok_or_else(|| err("needs 'joint' (a revolute or cylindrical joint: the servo acts about its axis)"))?,
+                stiffness: d.stiffness.unwrap_or(0.0),
+                damping: d.damping.unwrap_or(0.0),
+                target: function(&d.target, "target")?,
+                torque: function(&d.value, "value")?,
+                range: d.range.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]),
+            }
+        }
         "sphere-plane" => {
             check(d.only(&on_plane("radius")))?;
             let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
@@ -398,7 +425,7 @@ pub(crate) fn force(
         }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, sphere-plane, box-plane, capsule-plane, sphere-sphere, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, servo, sphere-plane, box-plane, capsule-plane, sphere-sphere, code)"
             )))
         }
     })

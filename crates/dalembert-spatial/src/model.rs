@@ -563,7 +563,7 @@ impl MultibodySystem for Model {
     fn check_forces(&self, t: f64, q: &[f64], v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
         let frame = |b: Option<usize>| self.frame(b, q, v);
         for (f, name) in self.forces.iter().zip(&self.force_names) {
-            f.check(&frame).map_err(|what| DynamicsError::ForceElement {
+            f.check(t, &frame).map_err(|what| DynamicsError::ForceElement {
                 time: t,
                 element: format!("force '{name}'"),
                 what,

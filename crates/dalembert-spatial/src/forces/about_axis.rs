@@ -1,6 +1,8 @@
-//! Torques about a revolute or cylindrical joint's axis: a joint torque `f(t)` and the rotational
-//! spring–damper `τ = −k (θ − θ₀) − c θ̇`, acting `+τ z` on the joint's second body and `−τ z` on its
-//! first.
+//! Torques about a revolute or cylindrical joint's axis: a joint torque `f(t)`, the rotational
+//! spring–damper `τ = −k (θ − θ₀) − c θ̇`, and the servo
+//! `τ = clamp(−k (θ − θ₀ − θ*(t)) − c θ̇ + f(t), τ_lo, τ_hi)` that follows a target angle `θ*(t)`
+//! (an MJCF `position` or affine `general` actuator), acting `+τ z` on the joint's second body
+//! and `−τ z` on its first.
 //!
 //! With the joint frame `(x_i, y_i, z)` on body `i` and `x_j` on body `j` (equal to `x_i` in the
 //! initial configuration), the joint angle is `θ = atan2(x_j · y_i, x_j · x_i)` (right-handed about
@@ -39,6 +41,10 @@ pub(crate) struct AxisForce {
     damping: f64,
     free_angle: f64,
     torque: Option<TimeFunction>,
+    /// A servo's target `θ*(t)`, added to the free angle.
+    target: Option<TimeFunction>,
+    /// The torque is held within `[lo, hi]` (unbounded unless a servo's range is given).
+    range: [f64; 2],
 }
 
 impl AxisForce {
@@ -61,23 +67,51 @@ impl AxisForce {
             damping,
             free_angle,
             torque,
+            target: None,
+            range: [f64::NEG_INFINITY, f64::INFINITY],
         }
     }
 
-    /// The axis (global), the deflection `θ − θ₀` in (−π, π] and the rate `θ̇`.
-    fn state(&self, fi: &Frame, fj: &Frame) -> (V3, f64, f64) {
+    /// The servo about `joint`'s axis: the law of [`AxisForce::new`] with the free angle moved by
+    /// `target(t)` and the torque held within `range`.
+    pub fn servo(
+        joint: &JointData,
+        gains: [f64; 2],
+        target: Option<TimeFunction>,
+        torque: Option<TimeFunction>,
+        range: [f64; 2],
+    ) -> Self {
+        AxisForce {
+            target,
+            range,
+            ..AxisForce::new(joint, gains[0], gains[1], 0.0, torque)
+        }
+    }
+
+    /// The axis (global), the deflection `θ − θ₀ − θ*(t)` in (−π, π] and the rate `θ̇`.
+    fn state(&self, t: f64, fi: &Frame, fj: &Frame) -> (V3, f64, f64) {
         let xj = fj.a * self.x_j;
         let theta = xj.dot(&(fi.a * self.y_i)).atan2(xj.dot(&(fi.a * self.x_i)));
         let z = fi.a * self.z_i;
-        let deflection = (theta - self.free_angle + PI).rem_euclid(TAU) - PI;
+        let free = self.free_angle + self.target.as_ref().map_or(0.0, |f| f.value(t));
+        let deflection = (theta - free + PI).rem_euclid(TAU) - PI;
         (z, deflection, z.dot(&(fj.w - fi.w)))
+    }
+
+    /// The torque `τ` and whether it is inside its range (where it is held at a bound, it does
+    /// not change with the state).
+    fn torque(&self, t: f64, deflection: f64, rate: f64) -> (f64, bool) {
+        let free =
+            -self.stiffness * deflection - self.damping * rate + self.torque.as_ref().map_or(0.0, |f| f.value(t));
+        let [lo, hi] = self.range;
+        (free.clamp(lo, hi), free > lo && free < hi)
     }
 
     /// Adds `+τ z` on body `j` and `−τ z` on body `i` at time `t`.
     pub fn add(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
         let (fi, fj) = (frame(self.body_i), frame(self.body_j));
-        let (z, deflection, rate) = self.state(&fi, &fj);
-        let tau = -self.stiffness * deflection - self.damping * rate + self.torque.as_ref().map_or(0.0, |f| f.value(t));
+        let (z, deflection, rate) = self.state(t, &fi, &fj);
+        let (tau, _) = self.torque(t, deflection, rate);
         if let Some(b) = self.body_j {
             add_torque(out, b, &fj, &(tau * z));
         }
@@ -86,26 +120,40 @@ impl AxisForce {
         }
     }
 
-    /// `½ k (θ − θ₀)²`.
-    pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        let (_, deflection, _) = self.state(&frame(self.body_i), &frame(self.body_j));
+    /// `½ k (θ − θ₀)²`; zero for a servo (its torque, held within its range, has no potential:
+    /// its whole work is counted as work done on the model).
+    pub fn potential(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
+        if self.is_servo() {
+            return 0.0;
+        }
+        let (_, deflection, _) = self.state(t, &frame(self.body_i), &frame(self.body_j));
         0.5 * self.stiffness * deflection * deflection
     }
 
-    /// No damping, no applied torque.
+    /// A target or a range: a servo.
+    fn is_servo(&self) -> bool {
+        self.target.is_some() || self.range != [f64::NEG_INFINITY, f64::INFINITY]
+    }
+
+    /// No damping, no applied torque, not a servo.
     pub fn is_conservative(&self) -> bool {
-        self.damping == 0.0 && self.torque.is_none()
+        self.damping == 0.0 && self.torque.is_none() && !self.is_servo()
     }
 
     /// A spring wound past [`WIND_LIMIT`] is an error (its angle would wrap).
-    pub fn check(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
+    pub fn check(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
         if self.stiffness == 0.0 {
             return Ok(());
         }
-        let (_, deflection, _) = self.state(&frame(self.body_i), &frame(self.body_j));
+        let (_, deflection, _) = self.state(t, &frame(self.body_i), &frame(self.body_j));
         if deflection.abs() > WIND_LIMIT {
+            let from = if self.target.is_some() {
+                "its target"
+            } else {
+                "its free angle"
+            };
             return Err(format!(
-                "rotational spring wound {deflection:.4} rad from its free angle: its angle is measured within ±π, so it cannot follow past 0.9π"
+                "joint turned {deflection:.4} rad from {from}: the angle is measured within ±π, so the law cannot follow past 0.9π"
             ));
         }
         Ok(())
@@ -122,9 +170,14 @@ impl AxisForce {
         frame: &dyn Fn(Option<usize>) -> Frame,
     ) -> ([Option<usize>; 2], WrenchDerivative) {
         let (fi, fj) = (frame(self.body_i), frame(self.body_j));
-        let (z, deflection, rate) = self.state(&fi, &fj);
-        let (k, c) = (self.stiffness, self.damping);
-        let tau = -k * deflection - c * rate + self.torque.as_ref().map_or(0.0, |f| f.value(t));
+        let (z, deflection, rate) = self.state(t, &fi, &fj);
+        let (tau, inside) = self.torque(t, deflection, rate);
+        // Held at a bound of its range, the torque does not change with the state.
+        let (k, c) = if inside {
+            (self.stiffness, self.damping)
+        } else {
+            (0.0, 0.0)
+        };
         let xj = fj.a * self.x_j;
         let (xi, yi) = (fi.a * self.x_i, fi.a * self.y_i);
         let (a, b) = (xj.dot(&xi), xj.dot(&yi));

@@ -8,6 +8,7 @@
 //! | torque | `T(t)`, global or body components | here |
 //! | spring–damper–actuator | tension `k (ℓ − ℓ₀) + c ℓ̇ + f(t)` along the line of its points | here |
 //! | joint torque, rotational spring–damper | `τ = −k (θ − θ₀) − c θ̇ + f(t)` about a revolute or cylindrical joint's axis | [`about_axis`] |
+//! | joint servo | `τ = clamp(−k (θ − θ*(t)) − c θ̇ + f(t), τ_lo, τ_hi)` about the same axis | [`about_axis`] |
 //! | sphere–plane contact | Hunt–Crossley normal force and regularized Coulomb friction between a sphere on a body and a plane of the ground | `contact.rs` |
 //! | sphere–sphere contact | the same law between spheres on two bodies | `contact.rs` |
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
@@ -116,6 +117,27 @@ pub enum Force {
         /// Free angle `θ₀` (rad).
         free_angle: f64,
     },
+    /// A servo about the axis of the named revolute or cylindrical joint (an MJCF `position`
+    /// actuator, or a `general` one with an affine bias): torque
+    /// `clamp(−k (θ − θ*(t)) − c θ̇ + f(t), lo, hi)` on the second body (the opposite on the
+    /// first), with `θ` the joint angle (0 in the initial configuration) and its distance from the
+    /// target measured within ±π.
+    JointServo {
+        /// Name.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// Stiffness `k` (N·m/rad): the position gain.
+        stiffness: f64,
+        /// Damping `c` (N·m·s/rad): the velocity gain.
+        damping: f64,
+        /// The target angle `θ*(t)` (rad; 0 when absent).
+        target: Option<TimeFunction>,
+        /// A torque `f(t)` added before the range (N·m).
+        torque: Option<TimeFunction>,
+        /// The torque is held within `[lo, hi]` (N·m; infinite bounds for none).
+        range: [f64; 2],
+    },
     /// Compliant contact of a sphere on `body` with a plane of the ground
     /// (`docs/contact.md`): normal force `k δⁿ (1 + d δ̇)` with `δ` the penetration, Coulomb
     /// friction `μ F_n` regularized below `smoothing_velocity`.
@@ -201,7 +223,8 @@ impl Force {
             | Force::BoxPlane { name, .. }
             | Force::CapsulePlane { name, .. }
             | Force::SphereSphere { name, .. }
-            | Force::RotationalSpringDamper { name, .. } => name,
+            | Force::RotationalSpringDamper { name, .. }
+            | Force::JointServo { name, .. } => name,
             Force::User(u) => u.name(),
         }
     }
@@ -418,6 +441,34 @@ impl ForceData {
                 }
                 let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
                 ForceData::AboutAxis(AxisForce::new(j, *stiffness, *damping, *free_angle, None))
+            }
+            Force::JointServo {
+                joint,
+                stiffness,
+                damping,
+                target,
+                torque,
+                range,
+                ..
+            } => {
+                non_negative(&[(*stiffness, "stiffness"), (*damping, "damping")])?;
+                functions(target.as_slice())?;
+                functions(torque.as_slice())?;
+                let [lo, hi] = *range;
+                if lo.is_nan() || hi.is_nan() || lo > hi {
+                    return Err(bad(&format!("range [{lo}, {hi}]: the first bound is above the second")));
+                }
+                if target.is_some() && *stiffness == 0.0 {
+                    return Err(bad("a target needs a stiffness (the gain that pulls the joint to it)"));
+                }
+                let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
+                ForceData::AboutAxis(AxisForce::servo(
+                    j,
+                    [*stiffness, *damping],
+                    target.clone(),
+                    torque.clone(),
+                    *range,
+                ))
             }
             Force::SpherePlane {
                 body,
@@ -641,7 +692,7 @@ impl ForceData {
                 let d = fj.point(&ends[1].1) - fi.point(&ends[0].1);
                 0.5 * stiffness * (d.norm() - free_length).powi(2)
             }
-            ForceData::AboutAxis(a) => a.potential(frame),
+            ForceData::AboutAxis(a) => a.potential(t, frame),
             ForceData::SpherePlane(c) => c.potential(frame),
             ForceData::SphereSphere(c) => c.potential(frame),
             ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
@@ -677,11 +728,11 @@ impl ForceData {
         }
     }
 
-    /// Checks that the element's law holds at the state behind `frame`: `Err(what)` when it has
+    /// Checks that the element's law holds at `t` and the state behind `frame`: `Err(what)` when it has
     /// left its range.
-    pub fn check(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
+    pub fn check(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
         match self {
-            ForceData::AboutAxis(a) => a.check(frame),
+            ForceData::AboutAxis(a) => a.check(t, frame),
             _ => Ok(()),
         }
     }
