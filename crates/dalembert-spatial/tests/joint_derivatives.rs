@@ -238,11 +238,35 @@ fn residual(m: &Model, t: f64, q: &[f64], v: &[f64], vdot: &[f64], lambda: &[f64
     r
 }
 
+/// Two moving bodies on a revolute joint with a servo following a harmonic target, its torque
+/// held within `range`.
+fn model_with_servo(range: [f64; 2]) -> Model {
+    use dalembert_spatial::Force;
+    let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
+    let (first, second) = two_bodies(&mut b);
+    b.joint(Joint::revolute("j", first, second, [0.5, 0.1, 0.1], [0.2, -0.5, 0.8]));
+    b.force(Force::JointServo {
+        name: "servo".into(),
+        joint: "j".into(),
+        stiffness: 30.0,
+        damping: 2.0,
+        target: Some(TimeFunction::Harmonic {
+            offset: 0.4,
+            amplitude: 0.3,
+            frequency: 0.7,
+            phase: 0.2,
+        }),
+        torque: Some(TimeFunction::Constant(0.6)),
+        range,
+    });
+    b.build().unwrap()
+}
+
 /// The analytic tangent of the residual (`MultibodySystem::residual_tangent`: each primitive's and
 /// force element's wrench derivatives mapped to the body-frame rotation coordinates, and the
 /// gyroscopic term) against central differences of `r` along `q ⊕ ε e_j` and `v + ε e_j`, for every
 /// joint kind (to another body and to the ground), every driver, and the force elements of
-/// [`model_with_forces`], at a state off the constraint manifold with multipliers on every
+/// [`model_with_forces`] and [`model_with_servo`], at a state off the constraint manifold with multipliers on every
 /// equation. Step 1e-6: truncation ≈ 1e-12, round-off ≈ 1e-16 |r| / h ≈ 1e-9;
 /// tolerance 1e-6 of the largest entry (at least 1).
 #[test]
@@ -271,6 +295,11 @@ fn residual_tangent_matches_finite_differences() {
         }
     }
     models.push(("forces on two moving bodies".into(), model_with_forces()));
+    // A servo inside its range, and one held at a bound (its torque then does not change with
+    // the state; the state's free torque is far from the bound, so the differences do not cross
+    // it).
+    models.push(("servo inside its range".into(), model_with_servo([-1e3, 1e3])));
+    models.push(("servo held at its bound".into(), model_with_servo([0.1, 0.2])));
     let t = 0.3;
     for (name, m) in models {
         let (q, v) = state(&m);

@@ -78,9 +78,16 @@ impl<'a> Reader<'_, 'a> {
         };
         self.attributes(c, &[&common[..], own].concat(), &["group"])?;
         // What would change the force and is not modelled: refused unless at its default.
-        for key in ["dampratio", "timeconst", "inheritrange"] {
+        for (key, instead) in [
+            ("dampratio", "give the damping as kv"),
+            ("timeconst", "an activation filter is not modelled"),
+            ("inheritrange", "give ctrlrange"),
+        ] {
             if tag == "position" && self.number(c, key, 0.0)? != 0.0 {
-                return Err(self.err(c, format!("<position> {key} other than 0 is outside the subset")));
+                return Err(self.err(
+                    c,
+                    format!("<position> {key} other than 0 is outside the subset ({instead})"),
+                ));
             }
         }
         if tag == "general" {
