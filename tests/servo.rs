@@ -32,7 +32,14 @@ fn step_response(k: f64, c: f64, aim: f64, t: f64) -> f64 {
     aim * (1.0 - (-zeta * omega * t).exp() * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin()))
 }
 
-const FORMULATIONS: [&str; 3] = ["augmented", "embedding", "amalgamated"];
+/// Every formulation in absolute coordinates, and the tree in joint coordinates (where the
+/// servo's angle is the joint's coordinate).
+const FORMULATIONS: [&str; 4] = [
+    "augmented\"\ncoordinates = \"absolute",
+    "embedding",
+    "amalgamated",
+    "augmented\"\ncoordinates = \"joint",
+];
 
 #[test]
 fn a_servo_steps_to_its_target_as_a_damped_oscillator() {

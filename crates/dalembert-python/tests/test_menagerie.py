@@ -20,6 +20,10 @@ from test_mjcf import placed
 
 ROBOTS = {"iiwa14": "kuka_iiwa_14/iiwa14.xml", "gen3": "kinova_gen3/gen3.xml"}
 
+# Every formulation in absolute coordinates, and joint coordinates (the articulated-body
+# algorithm, where a servo reads its joint's coordinate).
+SETTINGS = [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")] + [dict(coordinates="joint")]
+
 
 def menagerie(root: pathlib.Path, name: str) -> pathlib.Path:
     return root / "tests" / "data" / "menagerie" / ROBOTS[name]
@@ -70,7 +74,8 @@ def states(model, rng, count):
 
 @pytest.mark.parametrize("name", ROBOTS)
 def test_menagerie_accelerations_match_mujoco_at_random_states_and_controls(root, name):
-    """At 300 random states and controls (`states`), `JOINT.qdd` of every formulation is MuJoCo's
+    """At 300 random states and controls (`states`), `JOINT.qdd` of every formulation and of joint
+    coordinates is MuJoCo's
     `qacc` within 1e-9 of the largest; some states have every servo's force inside its range and
     some hold forces at a bound (the range's effect is checked, not assumed); with the controls
     moved 0.3 toward the angles instead the accelerations differ by more than 1e-2: the
@@ -96,8 +101,8 @@ def test_menagerie_accelerations_match_mujoco_at_random_states_and_controls(root
         cases.append((q, v, ctrl, data.qacc.copy()))
     if model.actuator_forcelimited.any():
         assert 30 < clamped < 270, f"{clamped} of 300 states hold a force at a bound"
-    for formulation in ("augmented", "embedding", "amalgamated"):
-        sim = scene.simulator(formulation=formulation)
+    for settings in SETTINGS:
+        sim = scene.simulator(**settings)
         worst, idle = 0.0, 0.0
         for (q, v, ctrl, qacc), (qpos, _, _) in zip(cases, states_used):
             for a, u, j in zip(actuators, ctrl, model.actuator_trnid[:, 0]):
@@ -111,9 +116,9 @@ def test_menagerie_accelerations_match_mujoco_at_random_states_and_controls(root
             assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12, f"assembly moved {moved}"
             got = np.array([sim[f"{j}.qdd"] for j in joints])
             worst = max(worst, np.max(np.abs(got - qacc)) / np.max(np.abs(qacc)))
-        print(f"{name} {formulation}: worst relative difference {worst:.2e}")
-        assert worst < 1e-9, f"{formulation}: {worst:.2e}"
-        assert idle > 1e-2, f"{formulation}: the actuators change the accelerations by {idle:.2e} only"
+        print(f"{name} {settings}: worst relative difference {worst:.2e}")
+        assert worst < 1e-9, f"{settings}: {worst:.2e}"
+        assert idle > 1e-2, f"{settings}: the actuators change the accelerations by {idle:.2e} only"
 
 
 @pytest.mark.parametrize("name", ROBOTS)
@@ -121,7 +126,7 @@ def test_menagerie_run_from_rest_holds_its_servos_as_mujoco(root, name):
     """From the file's configuration at rest, the controls at 0.3 rad (within every range), 0.2 s:
     the servos pull each joint toward 0.3 against gravity; dalembert's joint values are MuJoCo's
     (its `qacc` integrated by DOP853 at 1e-12) within 1e-8 rad, rates within 1e-6 rad/s, with
-    every formulation (dopri5 at 1e-12; the servos' damping makes the motion stiff, so both take
+    every formulation and in joint coordinates (dopri5 at 1e-12; the servos' damping makes the motion stiff, so both take
     small steps)."""
     path = menagerie(root, name)
     model = mujoco_model(path)
@@ -139,11 +144,11 @@ def test_menagerie_run_from_rest_holds_its_servos_as_mujoco(root, name):
     actuators = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)]
     assert np.max(np.abs(x[: model.nq])) > 0.1, "the joints move"
     scene = dalembert.Scene.load(path)
-    for formulation in ("augmented", "embedding", "amalgamated"):
-        sim = scene.simulator(integrator="dopri5", rtol=1e-12, atol=1e-13, formulation=formulation)
+    for settings in SETTINGS:
+        sim = scene.simulator(integrator="dopri5", rtol=1e-12, atol=1e-13, **settings)
         for a in actuators:
             sim.set_input(a, 0.3)
         sim.advance_to(end)
         for k, j in enumerate(joints):
-            assert abs(sim[f"{j}.q"] - x[k]) < 1e-8, f"{formulation} {j}: {sim[f'{j}.q']} vs MuJoCo {x[k]}"
-            assert abs(sim[f"{j}.qd"] - x[model.nq + k]) < 1e-6, f"{formulation} {j} rate"
+            assert abs(sim[f"{j}.q"] - x[k]) < 1e-8, f"{settings} {j}: {sim[f'{j}.q']} vs MuJoCo {x[k]}"
+            assert abs(sim[f"{j}.qd"] - x[model.nq + k]) < 1e-6, f"{settings} {j} rate"

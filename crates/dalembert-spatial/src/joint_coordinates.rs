@@ -9,9 +9,11 @@
 //! their axes: the model's initial velocities projected onto the joints.
 
 use crate::euler_parameters::{self, from_rotation};
+use crate::forces::ForceData;
 use crate::frame::{NQ, NV};
 use crate::joints::JointKind;
 use crate::Model;
+use dalembert_system::tree::JointAxisLaw;
 use dalembert_system::tree::{self, KinematicTree, TreeBody, WorldFrame};
 use dalembert_system::{JointSpace, ModelError};
 use nalgebra::{Matrix3, Vector3};
@@ -39,7 +41,9 @@ fn refuse(element: String, what: &str) -> ModelError {
 
 impl Model {
     /// This model in joint coordinates, when it is a tree of revolute and prismatic joints
-    /// rooted at the ground, with gravity and no force elements or drivers; otherwise an error
+    /// rooted at the ground, with gravity, forces about the joints' axes only and no drivers
+    /// (the forces' laws then read the joint coordinate: a spring's deflection is not measured
+    /// within a turn); otherwise an error
     /// naming the first element that joint coordinates cannot take. The tree's zero
     /// configuration is the bodies' initial poses ([`Model::initial_state`]); see
     /// [`Model::joint_coordinates_at`].
@@ -73,10 +77,15 @@ impl Model {
                 "is a constraint between joints, solved in absolute coordinates only",
             ));
         }
-        if let Some(f) = self.force_names().next() {
+        if let Some((_, f)) = self
+            .force_data()
+            .iter()
+            .zip(self.force_names())
+            .find(|(f, _)| !matches!(f, ForceData::AboutAxis(_)))
+        {
             return Err(refuse(
                 format!("force '{f}'"),
-                "joint coordinates take gravity only, no force elements yet",
+                "joint coordinates take gravity and the forces about joint axes (joint torques, rotational springs, servos) only",
             ));
         }
         let n = self.bodies().len();
@@ -260,7 +269,35 @@ impl Model {
             .iter()
             .map(|&k| (tree_joint[k], self.joint_row_into(k, q, v, &mut row)))
             .collect();
-        let system = JointSpace::new(tree).with_limits(self.limits.clone(), limited)?;
+        // Each law about a joint's axis on its joint's coordinate: the law's angle here added,
+        // its sign turned where the law's second body is the joint's parent in the tree.
+        let frame = |b: Option<usize>| self.frame(b, q, v);
+        let laws = self
+            .force_data()
+            .iter()
+            .filter_map(|f| match f {
+                ForceData::AboutAxis(a) => Some(a),
+                _ => None,
+            })
+            .map(|a| {
+                let (k, law) = a.joint_law();
+                let t = tree_joint[k];
+                let sign = if joints[k].body_j == Some(order[t].0) {
+                    1.0
+                } else {
+                    -1.0
+                };
+                JointAxisLaw {
+                    joint: t,
+                    sign,
+                    offset: a.angle_at(&frame),
+                    law: law.clone(),
+                }
+            })
+            .collect();
+        let system = JointSpace::new(tree)
+            .with_limits(self.limits.clone(), limited)?
+            .with_axis_laws(laws)?;
         Ok(JointCoordinates {
             system: Arc::new(system),
             bodies: order.iter().map(|o| o.0).collect(),

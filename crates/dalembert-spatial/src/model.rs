@@ -284,6 +284,11 @@ impl Model {
         lambda[first..first + self.couplings.len()].iter().map(|l| -l)
     }
 
+    /// The force elements, in order.
+    pub(crate) fn force_data(&self) -> &[ForceData] {
+        &self.forces
+    }
+
     /// Names of the force elements, in order.
     pub fn force_names(&self) -> impl Iterator<Item = &str> {
         self.force_names.iter().map(|n| n.as_str())

@@ -16,6 +16,7 @@
 //! seam for planar bodies, `dalembert-spatial` for spatial ones. Equations follow `docs/equations.md`; `docs/architecture.md` shows where
 //! each part lives.
 
+pub mod axis_law;
 pub mod blocks;
 pub mod constraint_set;
 pub mod contact_law;
@@ -46,6 +47,7 @@ pub mod tangent;
 pub mod time_function;
 pub mod tree;
 
+pub use axis_law::AxisLaw;
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
 pub use contact_law::ContactLaw;

@@ -170,6 +170,12 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// For a system with a [`MultibodySystem::kinematic_tree`]: adds to `out` (one per joint) the
+    /// joints' generalized forces at `(t, q, v)` that the tree's own joint forces do not hold
+    /// (a model's torque laws about the joints' axes, [`crate::tree::JointAxisLaw`]), for the
+    /// articulated-body solve. Default: none.
+    fn add_joint_forces(&self, _t: f64, _q: &[f64], _v: &[f64], _out: &mut [f64]) {}
+
     /// The system as a kinematic tree in joint coordinates, when it is one ([`crate::JointSpace`]):
     /// with no constraint equations every formulation's equations are then `M q̈ = Q`, and the
     /// formulations solve them by the articulated-body algorithm ([`crate::tree::Articulated`])

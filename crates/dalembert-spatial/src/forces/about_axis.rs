@@ -14,7 +14,7 @@ use super::add_torque;
 use crate::frame::Frame;
 use crate::joints::second_derivatives::{skew, WrenchDerivative};
 use crate::joints::JointData;
-use dalembert_system::TimeFunction;
+use dalembert_system::AxisLaw;
 use nalgebra::Matrix3;
 use nalgebra::Vector3;
 use std::f64::consts::{PI, TAU};
@@ -37,14 +37,10 @@ pub(crate) struct AxisForce {
     z_i: V3,
     /// The joint frame's `x` on body `j` (body components).
     x_j: V3,
-    stiffness: f64,
-    damping: f64,
-    free_angle: f64,
-    torque: Option<TimeFunction>,
-    /// A servo's target `θ*(t)`, added to the free angle.
-    target: Option<TimeFunction>,
-    /// The torque is held within `[lo, hi]` (unbounded unless a servo's range is given).
-    range: [f64; 2],
+    /// The law (shared with joint coordinates).
+    law: AxisLaw,
+    /// The joint's index in the model.
+    joint: usize,
 }
 
 impl AxisForce {
@@ -54,7 +50,8 @@ impl AxisForce {
     }
 
     /// The law about `joint`'s axis.
-    pub fn new(joint: &JointData, stiffness: f64, damping: f64, free_angle: f64, torque: Option<TimeFunction>) -> Self {
+    pub fn new(joint: (usize, &JointData), law: AxisLaw) -> Self {
+        let (index, joint) = joint;
         let col = |k: usize| -> V3 { joint.axes_i.column(k).into() };
         AxisForce {
             body_i: joint.body_i,
@@ -63,55 +60,39 @@ impl AxisForce {
             y_i: col(1),
             z_i: col(2),
             x_j: joint.axes_j.column(0).into(),
-            stiffness,
-            damping,
-            free_angle,
-            torque,
-            target: None,
-            range: [f64::NEG_INFINITY, f64::INFINITY],
+            law,
+            joint: index,
         }
     }
 
-    /// The servo about `joint`'s axis: the law of [`AxisForce::new`] with the free angle moved by
-    /// `target(t)` and the torque held within `range`.
-    pub fn servo(
-        joint: &JointData,
-        gains: [f64; 2],
-        target: Option<TimeFunction>,
-        torque: Option<TimeFunction>,
-        range: [f64; 2],
-    ) -> Self {
-        AxisForce {
-            target,
-            range,
-            ..AxisForce::new(joint, gains[0], gains[1], 0.0, torque)
-        }
+    /// The joint's index in the model, and the law (for joint coordinates).
+    pub fn joint_law(&self) -> (usize, &AxisLaw) {
+        (self.joint, &self.law)
+    }
+
+    /// The joint angle `θ` (right-handed about `z`, 0 in the initial configuration, within ±π).
+    fn angle(&self, fi: &Frame, fj: &Frame) -> f64 {
+        let xj = fj.a * self.x_j;
+        xj.dot(&(fi.a * self.y_i)).atan2(xj.dot(&(fi.a * self.x_i)))
+    }
+
+    /// The joint angle at the state behind `frame`.
+    pub fn angle_at(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
+        self.angle(&frame(self.body_i), &frame(self.body_j))
     }
 
     /// The axis (global), the deflection `θ − θ₀ − θ*(t)` in (−π, π] and the rate `θ̇`.
     fn state(&self, t: f64, fi: &Frame, fj: &Frame) -> (V3, f64, f64) {
-        let xj = fj.a * self.x_j;
-        let theta = xj.dot(&(fi.a * self.y_i)).atan2(xj.dot(&(fi.a * self.x_i)));
         let z = fi.a * self.z_i;
-        let free = self.free_angle + self.target.as_ref().map_or(0.0, |f| f.value(t));
-        let deflection = (theta - free + PI).rem_euclid(TAU) - PI;
+        let deflection = (self.angle(fi, fj) - self.law.free(t) + PI).rem_euclid(TAU) - PI;
         (z, deflection, z.dot(&(fj.w - fi.w)))
-    }
-
-    /// The torque `τ` and whether it is inside its range (where it is held at a bound, it does
-    /// not change with the state).
-    fn torque(&self, t: f64, deflection: f64, rate: f64) -> (f64, bool) {
-        let free =
-            -self.stiffness * deflection - self.damping * rate + self.torque.as_ref().map_or(0.0, |f| f.value(t));
-        let [lo, hi] = self.range;
-        (free.clamp(lo, hi), free > lo && free < hi)
     }
 
     /// Adds `+τ z` on body `j` and `−τ z` on body `i` at time `t`.
     pub fn add(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
         let (fi, fj) = (frame(self.body_i), frame(self.body_j));
         let (z, deflection, rate) = self.state(t, &fi, &fj);
-        let (tau, _) = self.torque(t, deflection, rate);
+        let (tau, _) = self.law.torque(t, deflection, rate);
         if let Some(b) = self.body_j {
             add_torque(out, b, &fj, &(tau * z));
         }
@@ -123,31 +104,23 @@ impl AxisForce {
     /// `½ k (θ − θ₀)²`; zero for a servo (its torque, held within its range, has no potential:
     /// its whole work is counted as work done on the model).
     pub fn potential(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        if self.is_servo() {
-            return 0.0;
-        }
         let (_, deflection, _) = self.state(t, &frame(self.body_i), &frame(self.body_j));
-        0.5 * self.stiffness * deflection * deflection
-    }
-
-    /// A target or a range: a servo.
-    fn is_servo(&self) -> bool {
-        self.target.is_some() || self.range != [f64::NEG_INFINITY, f64::INFINITY]
+        self.law.potential(deflection)
     }
 
     /// No damping, no applied torque, not a servo.
     pub fn is_conservative(&self) -> bool {
-        self.damping == 0.0 && self.torque.is_none() && !self.is_servo()
+        self.law.is_conservative()
     }
 
     /// A spring wound past [`WIND_LIMIT`] is an error (its angle would wrap).
     pub fn check(&self, t: f64, frame: &dyn Fn(Option<usize>) -> Frame) -> Result<(), String> {
-        if self.stiffness == 0.0 {
+        if self.law.stiffness == 0.0 {
             return Ok(());
         }
         let (_, deflection, _) = self.state(t, &frame(self.body_i), &frame(self.body_j));
         if deflection.abs() > WIND_LIMIT {
-            let from = if self.target.is_some() {
+            let from = if self.law.target.is_some() {
                 "its target"
             } else {
                 "its free angle"
@@ -171,10 +144,10 @@ impl AxisForce {
     ) -> ([Option<usize>; 2], WrenchDerivative) {
         let (fi, fj) = (frame(self.body_i), frame(self.body_j));
         let (z, deflection, rate) = self.state(t, &fi, &fj);
-        let (tau, inside) = self.torque(t, deflection, rate);
+        let (tau, inside) = self.law.torque(t, deflection, rate);
         // Held at a bound of its range, the torque does not change with the state.
         let (k, c) = if inside {
-            (self.stiffness, self.damping)
+            (self.law.stiffness, self.law.damping)
         } else {
             (0.0, 0.0)
         };

@@ -23,7 +23,7 @@ use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
 use contact::{SpherePlane, SphereSphere};
-use dalembert_system::ContactLaw;
+use dalembert_system::{AxisLaw, ContactLaw};
 use dalembert_system::{ModelError, TimeFunction};
 use nalgebra::Vector3;
 use std::sync::Arc;
@@ -313,13 +313,14 @@ fn components(f: &[TimeFunction; 3], t: f64) -> V3 {
 }
 
 /// The joint named `name`, which must be revolute or cylindrical (an axis-bound element).
-fn axis_joint<'a>(joints: &'a [JointData], name: &str) -> Result<&'a JointData, String> {
-    let j = joints
+fn axis_joint<'a>(joints: &'a [JointData], name: &str) -> Result<(usize, &'a JointData), String> {
+    let (k, j) = joints
         .iter()
-        .find(|j| j.name == name)
+        .enumerate()
+        .find(|(_, j)| j.name == name)
         .ok_or_else(|| format!("no joint named '{name}'"))?;
     match j.kind {
-        Some(JointKind::Revolute | JointKind::Cylindrical) => Ok(j),
+        Some(JointKind::Revolute | JointKind::Cylindrical) => Ok((k, j)),
         Some(k) => Err(format!(
             "joint '{name}' is {}: a torque about a joint axis needs a revolute or cylindrical joint",
             k.name()
@@ -426,7 +427,13 @@ impl ForceData {
             Force::JointTorque { joint, torque, .. } => {
                 functions(std::slice::from_ref(torque))?;
                 let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
-                ForceData::AboutAxis(AxisForce::new(j, 0.0, 0.0, 0.0, Some(torque.clone())))
+                ForceData::AboutAxis(AxisForce::new(
+                    j,
+                    AxisLaw {
+                        torque: Some(torque.clone()),
+                        ..AxisLaw::spring(0.0, 0.0, 0.0)
+                    },
+                ))
             }
             Force::RotationalSpringDamper {
                 joint,
@@ -440,7 +447,7 @@ impl ForceData {
                     return Err(bad("free angle must be finite"));
                 }
                 let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
-                ForceData::AboutAxis(AxisForce::new(j, *stiffness, *damping, *free_angle, None))
+                ForceData::AboutAxis(AxisForce::new(j, AxisLaw::spring(*stiffness, *damping, *free_angle)))
             }
             Force::JointServo {
                 joint,
@@ -462,12 +469,14 @@ impl ForceData {
                     return Err(bad("a target needs a stiffness (the gain that pulls the joint to it)"));
                 }
                 let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
-                ForceData::AboutAxis(AxisForce::servo(
+                ForceData::AboutAxis(AxisForce::new(
                     j,
-                    [*stiffness, *damping],
-                    target.clone(),
-                    torque.clone(),
-                    *range,
+                    AxisLaw {
+                        target: target.clone(),
+                        torque: torque.clone(),
+                        range: *range,
+                        ..AxisLaw::spring(*stiffness, *damping, 0.0)
+                    },
                 ))
             }
             Force::SpherePlane {

@@ -29,6 +29,8 @@ pub struct Articulated {
     u: Vec<Sv>,
     d: Vec<f64>,
     tau: Vec<f64>,
+    /// The generalized forces added to the tree's own (the caller's and the system's).
+    added: Vec<f64>,
 }
 
 impl Articulated {
@@ -42,6 +44,7 @@ impl Articulated {
             u: vec![Sv::ZERO; n],
             d: vec![0.0; n],
             tau: vec![0.0; n],
+            added: vec![0.0; n],
         }
     }
 
@@ -57,7 +60,8 @@ impl Articulated {
 
     /// `q̈` of `system` (whose [`MultibodySystem::kinematic_tree`] this workspace was made for) at
     /// `(t, q, q̇)` into `qdd`, after checking the state, with the generalized force `extra` added
-    /// to the joints' (empty: none; [`crate::Data::set_extra_force`]): what a formulation calls.
+    /// to the joints' (empty: none; [`crate::Data::set_extra_force`]) and the system's
+    /// ([`MultibodySystem::add_joint_forces`]): what a formulation calls.
     pub fn solve(
         &mut self,
         system: &dyn MultibodySystem,
@@ -67,7 +71,17 @@ impl Articulated {
     ) -> Result<(), DynamicsError> {
         system.check_state(t, q, qd)?;
         match system.kinematic_tree() {
-            Some(tree) if tree.len() == self.d.len() => self.solve_tree(tree, (t, q, qd), extra, qdd),
+            Some(tree) if tree.len() == self.d.len() => {
+                // Moved out for the solve and back (no allocation).
+                let mut added = std::mem::take(&mut self.added);
+                for (k, a) in added.iter_mut().enumerate() {
+                    *a = extra.get(k).copied().unwrap_or(0.0);
+                }
+                system.add_joint_forces(t, q, qd, &mut added);
+                let solved = self.solve_tree(tree, (t, q, qd), &added, qdd);
+                self.added = added;
+                solved
+            }
             _ => Err(DynamicsError::Singular {
                 time: t,
                 what: "the articulated-body workspace does not match the system's tree".into(),

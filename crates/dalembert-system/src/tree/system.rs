@@ -4,8 +4,8 @@
 use super::recursion::{Pass, WorldFrame};
 use super::{JointKind, KinematicTree};
 use crate::{
-    BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, JointLimit, Layout,
-    ModelError, MultibodySystem, SlipRow,
+    AxisLaw, BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, JointLimit,
+    Layout, ModelError, MultibodySystem, SlipRow,
 };
 use std::sync::Mutex;
 
@@ -24,6 +24,35 @@ pub struct JointSpace {
     limits: Vec<JointLimit>,
     /// Each limit's joint (tree index) and its coordinate at the tree's zero configuration.
     limited: Vec<(usize, f64)>,
+    /// Torque laws about joints' axes ([`JointSpace::with_axis_laws`]).
+    laws: Vec<JointAxisLaw>,
+}
+
+/// An [`AxisLaw`] on a revolute joint of the tree: the law's angle is `offset + sign q` and its
+/// rate `sign q̇`, and it adds `sign τ` to the joint's generalized force. `sign` is −1 where the
+/// law measures the joint's parent turning relative to its child.
+#[derive(Debug, Clone)]
+pub struct JointAxisLaw {
+    /// The joint (tree index).
+    pub joint: usize,
+    /// ±1.
+    pub sign: f64,
+    /// The law's angle at the tree's zero configuration (rad).
+    pub offset: f64,
+    /// The law.
+    pub law: AxisLaw,
+}
+
+impl JointAxisLaw {
+    /// The deflection `θ − θ₀ − θ*(t)` and the rate at joint coordinates `q`, `q̇` (the angle is
+    /// the coordinate: no turn is lost).
+    fn state(&self, t: f64, q: &[f64], v: &[f64]) -> (f64, f64) {
+        (self.deflection(t, q), self.sign * v[self.joint])
+    }
+
+    fn deflection(&self, t: f64, q: &[f64]) -> f64 {
+        self.offset + self.sign * q[self.joint] - self.law.free(t)
+    }
 }
 
 #[derive(Debug)]
@@ -61,7 +90,29 @@ impl JointSpace {
             pattern,
             limits: Vec::new(),
             limited: Vec::new(),
+            laws: Vec::new(),
         }
+    }
+
+    /// The system with torque laws about some of its revolute joints (a model's joint torques,
+    /// rotational springs and servos). An error names a law whose joint the tree does not have or
+    /// is not revolute, or whose sign is not ±1.
+    pub fn with_axis_laws(mut self, laws: Vec<JointAxisLaw>) -> Result<Self, ModelError> {
+        for l in &laws {
+            let revolute = self
+                .tree
+                .bodies()
+                .get(l.joint)
+                .is_some_and(|b| b.kind == JointKind::Revolute);
+            if !revolute || l.sign.abs() != 1.0 || !l.offset.is_finite() {
+                return Err(ModelError::InvalidParameter {
+                    element: format!("axis law on joint {}", l.joint),
+                    what: "needs a revolute joint of the tree, a sign of ±1 and a finite offset".into(),
+                });
+            }
+        }
+        self.laws = laws;
+        Ok(self)
     }
 
     /// The system with limits on some of its joints (`docs/limits.md`): limit `k` is on joint
@@ -145,9 +196,18 @@ impl MultibodySystem for JointSpace {
         false
     }
 
-    fn applied_forces(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+    fn applied_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         let mut s = self.scratch();
         self.tree.bias_forces(q, v, &mut s.pass, out);
+        drop(s);
+        self.add_joint_forces(t, q, v, out);
+    }
+
+    fn add_joint_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
+        for l in &self.laws {
+            let (deflection, rate) = l.state(t, q, v);
+            out[l.joint] += l.sign * l.law.torque(t, deflection, rate).0;
+        }
     }
 
     fn check_forces(&self, t: f64, _q: &[f64], _v: &[f64], q_e: &[f64]) -> Result<(), DynamicsError> {
@@ -195,19 +255,29 @@ impl MultibodySystem for JointSpace {
         self.tree.kinetic(&s.pass)
     }
 
-    fn potential_energy(&self, _t: f64, q: &[f64]) -> f64 {
+    fn potential_energy(&self, t: f64, q: &[f64]) -> f64 {
         let mut s = self.scratch();
         self.tree.world_frames(q, None, &mut s.frames);
-        self.tree.potential(q, &s.frames)
+        let laws: f64 = self.laws.iter().map(|l| l.law.potential(l.deflection(t, q))).sum();
+        self.tree.potential(q, &s.frames) + laws
     }
 
     fn is_conservative(&self) -> bool {
-        self.tree.is_conservative()
+        self.tree.is_conservative() && self.laws.iter().all(|l| l.law.is_conservative())
     }
 
-    /// The joint dampers' `−c q̇²` (a joint's stiffness and constant effort are in its potential).
-    fn nonconservative_power(&self, _t: f64, _q: &[f64], v: &[f64]) -> f64 {
-        self.tree.damping_power(v)
+    /// The joint dampers' `−c q̇²` (a joint's stiffness and constant effort are in its
+    /// potential), and the power of the axis laws that their potential does not count.
+    fn nonconservative_power(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+        let laws: f64 = self
+            .laws
+            .iter()
+            .map(|l| {
+                let (deflection, rate) = l.state(t, q, v);
+                l.law.nonconservative_power(t, deflection, rate)
+            })
+            .sum();
+        self.tree.damping_power(v) + laws
     }
 
     fn bodies_without_inertia(&self) -> Vec<String> {
