@@ -377,10 +377,21 @@ impl Simulation {
         }
         let method = self.integrator.method.entry();
         if method.applies == dalembert_integrators::Applies::AugmentedIndex3 {
-            return Err(refuse(format!(
-                "{} integrates the index-3 equations without joint {kind}: use rk4 or dopri5",
-                method.name
-            )));
+            if kind == "friction" {
+                return Err(refuse(format!(
+                    "{} integrates the index-3 equations without joint {kind}: use rk4 or dopri5",
+                    method.name
+                )));
+            }
+            // Limits: free while no joint reaches a bound; the run stops where one does.
+            return Ok(Box::new(
+                dalembert_system::Frictional::new((entry.build)(system, &settings)?)?.refusing_impacts_because(
+                    &format!(
+                        "{} integrates the index-3 equations without stops: it runs while every limit is free and stops here; use rk4 or dopri5, which take the impacts",
+                        method.name
+                    ),
+                ),
+            ));
         }
         Ok(Box::new(dalembert_system::Frictional::new((entry.build)(
             system, &settings,

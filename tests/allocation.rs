@@ -717,3 +717,37 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
     let failures = switching_runs_growing(&[text, spatial, ball, &joint], "impact");
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Generalized-α and ALI3-P on models with limits that stay free (held free by `Frictional`,
+/// which would stop the run at a bound): a planar and a spatial rod swinging from horizontal to
+/// the other horizontal between stops at −3.5 and 0.5 rad; after 50 rounds of the simulator's
+/// loop, 300 more allocate nothing.
+#[test]
+fn implicit_methods_with_free_limits_allocate_nothing_per_step() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let planar = "[scene]\ngravity = [0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\nshape = { rod = 1.0 }\nposition = [0.5, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
+        limits = [-3.5, 0.5]\n[simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    let spatial = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08, 0.08]\nposition = [0.5, 0.0, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
+        axis = [0.0, -1.0, 0.0]\nlimits = [-3.5, 0.5]\n[simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    let mut failures = Vec::new();
+    let mut ran = 0;
+    for text in [planar, spatial] {
+        let base = dalembert::Scene::from_toml(text, "rod").unwrap();
+        for entry in METHODS.iter().filter(|e| e.applies == Applies::AugmentedIndex3) {
+            let mut scene = base.clone();
+            scene.settings.method = Method::of(entry);
+            let (count, _) = loop_after_warm_up(&scene, 50, 300);
+            ran += 1;
+            if count > 0 {
+                failures.push(format!("{}: {count} allocations in 300 rounds", entry.name));
+            }
+        }
+    }
+    assert_eq!(ran, 4, "generalized-α and ALI3-P, planar and spatial");
+    assert!(failures.is_empty(), "{failures:#?}");
+}

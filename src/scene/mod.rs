@@ -171,7 +171,8 @@ impl Scene {
     pub fn check_settings(&self, spelling: Spelling) -> Result<(), String> {
         if let Some((joint, kind)) = crate::simulation::switching_joint(self.model.system().as_ref()) {
             let method = self.settings.method.entry();
-            if method.applies == dalembert_integrators::Applies::AugmentedIndex3 {
+            // Limits alone are taken while free (the run stops where one is reached).
+            if method.applies == dalembert_integrators::Applies::AugmentedIndex3 && kind == "friction" {
                 return Err(format!(
                     "invalid integrator options: {} integrates the index-3 equations without joint {kind}: use rk4 or dopri5 with the {kind} of joint '{joint}'",
                     method.name
@@ -218,7 +219,7 @@ impl Scene {
             // A servo whose joint runs half a turn from its target within a run that started
             // near it has, almost always, been thrown there by a step its gains make unstable.
             return what.contains("from its target").then_some(
-                "a servo's joint thrown this far from its target within a few steps is the sign of a step too large for its gains (an explicit method needs h below about 2.8 J/c for a servo damping c on an inertia J): use dopri5, whose steps adapt, or a smaller step",
+                "a servo's joint thrown this far from its target within a few steps is the sign of a step too large for its gains (an explicit method needs h below about 2.8 J/c for a servo damping c on an inertia J): use generalized-alpha (implicit: a step of the motion's own scale, and the run stops if a joint reaches a stop), dopri5, whose steps adapt, or a smaller step",
             );
         }
         let redundant = matches!(dynamics, dalembert_system::DynamicsError::RedundantConstraints { .. });

@@ -38,6 +38,8 @@ pub struct Frictional {
     /// True when an evaluation past a free limit's bound is an error
     /// ([`Frictional::refusing_impacts`]).
     refuse_impacts: bool,
+    /// Why a limit reached stops the computation ([`Frictional::refusing_impacts`]).
+    refusal: String,
     /// An impact's limits (the impacting one first, then the held ones), their `G` and its
     /// factorization's work copy, and their impulses ([`Frictional::solve_impulses`]).
     impact_set: Vec<usize>,
@@ -92,6 +94,7 @@ impl Frictional {
             impact_loss: 0.0,
             coordinates: vec![0.0; count - frictions],
             refuse_impacts: false,
+            refusal: String::new(),
             impact_set: Vec::with_capacity(count),
             impact_g: vec![0.0; count * count],
             impact_lu: vec![0.0; count * count],
@@ -105,6 +108,15 @@ impl Frictional {
     /// ([`DynamicsError::Limit`]), so the run stops there.
     pub fn refusing_impacts(mut self) -> Self {
         self.refuse_impacts = true;
+        self.refusal = "this computation holds only while every limit is free".into();
+        self
+    }
+
+    /// [`Frictional::refusing_impacts`], the error saying `why` (what holds only while the limits
+    /// are free, and what to use instead).
+    pub fn refusing_impacts_because(mut self, why: &str) -> Self {
+        self.refuse_impacts = true;
+        self.refusal = why.into();
         self
     }
 
@@ -337,8 +349,8 @@ impl Formulation for Frictional {
                         time: t,
                         element: format!("{} '{}'", limit.element, limit.name),
                         what: format!(
-                            "reaches its limits [{}, {}] (at {s}), and this computation holds only while every limit is free",
-                            limit.lower, limit.upper
+                            "reaches its limits [{}, {}] (at {s}), and {}",
+                            limit.lower, limit.upper, self.refusal
                         ),
                     });
                 }
@@ -373,10 +385,12 @@ impl Formulation for Frictional {
         self.inner.stats()
     }
 
-    /// False: the implicit methods integrate the frictionless index-3 system themselves, which
-    /// holds no friction.
+    /// The inner formulation's where there is no friction and every limit is held free (the run
+    /// stops where one is reached: [`Frictional::refusing_impacts`]): the implicit methods then
+    /// integrate the inner index-3 system. False otherwise: that system holds no friction and no
+    /// impacts.
     fn is_index3_augmented(&self) -> bool {
-        false
+        self.refuse_impacts && self.frictions == 0 && self.inner.is_index3_augmented()
     }
 
     fn set_extra_force(&mut self, extra: Option<&[f64]>) -> bool {
