@@ -151,7 +151,14 @@ fn urdf_reader_never_panics() {
 
 #[test]
 fn mjcf_reader_never_panics() {
-    let folders = ["scenes/mjcf", "tests/bad_inputs", "tests/data/imported"];
+    let folders = [
+        "scenes/mjcf",
+        "tests/bad_inputs",
+        "tests/data/imported",
+        "tests/data/menagerie/kuka_iiwa_14",
+        "tests/data/menagerie/kinova_gen3",
+        "tests/data/meshes",
+    ];
     fuzz_reader("mjcf", &folders, "xml", &|text| Scene::from_mjcf(text, "fuzz.xml"));
 }
 

@@ -7,6 +7,7 @@
 //! contacts), skipped with a note.
 
 mod actuators;
+mod meshes;
 
 use super::tree::{
     combined, quoted, scene_of, Inertial, Kind, Link, LinkVisual, Pose, Read, Shape, Tree, TreeJoint, V3,
@@ -45,6 +46,10 @@ struct Reader<'s, 'a> {
     from_geoms: &'a str,
     gravity: [f64; 3],
     step: Option<f64>,
+    /// `compiler meshdir`, else `assetdir`.
+    mesh_folder: Option<String>,
+    /// The `<asset>` meshes by name.
+    meshes: HashMap<String, meshes::MeshAsset>,
     notes: Vec<String>,
     skipped: Vec<String>,
 }
@@ -77,6 +82,8 @@ impl<'s, 'a> Reader<'s, 'a> {
             from_geoms: "auto",
             gravity: [0.0, 0.0, -9.81],
             step: None,
+            mesh_folder: None,
+            meshes: HashMap::new(),
             notes: Vec::new(),
             skipped: Vec::new(),
         };
@@ -85,8 +92,9 @@ impl<'s, 'a> Reader<'s, 'a> {
                 "compiler" => r.compiler(c)?,
                 "option" => r.option(c)?,
                 "default" => r.default(c, "main", &HashMap::new())?,
+                "asset" => {}
                 "worldbody" | "equality" | "actuator" => {}
-                "asset" | "visual" | "statistic" | "size" | "sensor" | "keyframe" | "custom" => {
+                "visual" | "statistic" | "size" | "sensor" | "keyframe" | "custom" => {
                     r.skip(format!("<{}>", c.tag_name().name()))
                 }
                 "contact" => r.skip("<contact> (contacts are not modelled)".into()),
@@ -97,6 +105,10 @@ impl<'s, 'a> Reader<'s, 'a> {
                     ))
                 }
             }
+        }
+        // Assets after the compiler (its mesh folder), wherever the file puts them.
+        for c in root.children().filter(|c| c.has_tag_name("asset")) {
+            r.assets(c)?;
         }
         Ok(r)
     }
@@ -132,9 +144,12 @@ impl<'s, 'a> Reader<'s, 'a> {
     fn compiler(&mut self, node: Node<'a, 'a>) -> Result<(), SceneError> {
         self.attributes(
             node,
-            &["angle", "eulerseq", "inertiafromgeom"],
-            &["autolimits", "meshdir", "texturedir", "assetdir", "discardvisual"],
+            &["angle", "eulerseq", "inertiafromgeom", "meshdir", "assetdir"],
+            &["autolimits", "texturedir", "discardvisual"],
         )?;
+        if let Some(dir) = node.attribute("meshdir").or_else(|| node.attribute("assetdir")) {
+            self.mesh_folder = Some(dir.to_string());
+        }
         if let Some(a) = node.attribute("angle") {
             self.degrees = match a {
                 "degree" => true,
@@ -394,12 +409,21 @@ impl<'s, 'a> Reader<'s, 'a> {
     }
 
     /// What a body's geoms look like (the link's frame is the body's moved by `offset`): spheres,
-    /// boxes and cylinders as they are, a capsule as its cylinder and two balls. Ellipsoids,
-    /// planes and meshes are not drawn (a body with none of the others is drawn as its box of
-    /// inertia).
-    fn geom_visuals(&self, body: Node<'a, 'a>, offset: V3) -> Vec<LinkVisual> {
+    /// boxes and cylinders as they are, a capsule as its cylinder and two balls, a mesh from its
+    /// asset's file (read by the viewer). Ellipsoids and planes are not drawn (a body with none of
+    /// the others is drawn as its box of inertia). As MuJoCo's viewer by default, only the geoms
+    /// of groups 0 to 2 are drawn where a body has any (Menagerie's collision geoms are group 3).
+    /// A mesh geom naming no `<asset>` mesh is an error naming its line.
+    fn geom_visuals(&self, body: Node<'a, 'a>, offset: V3) -> Result<Vec<LinkVisual>, SceneError> {
         let mut out = Vec::new();
-        for g in body.children().filter(|c| c.has_tag_name("geom")) {
+        let geoms: Vec<Node<'a, 'a>> = body.children().filter(|c| c.has_tag_name("geom")).collect();
+        let group = |g: &Node<'a, 'a>| {
+            self.value(*g, "group")
+                .and_then(|v| v.trim().parse::<i64>().ok())
+                .unwrap_or(0)
+        };
+        let shown = geoms.iter().any(|g| group(g) <= 2);
+        for g in geoms.into_iter().filter(|g| !shown || group(g) <= 2) {
             // A geom outside the inertia subset still loads when an <inertial> is given: it is only
             // left undrawn.
             let Ok((kind, size, mut frame, half)) = self.geom_shape(g) else {
@@ -427,10 +451,17 @@ impl<'s, 'a> Reader<'s, 'a> {
                         push(Pose { p, r: frame.r }, Shape::Sphere(r));
                     }
                 }
+                ("mesh", ..) => {
+                    let name = self.value(g, "mesh").unwrap_or("");
+                    let asset = self.meshes.get(name).ok_or_else(|| {
+                        self.err(g, format!("<geom mesh=\"{name}\">: no <mesh> of that name in <asset>"))
+                    })?;
+                    push(frame, Shape::Mesh(asset.file.clone(), asset.scale));
+                }
                 _ => {}
             }
         }
-        out
+        Ok(out)
     }
 
     /// A geom's mass, centre and inertia about it (body frame), as MuJoCo computes them from its
@@ -957,7 +988,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                     name,
                     node: c,
                     inertial,
-                    visuals: self.geom_visuals(c, offset),
+                    visuals: self.geom_visuals(c, offset)?,
                 },
                 offset,
             });

@@ -612,16 +612,28 @@ fn blue_near(png: &Png, (x, y): (f64, f64), r: i64) -> usize {
 /// projected by the page's own camera; a cube is about 30 px wide here) is covered by the body's
 /// colour (at least 40 of the 49 pixels within 3 px), and the point opposite it (0.6 m the other
 /// way) is not (at most 3): a mesh in the wrong units, axes or place fails one or the other.
+///
+/// The same pendulum in MJCF (`three-cubes.xml`: `<asset>` meshes, the OBJ along x and y, the STL
+/// along z, and a group-3 sphere at the centre of mass that is not drawn, as in MuJoCo's viewer)
+/// passes the same check.
 #[test]
 fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
     let Some(browser) = chromium_or_skip() else {
         return;
     };
-    let path = format!(
-        "{}/../../tests/data/meshes/three-cubes.toml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let (csv, page) = (tmp("three-cubes.csv"), tmp("three-cubes.html"));
+    for (file, formats) in [
+        ("three-cubes.toml", ["OBJ", "COLLADA", "STL"]),
+        ("three-cubes.xml", ["OBJ", "OBJ", "STL"]),
+    ] {
+        cubes_where_their_body_puts_them(&browser, file, formats);
+    }
+}
+
+/// [`the_3d_viewer_draws_each_mesh_where_its_body_puts_it`] on `tests/data/meshes/<file>`, whose
+/// cubes along the body's x, y and z come from meshes in `formats`.
+fn cubes_where_their_body_puts_them(browser: &Path, file: &str, formats: [&str; 3]) {
+    let path = format!("{}/../../tests/data/meshes/{file}", env!("CARGO_MANIFEST_DIR"));
+    let (csv, page) = (tmp(&format!("{file}.csv")), tmp(&format!("{file}.html")));
     let csv_arg = csv.to_str().unwrap();
     let (ok, _, err) = dalembert(&["simulate", &path, "--every", "0.05", "--output", csv_arg]);
     assert!(ok, "{err}");
@@ -631,7 +643,7 @@ fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
     let budget = "--virtual-time-budget=5000";
     let size = (800, 560);
     let probe = browse(
-        &browser,
+        browser,
         &format!("file://{}#t=0", page.display()),
         size,
         &["--dump-dom", budget],
@@ -646,21 +658,21 @@ fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
     let dump = (size.0, 2 * size.1 - seen);
     for t in [0.25, 0.75] {
         let url = format!("file://{}#t={t}", page.display());
-        let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);
+        let dom = browse(browser, &url, dump, &["--dump-dom", budget]);
         assert_eq!(attribute(&dom, "<body", "data-status").as_deref(), Some("ready"));
         assert_eq!(attribute(&dom, "<body", "data-errors"), None, "script errors");
-        assert_eq!(attribute(&dom, "<body", "data-meshes").as_deref(), Some("3"));
+        assert_eq!(attribute(&dom, "<body", "data-meshes").as_deref(), Some("3"), "{file}");
         let view = attribute(&dom, "<canvas", "data-view").unwrap();
-        let shot = tmp(&format!("three-cubes-{t}.png"));
+        let shot = tmp(&format!("{file}-{t}.png"));
         browse(
-            &browser,
+            browser,
             &url,
             size,
             &[&format!("--screenshot={}", shot.display()), budget],
         );
         let png = Png::read(&shot);
         let (_, c, e) = rows.iter().find(|r| (r.0 - t).abs() < 1e-9).copied().unwrap();
-        for (k, format) in ["OBJ", "COLLADA", "STL"].iter().enumerate() {
+        for (k, format) in formats.iter().enumerate() {
             let mut along = [0.0; 3];
             along[k] = 0.6;
             let d = rotate(e, along);
@@ -668,12 +680,12 @@ fn the_3d_viewer_draws_each_mesh_where_its_body_puts_it() {
             let (here, opposite) = (blue_near(&png, at(1.0), 3), blue_near(&png, at(-1.0), 3));
             assert!(
                 here >= 40,
-                "t = {t}: the {format} cube is not at {:?} ({here} of 49 pixels)",
+                "{file} t = {t}: the {format} cube is not at {:?} ({here} of 49 pixels)",
                 at(1.0)
             );
             assert!(
                 opposite <= 3,
-                "t = {t}: the {format} cube's opposite point is drawn ({opposite} of 49)"
+                "{file} t = {t}: the {format} cube's opposite point is drawn ({opposite} of 49)"
             );
         }
     }
