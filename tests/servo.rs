@@ -110,3 +110,48 @@ fn a_servo_follows_a_target_set_between_steps() {
         assert!((got - want).abs() < 1e-8, "{formulation}: {got} vs {want}");
     }
 }
+
+/// A block (2 kg) on a prismatic joint along x, no gravity: a servo on a slide pushes along the
+/// axis, `m s̈ = −k (s − s*) − c ṡ`, the step response of [`step_response`] with `J` replaced by
+/// the mass; and held at its range, `s = ½ (F_max / m) t²`.
+fn block(servo: &str, settings: &str) -> Scene {
+    let toml = format!(
+        "[scene]\ngravity = [0.0, 0.0, 0.0]\n\n[[bodies]]\nname = \"block\"\nmass = 2.0\ninertia = [0.01, 0.01, 0.01]\n\
+         position = [0.3, 0.2, 0.0]\n\n[[joints]]\nname = \"guide\"\nbodies = [\"ground\", \"block\"]\nat = [0.3, 0.2, 0.0]\n\
+         type = \"prismatic\"\naxis = [1.0, 0.0, 0.0]\n\n[[forces]]\nname = \"servo\"\ntype = \"servo\"\njoint = \"guide\"\n{servo}\n\n\
+         [simulation]\n{settings}\n"
+    );
+    Scene::from_toml(&toml, "block").unwrap()
+}
+
+#[test]
+fn a_servo_on_a_slide_moves_its_block_as_the_closed_forms() {
+    // k = 50 N/m, c = 2 N s/m on 2 kg: ω = 5 rad/s, ζ = 0.1; 1e-8 m at every sample. Then
+    // k = 400, target 1 m, range ±3 N: 400 (1 − s) > 3 until s = 0.9925, reached at 1.41 s, so to
+    // 1 s the block accelerates at 1.5 m/s², 1e-9 m.
+    let mass = 2.0;
+    for formulation in FORMULATIONS {
+        let settings =
+            format!("end = 1.0\nintegrator = \"dopri5\"\nrtol = 1e-11\natol = 1e-12\nformulation = \"{formulation}\"");
+        let run = block("stiffness = 50.0\ndamping = 2.0\ntarget = 0.4", &settings).record(&AtomicBool::new(false));
+        assert!(run.outcome.is_ok(), "{formulation}: {:?}", run.outcome);
+        let (t, s) = (run.table.column("t").unwrap(), run.table.column("guide.q").unwrap());
+        for (t, s) in t.iter().zip(&s) {
+            let omega = (50.0f64 / mass).sqrt();
+            let zeta = 2.0 / (2.0 * (50.0f64 * mass).sqrt());
+            let damped = omega * (1.0 - zeta * zeta).sqrt();
+            let want = 0.4
+                * (1.0 - (-zeta * omega * t).exp() * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin()));
+            assert!((s - want).abs() < 1e-8, "{formulation} t = {t}: {s} vs {want}");
+        }
+        let run =
+            block("stiffness = 400.0\ntarget = 1.0\nrange = [-3.0, 3.0]", &settings).record(&AtomicBool::new(false));
+        assert!(run.outcome.is_ok(), "{formulation}: {:?}", run.outcome);
+        let (t, s) = (run.table.column("t").unwrap(), run.table.column("guide.q").unwrap());
+        for (t, s) in t.iter().zip(&s) {
+            let want = 0.5 * (3.0 / mass) * t * t;
+            assert!((s - want).abs() < 1e-9, "{formulation} t = {t}: {s} vs {want}");
+        }
+        assert!(s.last().unwrap() > &0.7, "the block moves");
+    }
+}

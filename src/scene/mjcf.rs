@@ -724,11 +724,11 @@ impl<'s, 'a> Reader<'s, 'a> {
                             .set("stiffness", 0.0)
                             .set("actuator", held(Function::input(input).gain(-gear), law.motor_range()))
                     }
-                    (Kind::Revolute, _) => {
+                    (Kind::Revolute | Kind::Prismatic, _) => {
                         // τ = gear clamp(g ū + b₁ gear θ + b₂ gear θ̇, forcerange), ū the control
                         // held in ctrlrange: a servo with k = −b₁ gear², c = −b₂ gear², the
                         // target g ū / (−b₁ gear) (or, with b₁ = 0, the torque gear g ū) and
-                        // the range gear × forcerange.
+                        // the range gear × forcerange (on a slide θ is the displacement, τ a force).
                         let [_, b1, b2] = law.bias;
                         let mut range = law.force_range.map(|r| r * gear);
                         if range[0] > range[1] {
@@ -752,9 +752,7 @@ impl<'s, 'a> Reader<'s, 'a> {
                     _ => {
                         return Err(self.err(
                             c,
-                            format!(
-                                "<{tag}> on joint '{target}': motors act on hinge and slide joints, and the other actuators on hinges"
-                            ),
+                            format!("<{tag}> on joint '{target}': actuators act on hinge and slide joints"),
                         ))
                     }
                 });

@@ -18,7 +18,13 @@ from scipy.integrate import solve_ivp
 import dalembert
 from test_mjcf import placed
 
-ROBOTS = {"iiwa14": "kuka_iiwa_14/iiwa14.xml", "gen3": "kinova_gen3/gen3.xml"}
+ROBOTS = {
+    "iiwa14": "menagerie/kuka_iiwa_14/iiwa14.xml",
+    "gen3": "menagerie/kinova_gen3/gen3.xml",
+    # Not a Menagerie model: position servos with gears on a slide and a hinge, and a velocity
+    # servo (tests/data/imported/servos.xml).
+    "servos": "imported/servos.xml",
+}
 
 # Every formulation in absolute coordinates, and joint coordinates (the articulated-body
 # algorithm, where a servo reads its joint's coordinate).
@@ -26,7 +32,7 @@ SETTINGS = [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated
 
 
 def menagerie(root: pathlib.Path, name: str) -> pathlib.Path:
-    return root / "tests" / "data" / "menagerie" / ROBOTS[name]
+    return root / "tests" / "data" / ROBOTS[name]
 
 
 def mujoco_model(path: pathlib.Path):
@@ -44,7 +50,7 @@ def mujoco_model(path: pathlib.Path):
 
 def states(model, rng, count):
     """`count` random states and controls: angles within each joint's range (±π where it has
-    none), a control near the angle, within 0.8π of it (dalembert's servo measures the distance
+    none), a control whose target is near the angle (or the rate), within 0.8π of it (dalembert's servo measures the distance
     within ±π and stops a run past 0.9π; MuJoCo's follows any number of turns), a fifth of them
     beyond `ctrlrange` where the actuator has one (MuJoCo and dalembert hold it there). Half the
     states are slow and near their targets, where the servos' forces stay inside `forcerange`;
@@ -59,15 +65,26 @@ def states(model, rng, count):
         qvel = rng.uniform(-0.05, 0.05, model.nv) if near else rng.uniform(-2.0, 2.0, model.nv)
         ctrl = np.empty(model.nu)
         for a in range(model.nu):
-            q = qpos[model.actuator_trnid[a, 0]]
+            j = model.actuator_trnid[a, 0]
+            q, rate = qpos[j], qvel[model.jnt_dofadr[j]]
             spread = 0.01 if near else 2.0
-            ctrl[a] = q + rng.uniform(-spread, spread)
-            if model.actuator_ctrllimited[a]:
-                lo, hi = model.actuator_ctrlrange[a]
-                if rng.uniform() < 0.2:
-                    ctrl[a] = rng.choice([lo - 0.2, hi + 0.2])
-                if abs(np.clip(ctrl[a], lo, hi) - q) > 0.8 * np.pi:
-                    ctrl[a] = q
+            # A control whose target (a position servo's g ū / (−b₁ gear), a velocity servo's
+            # g ū / (−b₂ gear)) is near the joint's angle or rate.
+            gain, b1, b2, gear = (model.actuator_gainprm[a, 0], model.actuator_biasprm[a, 1],
+                                  model.actuator_biasprm[a, 2], model.actuator_gear[a, 0])
+            if b1 != 0:
+                ctrl[a] = (q + rng.uniform(-spread, spread)) * (-b1 * gear) / gain
+            elif b2 != 0:
+                ctrl[a] = (rate + rng.uniform(-spread, spread)) * (-b2 * gear) / gain
+            else:
+                ctrl[a] = rng.uniform(-spread, spread)
+            lo, hi = model.actuator_ctrlrange[a] if model.actuator_ctrllimited[a] else (-np.inf, np.inf)
+            if model.actuator_ctrllimited[a] and rng.uniform() < 0.2:
+                ctrl[a] = rng.choice([lo - 0.2, hi + 0.2])
+            # A position servo's target angle, g ū / (−b₁ gear): within 0.8π of the angle.
+            gain, b1, gear = model.actuator_gainprm[a, 0], model.actuator_biasprm[a, 1], model.actuator_gear[a, 0]
+            if b1 != 0 and abs(gain * np.clip(ctrl[a], lo, hi) / (-b1 * gear) - q) > 0.8 * np.pi:
+                ctrl[a] = q * (-b1 * gear) / gain
         out.append((qpos, qvel, ctrl))
     return out
 
@@ -87,7 +104,7 @@ def test_menagerie_accelerations_match_mujoco_at_random_states_and_controls(root
     ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in scene.bodies]
     joints = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(model.njnt)]
     actuators = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu)]
-    assert len(actuators) == 7 and set(actuators) <= set(scene.simulator().inputs)
+    assert actuators and set(actuators) <= set(scene.simulator().inputs)
     rng = np.random.default_rng(2026_11_28)
     cases, clamped = [], 0
     states_used = states(model, rng, 300)

@@ -81,11 +81,11 @@ impl Model {
             .force_data()
             .iter()
             .zip(self.force_names())
-            .find(|(f, _)| !matches!(f, ForceData::AboutAxis(_)))
+            .find(|(f, _)| !matches!(f, ForceData::AboutAxis(_) | ForceData::AlongAxis(_)))
         {
             return Err(refuse(
                 format!("force '{f}'"),
-                "joint coordinates take gravity and the forces about joint axes (joint torques, rotational springs, servos) only",
+                "joint coordinates take gravity and the forces about and along joint axes (joint torques, rotational springs, servos) only",
             ));
         }
         let n = self.bodies().len();
@@ -269,18 +269,19 @@ impl Model {
             .iter()
             .map(|&k| (tree_joint[k], self.joint_row_into(k, q, v, &mut row)))
             .collect();
-        // Each law about a joint's axis on its joint's coordinate: the law's angle here added,
+        // Each law about or along a joint's axis on its joint's coordinate: the law's angle or
+        // displacement here added,
         // its sign turned where the law's second body is the joint's parent in the tree.
         let frame = |b: Option<usize>| self.frame(b, q, v);
         let laws = self
             .force_data()
             .iter()
             .filter_map(|f| match f {
-                ForceData::AboutAxis(a) => Some(a),
+                ForceData::AboutAxis(a) => Some((a.joint_law(), a.angle_at(&frame))),
+                ForceData::AlongAxis(a) => Some((a.joint_law(), a.displacement_at(&frame))),
                 _ => None,
             })
-            .map(|a| {
-                let (k, law) = a.joint_law();
+            .map(|((k, law), offset)| {
                 let t = tree_joint[k];
                 let sign = if joints[k].body_j == Some(order[t].0) {
                     1.0
@@ -290,7 +291,7 @@ impl Model {
                 JointAxisLaw {
                     joint: t,
                     sign,
-                    offset: a.angle_at(&frame),
+                    offset,
                     law: law.clone(),
                 }
             })

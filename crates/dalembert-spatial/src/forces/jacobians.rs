@@ -121,7 +121,9 @@ impl ForceData {
             }
             ForceData::AboutAxis(a) => Some(a.wrench_derivative(t, frame)),
             // Not differentiated analytically: the tangent takes central differences.
-            ForceData::SpherePlane(_) | ForceData::SphereSphere(_) | ForceData::User(_) => None,
+            ForceData::SpherePlane(_) | ForceData::SphereSphere(_) | ForceData::User(_) | ForceData::AlongAxis(_) => {
+                None
+            }
         }
     }
 }

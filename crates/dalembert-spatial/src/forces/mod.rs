@@ -14,6 +14,7 @@
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
+mod along_axis;
 mod contact;
 mod jacobians;
 pub mod user;
@@ -22,6 +23,7 @@ use crate::frame::{Frame, NV};
 use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
+use along_axis::SlideForce;
 use contact::{SpherePlane, SphereSphere};
 use dalembert_system::{AxisLaw, ContactLaw};
 use dalembert_system::{ModelError, TimeFunction};
@@ -117,11 +119,12 @@ pub enum Force {
         /// Free angle `θ₀` (rad).
         free_angle: f64,
     },
-    /// A servo about the axis of the named revolute or cylindrical joint (an MJCF `position`
-    /// actuator, or a `general` one with an affine bias): torque
+    /// A servo about the axis of the named revolute or cylindrical joint, or along a prismatic
+    /// one's (an MJCF `position` actuator, or a `general` one with an affine bias): torque
     /// `clamp(−k (θ − θ*(t)) − c θ̇ + f(t), lo, hi)` on the second body (the opposite on the
     /// first), with `θ` the joint angle (0 in the initial configuration) and its distance from the
-    /// target measured within ±π.
+    /// target measured within ±π; on a prismatic joint `θ` is the displacement and the torque a
+    /// force along the axis.
     JointServo {
         /// Name.
         name: String,
@@ -273,6 +276,8 @@ pub(crate) enum ForceData {
         actuator: Option<TimeFunction>,
     },
     AboutAxis(AxisForce),
+    /// A law along a prismatic joint's axis (a servo on a slide).
+    AlongAxis(SlideForce),
     SpherePlane(SpherePlane),
     SphereSphere(SphereSphere),
     User(Arc<dyn UserForce>),
@@ -468,16 +473,20 @@ impl ForceData {
                 if target.is_some() && *stiffness == 0.0 {
                     return Err(bad("a target needs a stiffness (the gain that pulls the joint to it)"));
                 }
-                let j = axis_joint(joints, joint).map_err(|m| bad(&m))?;
-                ForceData::AboutAxis(AxisForce::new(
-                    j,
-                    AxisLaw {
-                        target: target.clone(),
-                        torque: torque.clone(),
-                        range: *range,
-                        ..AxisLaw::spring(*stiffness, *damping, 0.0)
-                    },
-                ))
+                let law = AxisLaw {
+                    target: target.clone(),
+                    torque: torque.clone(),
+                    range: *range,
+                    ..AxisLaw::spring(*stiffness, *damping, 0.0)
+                };
+                // A servo on a slide pushes along its axis; on a revolute or cylindrical joint it
+                // turns about it.
+                match joints.iter().enumerate().find(|(_, j)| j.name == *joint) {
+                    Some((k, j)) if j.kind == Some(JointKind::Prismatic) => {
+                        ForceData::AlongAxis(SlideForce::new((k, j), law))
+                    }
+                    _ => ForceData::AboutAxis(AxisForce::new(axis_joint(joints, joint).map_err(|m| bad(&m))?, law)),
+                }
             }
             Force::SpherePlane {
                 body,
@@ -610,6 +619,7 @@ impl ForceData {
             ForceData::SphereSphere(c) => c.ends.iter().filter_map(|e| e.0).collect(),
             ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
             ForceData::AboutAxis(a) => a.bodies(),
+            ForceData::AlongAxis(a) => a.bodies(),
             ForceData::User(u) => u
                 .bodies()
                 .into_iter()
@@ -682,6 +692,7 @@ impl ForceData {
                 }
             }
             ForceData::AboutAxis(a) => a.add(t, frame, out),
+            ForceData::AlongAxis(a) => a.add(t, frame, out),
             ForceData::SpherePlane(c) => c.add(frame, out),
             ForceData::SphereSphere(c) => c.add(frame, out),
             ForceData::User(u) => u.add(t, &Frames::new(frame), &mut Loads::new(frame, out)),
@@ -702,6 +713,7 @@ impl ForceData {
                 0.5 * stiffness * (d.norm() - free_length).powi(2)
             }
             ForceData::AboutAxis(a) => a.potential(t, frame),
+            ForceData::AlongAxis(a) => a.potential(t, frame),
             ForceData::SpherePlane(c) => c.potential(frame),
             ForceData::SphereSphere(c) => c.potential(frame),
             ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
@@ -730,6 +742,7 @@ impl ForceData {
         match self {
             ForceData::SpringDamper { damping, actuator, .. } => *damping == 0.0 && actuator.is_none(),
             ForceData::AboutAxis(a) => a.is_conservative(),
+            ForceData::AlongAxis(a) => a.is_conservative(),
             ForceData::SpherePlane(c) => c.is_conservative(),
             ForceData::SphereSphere(c) => c.is_conservative(),
             ForceData::User(u) => u.is_conservative(),

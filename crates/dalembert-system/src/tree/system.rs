@@ -28,7 +28,8 @@ pub struct JointSpace {
     laws: Vec<JointAxisLaw>,
 }
 
-/// An [`AxisLaw`] on a revolute joint of the tree: the law's angle is `offset + sign q` and its
+/// An [`AxisLaw`] on a joint of the tree: the law's angle (a prismatic joint's displacement) is
+/// `offset + sign q` and its
 /// rate `sign q̇`, and it adds `sign τ` to the joint's generalized force. `sign` is −1 where the
 /// law measures the joint's parent turning relative to its child.
 #[derive(Debug, Clone)]
@@ -94,20 +95,16 @@ impl JointSpace {
         }
     }
 
-    /// The system with torque laws about some of its revolute joints (a model's joint torques,
-    /// rotational springs and servos). An error names a law whose joint the tree does not have or
-    /// is not revolute, or whose sign is not ±1.
+    /// The system with laws about or along some of its joints' axes (a model's joint torques,
+    /// rotational springs and servos; on a prismatic joint the law's angle is its displacement
+    /// and its torque a force). An error names a law whose joint the tree does not have, or whose
+    /// sign is not ±1.
     pub fn with_axis_laws(mut self, laws: Vec<JointAxisLaw>) -> Result<Self, ModelError> {
         for l in &laws {
-            let revolute = self
-                .tree
-                .bodies()
-                .get(l.joint)
-                .is_some_and(|b| b.kind == JointKind::Revolute);
-            if !revolute || l.sign.abs() != 1.0 || !l.offset.is_finite() {
+            if l.joint >= self.tree.len() || l.sign.abs() != 1.0 || !l.offset.is_finite() {
                 return Err(ModelError::InvalidParameter {
                     element: format!("axis law on joint {}", l.joint),
-                    what: "needs a revolute joint of the tree, a sign of ±1 and a finite offset".into(),
+                    what: "needs a joint of the tree, a sign of ±1 and a finite offset".into(),
                 });
             }
         }
