@@ -13,21 +13,36 @@ use std::sync::atomic::AtomicBool;
 
 const J: f64 = 0.33;
 
-/// The rod and its servo; `servo` holds the servo's keys.
-fn rod(servo: &str, settings: &str) -> Scene {
+/// A body on one joint to the ground (`body` and `joint` their TOML keys besides the names), with
+/// no gravity and a servo named "servo" on the joint (`servo` its keys).
+fn one_joint(body: &str, joint: &str, servo: &str, settings: &str) -> Scene {
     let toml = format!(
-        "[scene]\ngravity = [0.0, 0.0, 0.0]\n\n[[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08, 0.08]\n\
-         position = [0.5, 0.0, 0.0]\n\n[[joints]]\nname = \"pin\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
-         type = \"revolute\"\naxis = [0.0, 0.0, 1.0]\n\n[[forces]]\nname = \"servo\"\ntype = \"servo\"\njoint = \"pin\"\n{servo}\n\n\
+        "[scene]\ngravity = [0.0, 0.0, 0.0]\n\n[[bodies]]\nname = \"body\"\n{body}\n\n[[joints]]\nname = \"j\"\n\
+         bodies = [\"ground\", \"body\"]\n{joint}\n\n[[forces]]\nname = \"servo\"\ntype = \"servo\"\njoint = \"j\"\n{servo}\n\n\
          [simulation]\n{settings}\n"
     );
-    Scene::from_toml(&toml, "rod").unwrap()
+    Scene::from_toml(&toml, "servo").unwrap()
 }
 
-/// The step response of `J θ̈ + c θ̇ + k θ = k θ*` from rest at 0 (under-damped).
+/// The rod and its servo.
+fn rod(servo: &str, settings: &str) -> Scene {
+    one_joint(
+        "mass = 1.0\ninertia = [0.001, 0.08, 0.08]\nposition = [0.5, 0.0, 0.0]",
+        "at = [0.0, 0.0, 0.0]\ntype = \"revolute\"\naxis = [0.0, 0.0, 1.0]",
+        servo,
+        settings,
+    )
+}
+
+/// The step response of `J θ̈ + c θ̇ + k θ = k θ*` from rest at 0 (under-damped), `J` the rod's.
 fn step_response(k: f64, c: f64, aim: f64, t: f64) -> f64 {
-    let omega = (k / J).sqrt();
-    let zeta = c / (2.0 * (k * J).sqrt());
+    response(J, k, c, aim, t)
+}
+
+/// The step response of `m ẍ + c ẋ + k x = k x*` from rest at 0 (under-damped).
+fn response(m: f64, k: f64, c: f64, aim: f64, t: f64) -> f64 {
+    let omega = (k / m).sqrt();
+    let zeta = c / (2.0 * (k * m).sqrt());
     let damped = omega * (1.0 - zeta * zeta).sqrt();
     aim * (1.0 - (-zeta * omega * t).exp() * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin()))
 }
@@ -54,7 +69,7 @@ fn a_servo_steps_to_its_target_as_a_damped_oscillator() {
         );
         let run = scene.record(&AtomicBool::new(false));
         assert!(run.outcome.is_ok(), "{formulation}: {:?}", run.outcome);
-        let (t, q) = (run.table.column("t").unwrap(), run.table.column("pin.q").unwrap());
+        let (t, q) = (run.table.column("t").unwrap(), run.table.column("j.q").unwrap());
         assert!(t.len() > 100);
         for (t, q) in t.iter().zip(&q) {
             let want = step_response(k, c, aim, *t);
@@ -74,7 +89,7 @@ fn a_servo_held_at_its_range_accelerates_the_rod_uniformly() {
         );
         let run = scene.record(&AtomicBool::new(false));
         assert!(run.outcome.is_ok(), "{formulation}: {:?}", run.outcome);
-        let (t, q) = (run.table.column("t").unwrap(), run.table.column("pin.q").unwrap());
+        let (t, q) = (run.table.column("t").unwrap(), run.table.column("j.q").unwrap());
         for (t, q) in t.iter().zip(&q) {
             let want = 0.5 * (0.5 / J) * t * t;
             assert!((q - want).abs() < 1e-9, "{formulation} t = {t}: {q} vs {want}");
@@ -98,7 +113,7 @@ fn a_servo_follows_a_target_set_between_steps() {
         let mut sim = scene.simulator().unwrap();
         sim.set_input("aim", 0.5).unwrap();
         sim.advance_to(1.0).unwrap();
-        let at_switch = sim.value("pin.q").unwrap();
+        let at_switch = sim.value("j.q").unwrap();
         assert!(
             (at_switch - step_response(k, c, 0.5, 1.0)).abs() < 1e-8,
             "{formulation}"
@@ -106,7 +121,7 @@ fn a_servo_follows_a_target_set_between_steps() {
         sim.set_input("aim", 0.2).unwrap();
         sim.advance_to(2.0).unwrap();
         let want = step_response(k, c, 0.5, 2.0) + step_response(k, c, -0.3, 1.0);
-        let got = sim.value("pin.q").unwrap();
+        let got = sim.value("j.q").unwrap();
         assert!((got - want).abs() < 1e-8, "{formulation}: {got} vs {want}");
     }
 }
@@ -115,13 +130,12 @@ fn a_servo_follows_a_target_set_between_steps() {
 /// axis, `m s̈ = −k (s − s*) − c ṡ`, the step response of [`step_response`] with `J` replaced by
 /// the mass; and held at its range, `s = ½ (F_max / m) t²`.
 fn block(servo: &str, settings: &str) -> Scene {
-    let toml = format!(
-        "[scene]\ngravity = [0.0, 0.0, 0.0]\n\n[[bodies]]\nname = \"block\"\nmass = 2.0\ninertia = [0.01, 0.01, 0.01]\n\
-         position = [0.3, 0.2, 0.0]\n\n[[joints]]\nname = \"guide\"\nbodies = [\"ground\", \"block\"]\nat = [0.3, 0.2, 0.0]\n\
-         type = \"prismatic\"\naxis = [1.0, 0.0, 0.0]\n\n[[forces]]\nname = \"servo\"\ntype = \"servo\"\njoint = \"guide\"\n{servo}\n\n\
-         [simulation]\n{settings}\n"
-    );
-    Scene::from_toml(&toml, "block").unwrap()
+    one_joint(
+        "mass = 2.0\ninertia = [0.01, 0.01, 0.01]\nposition = [0.3, 0.2, 0.0]",
+        "at = [0.3, 0.2, 0.0]\ntype = \"prismatic\"\naxis = [1.0, 0.0, 0.0]",
+        servo,
+        settings,
+    )
 }
 
 #[test]
@@ -135,23 +149,46 @@ fn a_servo_on_a_slide_moves_its_block_as_the_closed_forms() {
             format!("end = 1.0\nintegrator = \"dopri5\"\nrtol = 1e-11\natol = 1e-12\nformulation = \"{formulation}\"");
         let run = block("stiffness = 50.0\ndamping = 2.0\ntarget = 0.4", &settings).record(&AtomicBool::new(false));
         assert!(run.outcome.is_ok(), "{formulation}: {:?}", run.outcome);
-        let (t, s) = (run.table.column("t").unwrap(), run.table.column("guide.q").unwrap());
+        let (t, s) = (run.table.column("t").unwrap(), run.table.column("j.q").unwrap());
         for (t, s) in t.iter().zip(&s) {
-            let omega = (50.0f64 / mass).sqrt();
-            let zeta = 2.0 / (2.0 * (50.0f64 * mass).sqrt());
-            let damped = omega * (1.0 - zeta * zeta).sqrt();
-            let want = 0.4
-                * (1.0 - (-zeta * omega * t).exp() * ((damped * t).cos() + zeta * omega / damped * (damped * t).sin()));
+            let want = response(mass, 50.0, 2.0, 0.4, *t);
             assert!((s - want).abs() < 1e-8, "{formulation} t = {t}: {s} vs {want}");
         }
         let run =
             block("stiffness = 400.0\ntarget = 1.0\nrange = [-3.0, 3.0]", &settings).record(&AtomicBool::new(false));
         assert!(run.outcome.is_ok(), "{formulation}: {:?}", run.outcome);
-        let (t, s) = (run.table.column("t").unwrap(), run.table.column("guide.q").unwrap());
+        let (t, s) = (run.table.column("t").unwrap(), run.table.column("j.q").unwrap());
         for (t, s) in t.iter().zip(&s) {
             let want = 0.5 * (3.0 / mass) * t * t;
             assert!((s - want).abs() < 1e-9, "{formulation} t = {t}: {s} vs {want}");
         }
         assert!(s.last().unwrap() > &0.7, "the block moves");
     }
+}
+
+#[test]
+fn a_spring_across_the_half_turn_pulls_the_same_way_in_both_coordinates() {
+    // Free angle 2.5 rad, the rod started at −1 rad: the model measures the deflection within a
+    // half turn, −1 − 2.5 + 2π = 2.78 rad, so the spring turns the rod further negative (toward
+    // 2.5 − 2π). Joint coordinates must take the same deflection, not −3.5 (which pulls the other
+    // way): both runs end at the same angle (1e-9 rad; dopri5 at 1e-11) and it is below −1.
+    let mut ends = Vec::new();
+    for coordinates in ["absolute", "joint"] {
+        let scene = Scene::from_toml(
+            &format!(
+                "[scene]\ngravity = [0.0, 0.0, 0.0]\n\n[[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08, 0.08]\n\
+                 position = [0.5, 0.0, 0.0]\n\n[[joints]]\nname = \"pin\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
+                 type = \"revolute\"\naxis = [0.0, 0.0, 1.0]\n\n[[forces]]\nname = \"spring\"\ntype = \"rotational-spring-damper\"\n\
+                 joint = \"pin\"\nstiffness = 1.0\nfree_angle = 2.5\n\n[initial]\njoints = {{ pin = -1.0 }}\n\n\
+                 [simulation]\nend = 0.2\nintegrator = \"dopri5\"\nrtol = 1e-11\natol = 1e-12\ncoordinates = \"{coordinates}\"\n"
+            ),
+            "spring",
+        )
+        .unwrap();
+        let run = scene.record(&AtomicBool::new(false));
+        assert!(run.outcome.is_ok(), "{coordinates}: {:?}", run.outcome);
+        ends.push(*run.table.column("pin.q").unwrap().last().unwrap());
+    }
+    assert!(ends[0] < -1.1, "the spring turns the rod negative: {ends:?}");
+    assert!((ends[0] - ends[1]).abs() < 1e-9, "{ends:?}");
 }

@@ -210,6 +210,17 @@ def test_mjcf_accelerations_from_1000_random_states_match_mujoco(scenes, name):
         print(f"{name} {formulation}: worst relative difference {worst:.2e}")
 
 
+def relative_qdd_difference(sim, state, inputs, joints, qacc):
+    """`sim`'s `JOINT.qdd` at the absolute `state` with `inputs` set (names to values), against
+    MuJoCo's `qacc`, relative to its largest; the assembly must not move the state (1e-12)."""
+    for name, u in inputs.items():
+        sim.set_input(name, u)
+    moved = sim.set_state(*state)
+    assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12, f"assembly moved {moved}"
+    got = np.array([sim[f"{joint}.qdd"] for joint in joints])
+    return np.max(np.abs(got - qacc)) / np.max(np.abs(qacc))
+
+
 @pytest.mark.parametrize("name", MODELS)
 def test_mjcf_motors_accelerate_as_mujocos_at_random_states_and_controls(scenes, name):
     """Motors are named inputs times their gear (a torque about a hinge, a force along a slide),
@@ -235,17 +246,9 @@ def test_mjcf_motors_accelerate_as_mujocos_at_random_states_and_controls(scenes,
         sim = scene.simulator(formulation=formulation)
         worst, unmoved = 0.0, 0.0
         for q, v, ctrl, qacc in cases:
-            for motor, u in zip(motors, ctrl):
-                sim.set_input(motor, 0.0)
-            sim.set_state(q, v)
-            idle = np.array([sim[f"{joint}.qdd"] for joint in names])
-            unmoved = max(unmoved, np.max(np.abs(idle - qacc)) / np.max(np.abs(qacc)))
-            for motor, u in zip(motors, ctrl):
-                sim.set_input(motor, u)
-            moved = sim.set_state(q, v)
-            assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12
-            got = np.array([sim[f"{joint}.qdd"] for joint in names])
-            worst = max(worst, np.max(np.abs(got - qacc)) / np.max(np.abs(qacc)))
+            idle = relative_qdd_difference(sim, (q, v), dict.fromkeys(motors, 0.0), names, qacc)
+            unmoved = max(unmoved, idle)
+            worst = max(worst, relative_qdd_difference(sim, (q, v), dict(zip(motors, ctrl)), names, qacc))
         assert worst < 1e-9, f"{formulation}: {worst:.2e}"
         assert unmoved > 1e-2, f"{formulation}: the motors change the accelerations by {unmoved:.2e} only"
         print(f"{name} {formulation} with controls: worst relative difference {worst:.2e}")

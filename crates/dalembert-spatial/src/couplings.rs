@@ -166,7 +166,7 @@ impl CouplingData {
 pub(crate) type End = (Option<usize>, [V3; 2]);
 
 /// `x` moved by whole turns into `(−π, π]`.
-fn wrap_angle(x: f64) -> f64 {
+pub(crate) fn wrap_angle(x: f64) -> f64 {
     let tau = std::f64::consts::TAU;
     let y = x - tau * (x / tau).round();
     if y <= -std::f64::consts::PI {

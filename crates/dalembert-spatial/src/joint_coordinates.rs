@@ -8,6 +8,7 @@
 //! the model's (fixed in both bodies). Initial rates are the joints' relative velocities along
 //! their axes: the model's initial velocities projected onto the joints.
 
+use crate::couplings::wrap_angle;
 use crate::euler_parameters::{self, from_rotation};
 use crate::forces::ForceData;
 use crate::frame::{NQ, NV};
@@ -277,7 +278,13 @@ impl Model {
             .force_data()
             .iter()
             .filter_map(|f| match f {
-                ForceData::AboutAxis(a) => Some((a.joint_law(), a.angle_at(&frame))),
+                // The angle taken within a half turn of the free angle, as the model measures
+                // its deflection (a spring whose free angle is near ±π starts where it should).
+                ForceData::AboutAxis(a) => {
+                    let (k, law) = a.joint_law();
+                    let free = law.free_angle;
+                    Some(((k, law), free + wrap_angle(a.angle_at(&frame) - free)))
+                }
                 ForceData::AlongAxis(a) => Some((a.joint_law(), a.displacement_at(&frame))),
                 _ => None,
             })
