@@ -274,6 +274,30 @@ impl<'s, 'a> Reader<'s, 'a> {
         Ok(Some(out))
     }
 
+    /// `key`'s two numbers where the element is limited: where `flag` is `true`, or "auto" (the
+    /// default) and the range is given, as MuJoCo decides (joint ranges, actuators' control and
+    /// force ranges); `None` where it is not. `flag="true"` without the range is an error.
+    fn limited_range(&self, node: Node<'a, 'a>, key: &str, flag: &str) -> Result<Option<[f64; 2]>, SceneError> {
+        let tag = node.tag_name().name();
+        let given = self.numbers::<2>(node, key)?;
+        let on = match self.value(node, flag).unwrap_or("auto") {
+            "true" => true,
+            "false" => false,
+            "auto" => given.is_some(),
+            other => {
+                return Err(self.err(
+                    node,
+                    format!("<{tag}> {flag}=\"{other}\": expected true, false or auto"),
+                ))
+            }
+        };
+        match (on, given) {
+            (true, None) => Err(self.err(node, format!("<{tag}> {flag}=\"true\" needs {key}"))),
+            (true, given) => Ok(given),
+            (false, _) => Ok(None),
+        }
+    }
+
     fn number(&self, node: Node<'a, 'a>, key: &str, default: f64) -> Result<f64, SceneError> {
         Ok(self.numbers::<1>(node, key)?.map_or(default, |[x]| x))
     }
@@ -933,26 +957,10 @@ impl<'s, 'a> Reader<'s, 'a> {
                     } else {
                         joint_name = format!("{name}-joint");
                     }
-                    // Limited where `limited` says so, or ("auto", the default) where a range is
-                    // given, as for the motors' ranges.
-                    let given = self.numbers::<2>(j, "range")?;
-                    let on = match self.value(j, "limited").unwrap_or("auto") {
-                        "true" => true,
-                        "false" => false,
-                        "auto" => given.is_some(),
-                        other => {
-                            return Err(
-                                self.err(j, format!("<joint> limited=\"{other}\": expected true, false or auto"))
-                            )
-                        }
-                    };
-                    match (on, given) {
-                        (true, None) => return Err(self.err(j, "<joint> limited=\"true\" needs range")),
-                        (true, Some(_)) if kind == Kind::Spherical => limited.push(joint_name.clone()),
-                        (true, Some([lo, hi])) if kind == Kind::Revolute => {
-                            range = Some([self.angle(lo), self.angle(hi)])
-                        }
-                        (true, Some(bounds)) if kind == Kind::Prismatic => range = Some(bounds),
+                    match self.limited_range(j, "range", "limited")? {
+                        Some(_) if kind == Kind::Spherical => limited.push(joint_name.clone()),
+                        Some([lo, hi]) if kind == Kind::Revolute => range = Some([self.angle(lo), self.angle(hi)]),
+                        Some(bounds) if kind == Kind::Prismatic => range = Some(bounds),
                         _ => {}
                     }
                 }

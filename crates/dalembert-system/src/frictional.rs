@@ -106,10 +106,8 @@ impl Frictional {
     /// sensitivities, which do not cross an impact): an evaluation where a limit's coordinate
     /// reaches a bound, or starts held on one, is an error naming the limit
     /// ([`DynamicsError::Limit`]), so the run stops there.
-    pub fn refusing_impacts(mut self) -> Self {
-        self.refuse_impacts = true;
-        self.refusal = "this computation holds only while every limit is free".into();
-        self
+    pub fn refusing_impacts(self) -> Self {
+        self.refusing_impacts_because("this computation holds only while every limit is free")
     }
 
     /// [`Frictional::refusing_impacts`], the error saying `why` (what holds only while the limits

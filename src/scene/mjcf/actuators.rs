@@ -213,34 +213,18 @@ impl<'a> Reader<'_, 'a> {
         Ok(out)
     }
 
-    /// A range that holds where limited (`true`, or "auto", the default, where the range is
-    /// given); infinite bounds elsewhere.
+    /// A range that holds where limited ([`Reader::limited_range`]); infinite bounds elsewhere.
     fn range(&self, c: Node<'a, 'a>, key: &str, limited: &str) -> Result<[f64; 2], SceneError> {
-        let tag = c.tag_name().name();
-        let given = self.numbers::<2>(c, key)?;
-        let on = match self.value(c, limited).unwrap_or("auto") {
-            "true" => true,
-            "false" => false,
-            "auto" => given.is_some(),
-            other => {
-                return Err(self.err(
-                    c,
-                    format!("<{tag}> {limited}=\"{other}\": expected true, false or auto"),
-                ))
-            }
-        };
-        match (on, given) {
-            (true, None) => Err(self.err(c, format!("<{tag}> {limited}=\"true\" needs {key}"))),
-            (true, Some([lo, hi])) => {
-                if lo.is_nan() || hi.is_nan() || lo > hi {
-                    return Err(self.err(
-                        c,
-                        format!("<{tag}> {key}=\"{lo} {hi}\": the first bound is above the second"),
-                    ));
-                }
-                Ok([lo, hi])
-            }
-            _ => Ok([f64::NEG_INFINITY, f64::INFINITY]),
+        match self.limited_range(c, key, limited)? {
+            Some([lo, hi]) if lo.is_nan() || hi.is_nan() || lo > hi => Err(self.err(
+                c,
+                format!(
+                    "<{}> {key}=\"{lo} {hi}\": the first bound is above the second",
+                    c.tag_name().name()
+                ),
+            )),
+            Some(bounds) => Ok(bounds),
+            None => Ok([f64::NEG_INFINITY, f64::INFINITY]),
         }
     }
 }
