@@ -129,9 +129,9 @@ fn a_floating_base_robot_keeps_its_momenta_and_is_refused_in_joint_coordinates()
 }
 
 /// An MJCF slide with a spring (`stiffness`, `springref`) hanging 3 m below where the file puts
-/// it: the spring acts along the slide for any travel (its line reaches from 1 000 m behind the
-/// joint), so the body comes to rest at `springref − m g / k` (closed form, 1e-9 m; a line from
-/// 1 m behind would have turned the spring around after 1 m of travel), and the linear model there
+/// it: the spring acts along the slide for any travel (a servo on the slide's displacement), so the
+/// body comes to rest at `springref − m g / k` (closed form, 1e-9 m; a spring between two points
+/// 1 m apart would have turned around after 1 m of travel), and the linear model there
 /// has `A₂₁ = −k/m` and, for the motor of gear 3, `B₂ = gear/m` (1e-9).
 #[test]
 fn a_sprung_mjcf_slide_rests_where_its_spring_balances_gravity_far_from_the_file() {

@@ -729,25 +729,10 @@ impl<'s, 'a> Reader<'s, 'a> {
                     (Kind::Revolute, false) if law.gain == 1.0 => force(&element, "torque")
                         .set("joint", j.name.as_str())
                         .set("value", held(Function::input(input).gain(gear), law.motor_range())),
-                    (Kind::Prismatic, false) if law.gain == 1.0 => {
-                        let frame = tree.world[j.child];
-                        let (point, axis) = (frame.p, frame.r * j.axis);
-                        let bodies = [body_name(j.parent), body_name(j.child)];
-                        // Along the axis, between a point of the parent LEVER behind the joint
-                        // and the joint's point on the child: a tension pulls them together, so
-                        // the push along the axis is the actuator's negative.
-                        force(&element, "spring-damper")
-                            .set("bodies", bodies)
-                            .set(
-                                "at",
-                                [
-                                    <[f64; 3]>::from(point - super::tree::LEVER * axis),
-                                    <[f64; 3]>::from(point),
-                                ],
-                            )
-                            .set("stiffness", 0.0)
-                            .set("actuator", held(Function::input(input).gain(-gear), law.motor_range()))
-                    }
+                    // Along a slide: a servo with no gains, its added force the same.
+                    (Kind::Prismatic, false) if law.gain == 1.0 => force(&element, "servo")
+                        .set("joint", j.name.as_str())
+                        .set("value", held(Function::input(input).gain(gear), law.motor_range())),
                     (Kind::Revolute | Kind::Prismatic, _) => {
                         // τ = gear clamp(g ū + b₁ gear θ + b₂ gear θ̇, forcerange), ū the control
                         // held in ctrlrange: a servo with k = −b₁ gear², c = −b₂ gear², the

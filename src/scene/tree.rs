@@ -398,17 +398,12 @@ impl Tree {
                     Kind::Revolute => force(&name, "rotational-spring-damper")
                         .set("joint", j.name.as_str())
                         .set("free_angle", j.spring_rest),
-                    _ => {
-                        // Along the axis, from a point of the parent LEVER behind the joint to
-                        // the joint's point on the child: the line stays the axis as the joint
-                        // slides (its length LEVER in the file's configuration; a slide would have
-                        // to travel back that far for the two points to meet).
-                        let behind = frame.p - LEVER * axis;
-                        force(&name, "spring-damper")
-                            .set("bodies", bodies)
-                            .set("at", [<[f64; 3]>::from(behind), <[f64; 3]>::from(frame.p)])
-                            .set("free_length", LEVER + j.spring_rest)
-                    }
+                    // Along the slide's axis: a servo (docs/scenes.md) whose target is the
+                    // spring's rest displacement, the force `−k (s − s₀) − c ṡ`.
+                    _ if j.stiffness > 0.0 => force(&name, "servo")
+                        .set("joint", j.name.as_str())
+                        .set("target", j.spring_rest),
+                    _ => force(&name, "servo").set("joint", j.name.as_str()),
                 };
                 model = model.force(damper.set("stiffness", j.stiffness).set("damping", j.damping));
             }
@@ -416,11 +411,6 @@ impl Tree {
         Ok(model)
     }
 }
-
-/// The distance (m) behind a slide's point, on its parent, from which the slide's spring, damper
-/// and motor act along its axis: far beyond any travel a slide has, while the forces stay exact
-/// (the length's change is the slide's travel to round-off, 1e-13 m here).
-pub(crate) const LEVER: f64 = 1000.0;
 
 /// What a reader gives: the robot's scene elements, where each link and joint is in the file (for
 /// errors the scene builder finds), and the notes on what the reader left out.

@@ -17,6 +17,10 @@ import dalembert
 
 MODELS = ["arm-3"]
 
+# Every formulation in absolute coordinates, and joint coordinates (the articulated-body
+# algorithm; the slide's spring, damper and motor act along its coordinate there).
+SETTINGS = [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")] + [dict(coordinates="joint")]
+
 
 def mujoco_run(path, end, qpos=None, qvel=None):
     """`qpos`, `qvel` of the model at `end` from the given state (rest at 0 by default)."""
@@ -37,16 +41,16 @@ def mujoco_run(path, end, qpos=None, qvel=None):
 @pytest.mark.parametrize("name", MODELS)
 def test_mjcf_run_from_rest_matches_mujoco(scenes, name):
     """From rest, 0.6 s: joint values within 1e-7 (rad or m) of MuJoCo's, rates within 1e-6, with
-    every formulation (the model has damping, so joint coordinates refuse it)."""
+    every formulation and in joint coordinates."""
     path = scenes / "mjcf" / f"{name}.xml"
     values, rates = mujoco_run(path, 0.6)
     scene = dalembert.Scene.load(path)
     assert max(abs(v) for v in values.values()) > 0.05, "the arm moves"
-    for formulation in ("augmented", "embedding", "amalgamated"):
-        run = scene.simulate(end=0.6, integrator="dopri5", rtol=1e-11, atol=1e-12, formulation=formulation)
+    for settings in SETTINGS:
+        run = scene.simulate(end=0.6, integrator="dopri5", rtol=1e-11, atol=1e-12, **settings)
         for joint, expected in values.items():
-            assert abs(run[f"{joint}.q"][-1] - expected) < 1e-7, f"{formulation} {joint}: {run[f'{joint}.q'][-1]} vs {expected}"
-            assert abs(run[f"{joint}.qd"][-1] - rates[joint]) < 1e-6, f"{formulation} {joint} rate"
+            assert abs(run[f"{joint}.q"][-1] - expected) < 1e-7, f"{settings} {joint}: {run[f'{joint}.q'][-1]} vs {expected}"
+            assert abs(run[f"{joint}.qd"][-1] - rates[joint]) < 1e-6, f"{settings} {joint} rate"
 
 
 def welded_to(model, k):
@@ -114,7 +118,7 @@ def test_mjcf_motion_from_random_states_matches_mujoco(scenes, name):
         qvel = rng.uniform(-2.0, 2.0, model.nv)
         q, v = placed(model, data, ids, qpos, qvel)
         values, _ = mujoco_run(path, 0.05, qpos, qvel)
-        for settings in [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")]:
+        for settings in SETTINGS:
             sim = scene.simulator(integrator="dopri5", rtol=1e-12, atol=1e-13, **settings)
             moved = sim.set_state(q, v)
             assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12, f"assembly moved {moved}"
@@ -184,8 +188,8 @@ def test_mjcf_geoms_are_drawn_where_mujoco_places_them(scenes, name, tmp_path):
 @pytest.mark.parametrize("name", MODELS)
 def test_mjcf_accelerations_from_1000_random_states_match_mujoco(scenes, name):
     """At 1 000 random states (hinge angles in ±π, slides in ±0.1 m, rates in ±2), the joint
-    accelerations `JOINT.qdd` of every formulation are MuJoCo's `qacc` (contacts off, the joint
-    dampers in both) within 1e-9 of the largest of them."""
+    accelerations `JOINT.qdd` of every formulation and of joint coordinates are MuJoCo's `qacc`
+    (contacts off, the joint dampers in both) within 1e-9 of the largest of them."""
     path = scenes / "mjcf" / f"{name}.xml"
     model = mujoco.MjModel.from_xml_path(str(path))
     data = mujoco.MjData(model)
@@ -198,16 +202,16 @@ def test_mjcf_accelerations_from_1000_random_states_match_mujoco(scenes, name):
         qpos = random_qpos(model, rng)
         q, v = placed(model, data, ids, qpos, rng.uniform(-2.0, 2.0, model.nv))
         cases.append((q, v, data.qacc.copy()))
-    for formulation in ("augmented", "embedding", "amalgamated"):
-        sim = scene.simulator(formulation=formulation)
+    for settings in SETTINGS:
+        sim = scene.simulator(**settings)
         worst = 0.0
         for q, v, qacc in cases:
             moved = sim.set_state(q, v)
             assert moved["positions"] < 1e-12 and moved["velocities"] < 1e-12
             got = np.array([sim[f"{joint}.qdd"] for joint in names])
             worst = max(worst, np.max(np.abs(got - qacc)) / np.max(np.abs(qacc)))
-        assert worst < 1e-9, f"{formulation}: {worst:.2e}"
-        print(f"{name} {formulation}: worst relative difference {worst:.2e}")
+        assert worst < 1e-9, f"{settings}: {worst:.2e}"
+        print(f"{name} {settings}: worst relative difference {worst:.2e}")
 
 
 def relative_qdd_difference(sim, state, inputs, joints, qacc):
@@ -226,7 +230,8 @@ def test_mjcf_motors_accelerate_as_mujocos_at_random_states_and_controls(scenes,
     """Motors are named inputs times their gear (a torque about a hinge, a force along a slide),
     the control held in `ctrlrange` and the force in `forcerange` (arm-3's are ±2 and [−1.5, 1]):
     at 200 random states with random controls in ±3 (MuJoCo's `ctrl`, dalembert's inputs),
-    `JOINT.qdd` of every formulation is MuJoCo's `qacc` within 1e-9 of the largest. With the
+    `JOINT.qdd` of every formulation and of joint coordinates is MuJoCo's `qacc` within 1e-9 of
+    the largest. With the
     inputs at 0 instead the accelerations differ by far more than that: the motors act."""
     path = scenes / "mjcf" / f"{name}.xml"
     model = mujoco.MjModel.from_xml_path(str(path))
@@ -242,13 +247,13 @@ def test_mjcf_motors_accelerate_as_mujocos_at_random_states_and_controls(scenes,
         data.ctrl[:] = rng.uniform(-3.0, 3.0, model.nu)
         q, v = placed(model, data, ids, random_qpos(model, rng), rng.uniform(-2.0, 2.0, model.nv))
         cases.append((q, v, data.ctrl.copy(), data.qacc.copy()))
-    for formulation in ("augmented", "embedding", "amalgamated"):
-        sim = scene.simulator(formulation=formulation)
+    for settings in SETTINGS:
+        sim = scene.simulator(**settings)
         worst, unmoved = 0.0, 0.0
         for q, v, ctrl, qacc in cases:
             idle = relative_qdd_difference(sim, (q, v), dict.fromkeys(motors, 0.0), names, qacc)
             unmoved = max(unmoved, idle)
             worst = max(worst, relative_qdd_difference(sim, (q, v), dict(zip(motors, ctrl)), names, qacc))
-        assert worst < 1e-9, f"{formulation}: {worst:.2e}"
-        assert unmoved > 1e-2, f"{formulation}: the motors change the accelerations by {unmoved:.2e} only"
-        print(f"{name} {formulation} with controls: worst relative difference {worst:.2e}")
+        assert worst < 1e-9, f"{settings}: {worst:.2e}"
+        assert unmoved > 1e-2, f"{settings}: the motors change the accelerations by {unmoved:.2e} only"
+        print(f"{name} {settings} with controls: worst relative difference {worst:.2e}")

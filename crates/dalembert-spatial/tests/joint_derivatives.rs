@@ -238,13 +238,14 @@ fn residual(m: &Model, t: f64, q: &[f64], v: &[f64], vdot: &[f64], lambda: &[f64
     r
 }
 
-/// Two moving bodies on a revolute joint with a servo following a harmonic target, its torque
-/// held within `range`.
-fn model_with_servo(range: [f64; 2]) -> Model {
+/// Two moving bodies (or the second and the ground) on a revolute or prismatic joint with a servo
+/// following a harmonic target, its torque (or force along the axis) held within `range`.
+fn model_with_servo(kind: JointKind, to_ground: bool, range: [f64; 2]) -> Model {
     use dalembert_spatial::Force;
     let mut b = ModelBuilder::new([0.0, 0.0, -9.81]);
     let (first, second) = two_bodies(&mut b);
-    b.joint(Joint::revolute("j", first, second, [0.5, 0.1, 0.1], [0.2, -0.5, 0.8]));
+    let i = if to_ground { BodyRef::Ground } else { first };
+    b.joint(Joint::new("j", kind, i, second, [0.5, 0.1, 0.1], [0.2, -0.5, 0.8]));
     b.force(Force::JointServo {
         name: "servo".into(),
         joint: "j".into(),
@@ -297,9 +298,15 @@ fn residual_tangent_matches_finite_differences() {
     models.push(("forces on two moving bodies".into(), model_with_forces()));
     // A servo inside its range, and one held at a bound (its torque then does not change with
     // the state; the state's free torque is far from the bound, so the differences do not cross
-    // it).
-    models.push(("servo inside its range".into(), model_with_servo([-1e3, 1e3])));
-    models.push(("servo held at its bound".into(), model_with_servo([0.1, 0.2])));
+    // it), about a revolute joint and along a prismatic one.
+    for kind in [JointKind::Revolute, JointKind::Prismatic] {
+        for to_ground in [false, true] {
+            for (what, range) in [("inside its range", [-1e3, 1e3]), ("held at its bound", [0.1, 0.2])] {
+                let name = format!("servo {what}, {} (ground: {to_ground})", kind.name());
+                models.push((name, model_with_servo(kind, to_ground, range)));
+            }
+        }
+    }
     let t = 0.3;
     for (name, m) in models {
         let (q, v) = state(&m);

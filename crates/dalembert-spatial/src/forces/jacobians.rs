@@ -120,10 +120,9 @@ impl ForceData {
                 Some(([ends[0].0, ends[1].0], w))
             }
             ForceData::AboutAxis(a) => Some(a.wrench_derivative(t, frame)),
+            ForceData::AlongAxis(a) => Some(a.wrench_derivative(t, frame)),
             // Not differentiated analytically: the tangent takes central differences.
-            ForceData::SpherePlane(_) | ForceData::SphereSphere(_) | ForceData::User(_) | ForceData::AlongAxis(_) => {
-                None
-            }
+            ForceData::SpherePlane(_) | ForceData::SphereSphere(_) | ForceData::User(_) => None,
         }
     }
 }
