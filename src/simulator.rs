@@ -458,6 +458,16 @@ impl Simulator {
         Ok(moved)
     }
 
+    /// Sets every velocity to zero where the run is, in the coordinates it integrates (joint
+    /// coordinates too, without assembling the model again as [`Simulator::set_state`] does):
+    /// zero rates satisfy every joint's velocity equations. For the kinetic damping of
+    /// [`crate::relaxation`].
+    pub(crate) fn stop_motion(&mut self) -> Result<(), SimulatorError> {
+        let (q, qd) = self.run.state();
+        let (q, zero) = (q.to_vec(), vec![0.0; qd.len()]);
+        self.drive(|run, f| run.set_state(f, &q, &zero))
+    }
+
     /// Back to the initial state at the start time, inputs at 0, as newly built; the code
     /// forces keep their functions.
     pub fn reset(&mut self) -> Result<(), SimulatorError> {
