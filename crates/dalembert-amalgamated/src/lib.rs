@@ -353,6 +353,10 @@ impl Amalgamated {
         dqdd: &mut [f64],
         dlambda: &mut [f64],
     ) -> Result<bool, DynamicsError> {
+        // A tree solved outright by the articulated-body algorithm: no factorization to reuse.
+        if let Some(solved) = self.data.tree_response(&*self.model, g, dqdd) {
+            return Ok(solved && dlambda.is_empty());
+        }
         let Amalgamated {
             tracker,
             work,

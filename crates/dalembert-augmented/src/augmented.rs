@@ -76,6 +76,9 @@ impl Augmented {
         if self.independent.is_some() {
             return false;
         }
+        if let Some(solved) = self.data.tree_response(&*self.model, g, dqdd) {
+            return solved && dlambda.is_empty();
+        }
         let n = g.len();
         self.b[..n].copy_from_slice(g);
         match h {

@@ -96,6 +96,15 @@ impl Data {
         Ok(Stage::Loaded)
     }
 
+    /// `Δq̈ = M⁻¹ g` by the articulated-body algorithm at the last evaluation's state, where the
+    /// tree is solved outright (`None` otherwise: the formulation solves with its factorization).
+    /// A tree has no constraint equations, so no multipliers change.
+    pub fn tree_response(&mut self, model: &dyn MultibodySystem, g: &[f64], dqdd: &mut [f64]) -> Option<bool> {
+        let articulated = self.articulated.as_mut()?;
+        let tree = model.kinematic_tree()?;
+        Some(articulated.response(tree, g, dqdd))
+    }
+
     /// The state checked, `M` (once when constant), `Q` checked, the constraint values checked.
     pub fn load(&mut self, model: &dyn MultibodySystem, t: f64, q: &[f64], qd: &[f64]) -> Result<(), DynamicsError> {
         model.check_state(t, q, qd)?;

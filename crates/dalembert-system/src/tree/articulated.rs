@@ -31,6 +31,10 @@ pub struct Articulated {
     tau: Vec<f64>,
     /// The generalized forces added to the tree's own (the caller's and the system's).
     added: Vec<f64>,
+    /// [`Articulated::response`]'s bias forces, joint forces and accelerations.
+    response_pa: Vec<Sv>,
+    response_tau: Vec<f64>,
+    response_a: Vec<Sv>,
 }
 
 impl Articulated {
@@ -45,7 +49,42 @@ impl Articulated {
             d: vec![0.0; n],
             tau: vec![0.0; n],
             added: vec![0.0; n],
+            response_pa: vec![Sv::ZERO; n],
+            response_tau: vec![0.0; n],
+            response_a: vec![Sv::ZERO; n],
         }
+    }
+
+    /// `x = M⁻¹ g` at the state of the last solve (its articulated inertias `I^A`, `Uᵢ`, `Dᵢ`
+    /// and transforms kept): passes 2 and 3 again with the generalized force `g` alone, no
+    /// velocities (`cᵢ = 0`, `p^Aᵢ = 0`) and no gravity (`a₀ = 0`), `O(n)`. It is the response of
+    /// the accelerations to a force `g` ([`crate::Formulation::force_response`]), and to an impulse
+    /// `g` of the velocities. `false` when no solve has been made (a pivot `Dᵢ` is still 0).
+    pub fn response(&mut self, tree: &KinematicTree, g: &[f64], x: &mut [f64]) -> bool {
+        let n = tree.len();
+        if self.d.iter().any(|&d| d <= 0.0) || g.len() != n || x.len() != n {
+            return false;
+        }
+        let p = &self.pass;
+        self.response_pa.iter_mut().for_each(|v| *v = Sv::ZERO);
+        for i in (0..n).rev() {
+            let s = tree.subspace(i);
+            let tau = g[i] - s.dot(&self.response_pa[i]);
+            self.response_tau[i] = tau;
+            if let Some(k) = tree.links[i].parent {
+                let pa = self.response_pa[i] + self.u[i].scale(tau / self.d[i]);
+                let back = p.x[i].force_back(&pa);
+                self.response_pa[k] += back;
+            }
+        }
+        for i in 0..n {
+            let a_parent = tree.links[i].parent.map_or(Sv::ZERO, |k| self.response_a[k]);
+            let a = p.x[i].motion(&a_parent);
+            let xi = (self.response_tau[i] - self.u[i].dot(&a)) / self.d[i];
+            x[i] = xi;
+            self.response_a[i] = a + tree.subspace(i).scale(xi);
+        }
+        crate::all_finite(x)
     }
 
     /// The workspace for `system` when the formulations should solve it by this algorithm: a
