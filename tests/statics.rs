@@ -327,6 +327,45 @@ fn scenes_started_far_from_rest_settle_where_their_motion_comes_to_rest() {
     }
 }
 
+/// A spatial chain of eight 1 m links (`chain3d_toml`: revolute joints about alternating axes)
+/// released in a horizontal line relaxes in joint coordinates (the articulated-body algorithm)
+/// and comes to hang straight down from its first joint: link `i`'s centre at `(0, 0, −(i + ½))`
+/// (1e-9 m, the potential's only minimum), stable, with no free direction. Written with its links
+/// listed in reverse, the same.
+#[test]
+fn a_spatial_chain_released_horizontal_comes_to_hang_straight_down() {
+    let text = dalembert_testkit::spatial::chain3d_toml(8, 1.0);
+    // The same chain with its bodies listed last link first.
+    let blocks: Vec<&str> = text.split("\n[[").collect();
+    let (head, rest) = blocks.split_first().unwrap();
+    let (bodies, others): (Vec<&str>, Vec<&str>) = rest.iter().partition(|b| b.starts_with("bodies]]"));
+    let reversed = std::iter::once(head.to_string())
+        .chain(bodies.iter().rev().chain(&others).map(|b| format!("[[{b}")))
+        .collect::<Vec<_>>()
+        .join("\n");
+    assert_eq!(bodies.len(), 8);
+    for (what, text) in [("as written", text.clone()), ("bodies reversed", reversed)] {
+        let scene = Scene::from_toml(&text, "chain").unwrap();
+        let eq = scene.equilibrium().unwrap();
+        assert!(
+            eq.stable && eq.free_directions.is_empty(),
+            "{what}: {:?}",
+            eq.unstable_directions
+        );
+        for i in 0..8 {
+            let at = |k: &str| named(&eq.positions, &format!("link{i}.{k}"));
+            let expected = [0.0, 0.0, -(i as f64 + 0.5)];
+            for (k, e) in ["x", "y", "z"].iter().zip(expected) {
+                assert!(
+                    (at(k) - e).abs() < 1e-9,
+                    "{what}: link{i}.{k} = {} (expected {e})",
+                    at(k)
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn a_parallelogram_with_a_redundant_crank_balances_and_swings_at_its_closed_form() {
     // The shipped parallelogram (three 1 kg cranks of 1 m pinned at their top ends, a 2 kg coupler
