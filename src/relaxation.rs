@@ -53,14 +53,14 @@ impl<'a> Relaxation<'a> {
         // the way down matters, not its accuracy, and the adaptive step grows to what stability
         // allows. A spatial tree runs in joint coordinates where it can (the articulated-body
         // algorithm: on a chain of 64 links it relaxes in 89 ms where absolute coordinates take
-        // 353 ms; the joints hold by construction, so nothing is projected).
+        // 353 ms; the joints hold by construction, and the driver projects nothing where there
+        // are no constraint equations).
         let mut relaxing = scene.clone();
         let settings = &mut relaxing.settings;
         settings.method = dalembert_integrators::Method::dopri5(RELAXATION_TOLERANCE, RELAXATION_TOLERANCE);
         settings.stabilization = dalembert_integrators::Stabilization::projection();
         let mut joint = relaxing.clone();
         joint.settings.coordinates = crate::simulation::Coordinates::Joint;
-        joint.settings.stabilization = dalembert_integrators::Stabilization::None;
         let sim = match joint.simulator() {
             Ok(sim) => sim,
             Err(_) => relaxing.simulator().ok()?,

@@ -395,16 +395,14 @@ impl Tree {
                 // joint's `damping`, `stiffness` and `springref`).
                 let name = format!("{}-damping", j.name);
                 let damper = match j.kind {
-                    Kind::Revolute => force(&name, "rotational-spring-damper")
-                        .set("joint", j.name.as_str())
-                        .set("free_angle", j.spring_rest),
+                    Kind::Revolute => force(&name, "rotational-spring-damper").set("free_angle", j.spring_rest),
                     // Along the slide's axis: a servo (docs/scenes.md) whose target is the
-                    // spring's rest displacement, the force `−k (s − s₀) − c ṡ`.
-                    _ if j.stiffness > 0.0 => force(&name, "servo")
-                        .set("joint", j.name.as_str())
-                        .set("target", j.spring_rest),
-                    _ => force(&name, "servo").set("joint", j.name.as_str()),
+                    // spring's rest displacement (a target needs a stiffness), the force
+                    // `−k (s − s₀) − c ṡ`.
+                    _ if j.stiffness > 0.0 => force(&name, "servo").set("target", j.spring_rest),
+                    _ => force(&name, "servo"),
                 };
+                let damper = damper.set("joint", j.name.as_str());
                 model = model.force(damper.set("stiffness", j.stiffness).set("damping", j.damping));
             }
         }

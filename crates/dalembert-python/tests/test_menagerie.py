@@ -16,7 +16,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 import dalembert
-from test_mjcf import placed, relative_qdd_difference
+from test_mjcf import SETTINGS, placed, relative_qdd_difference
 
 ROBOTS = {
     "iiwa14": "menagerie/kuka_iiwa_14/iiwa14.xml",
@@ -26,9 +26,8 @@ ROBOTS = {
     "servos": "imported/servos.xml",
 }
 
-# Every formulation in absolute coordinates, and joint coordinates (the articulated-body
-# algorithm, where a servo reads its joint's coordinate).
-SETTINGS = [dict(formulation=f) for f in ("augmented", "embedding", "amalgamated")] + [dict(coordinates="joint")]
+# SETTINGS (from test_mjcf): every formulation in absolute coordinates, and joint coordinates
+# (the articulated-body algorithm, where a servo reads its joint's coordinate).
 
 
 def menagerie(root: pathlib.Path, name: str) -> pathlib.Path:

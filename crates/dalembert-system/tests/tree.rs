@@ -157,6 +157,13 @@ fn solve_dense(n: usize, m: &[f64], b: &[f64]) -> Vec<f64> {
     (0..n).map(|i| x[(i, 0)]).collect()
 }
 
+/// The largest `|got − expected|` and the largest `|expected|`.
+fn gap(got: &[f64], expected: &[f64]) -> (f64, f64) {
+    let scale = expected.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let diff = got.iter().zip(expected).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    (diff, scale)
+}
+
 #[test]
 fn articulated_body_solves_the_composite_inertia_and_newton_euler_equations() {
     let tree = branched();
@@ -169,8 +176,7 @@ fn articulated_body_solves_the_composite_inertia_and_newton_euler_equations() {
         let mut qdd = vec![0.0; n];
         aba.solve(&sys, (0.0, &q, &qd), &[], &mut qdd)
             .expect("the tree has inertia on every joint");
-        let scale = expected.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let diff = qdd.iter().zip(&expected).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let (diff, scale) = gap(&qdd, &expected);
         assert!(diff <= 1e-11 * scale, "q = {q:?}: |Δq̈| {diff:e} of {scale:e}");
     }
 }
@@ -196,8 +202,7 @@ fn articulated_response_is_the_inverse_mass_matrix_applied_to_a_force() {
         let g: Vec<f64> = (0..n).map(|i| ((i + k) as f64 * 1.3).sin() + 0.2).collect();
         let expected = solve_dense(n, &m, &g);
         assert!(aba.response(&tree, &g, &mut x));
-        let scale = expected.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let diff = x.iter().zip(&expected).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        let (diff, scale) = gap(&x, &expected);
         assert!(diff <= 1e-11 * scale, "q = {q:?}: |Δx| {diff:e} of {scale:e}");
     }
 }
