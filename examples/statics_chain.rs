@@ -1,6 +1,7 @@
 //! Times the static equilibrium of spatial chains of 16 and 64 links started in their file
 //! configuration (`dalembert_testkit::spatial::chain3d_toml`: links in a horizontal line, far from
-//! rest) and the equilibrium and modes of the shipped chain of 16, which starts hanging, as
+//! rest; equilibrium alone, then equilibrium and modes) and the equilibrium and modes of the
+//! chain of 64 started hanging, as
 //! `docs/statics.md` reports: `cargo run --release --example statics_chain`.
 
 use std::time::Instant;
@@ -11,12 +12,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let start = Instant::now();
         let eq = scene.equilibrium()?;
         let equilibrium = start.elapsed();
+        let start = Instant::now();
+        let modes = scene.modes()?;
+        let with_modes = start.elapsed();
         println!(
-            "chain of {n}: equilibrium in {:.1} ms ({} Newton iterations, stable: {}, {} unstable directions)",
+            "chain of {n}: equilibrium in {:.1} ms ({} Newton iterations, stable: {}, {} unstable directions); with the modes {:.1} ms, lowest {:.6} Hz",
             equilibrium.as_secs_f64() * 1e3,
             eq.iterations,
             eq.stable,
-            eq.unstable_directions.len()
+            eq.unstable_directions.len(),
+            with_modes.as_secs_f64() * 1e3,
+            modes.frequencies[0]
         );
     }
     // The spatial chain of 64 started hanging (its first joint turned down by `[initial]`): the

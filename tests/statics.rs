@@ -366,6 +366,63 @@ fn a_spatial_chain_released_horizontal_comes_to_hang_straight_down() {
     }
 }
 
+/// A spatial double pendulum of two boxes (1 kg, 1 m × 0.1 m × 0.1 m along x, revolute joints
+/// about y at x = 0 and x = 1) released horizontal comes to hang and swings at the closed form of
+/// two compound pendulums: absolute angles about the hanging position, `J = m (L² + c²)/12` about
+/// y, `M = [J + 5/4, 1/2; 1/2, J + 1/4]`, `K = g diag(3/2, 1/2)`, `ω²` the roots of
+/// `det(K − ω² M) = 0` (1e-9 relative). The start lies on a maximum of the second link's potential
+/// along its own joint and nowhere near the well (the descent in joint coordinates goes down its
+/// negative curvature, `docs/statics.md`, "Far from rest"); the same with the bodies and joints
+/// listed in reverse, and with the start moved by 1e-12 rad.
+#[test]
+fn a_spatial_double_pendulum_released_horizontal_swings_at_its_closed_form() {
+    let body = |name: &str, x: f64| {
+        format!("[[bodies]]\nname = \"{name}\"\nmass = 1.0\nshape = {{ box = [1.0, 0.1, 0.1] }}\nposition = [{x:?}, 0.0, 0.0]\n")
+    };
+    let joint = |name: &str, a: &str, b: &str, x: f64| {
+        format!("[[joints]]\nname = \"{name}\"\ntype = \"revolute\"\nbodies = [\"{a}\", \"{b}\"]\nat = [{x:?}, 0.0, 0.0]\naxis = [0.0, 1.0, 0.0]\n")
+    };
+    let head = "[scene]\ngravity = [0.0, 0.0, -9.81]\n";
+    let parts = [
+        body("upper", 0.5),
+        body("lower", 1.5),
+        joint("shoulder", "ground", "upper", 0.0),
+        joint("elbow", "upper", "lower", 1.0),
+    ];
+    let written = format!("{head}{}", parts.join(""));
+    let reversed = format!("{head}{}{}{}{}", parts[1], parts[0], parts[3], parts[2]);
+    let moved = format!("{written}[initial]\njoints = {{ shoulder = 1e-12 }}\n");
+    let j = (1.0 + 0.01) / 12.0;
+    let (m11, m12, m22, k11, k22) = (j + 1.25, 0.5, j + 0.25, 1.5 * G, 0.5 * G);
+    let (a, b, c) = (m11 * m22 - m12 * m12, -(k11 * m22 + k22 * m11), k11 * k22);
+    let root = (b * b - 4.0 * a * c).sqrt();
+    let expected = [(-b - root) / (2.0 * a), (-b + root) / (2.0 * a)];
+    for (what, text) in [
+        ("as written", written),
+        ("listed in reverse", reversed),
+        ("moved 1e-12", moved),
+    ] {
+        let modes = Scene::from_toml(&text, "double pendulum").unwrap().modes().unwrap();
+        let eq = &modes.equilibrium;
+        assert!(eq.stable, "{what}: {:?}", eq.unstable_directions);
+        assert!(
+            (named(&eq.positions, "lower.z") + 1.5).abs() < 1e-9,
+            "{what}: {:?}",
+            eq.positions
+        );
+        assert!(
+            named(&eq.positions, "lower.x").abs() < 1e-9,
+            "{what}: {:?}",
+            eq.positions
+        );
+        for (k, w2) in expected.iter().enumerate() {
+            let f = w2.sqrt() / (2.0 * std::f64::consts::PI);
+            let got = modes.frequencies[k];
+            assert!((got - f).abs() < 1e-9 * f, "{what}: mode {k}: {got} Hz, expected {f}");
+        }
+    }
+}
+
 #[test]
 fn a_parallelogram_with_a_redundant_crank_balances_and_swings_at_its_closed_form() {
     // The shipped parallelogram (three 1 kg cranks of 1 m pinned at their top ends, a 2 kg coupler

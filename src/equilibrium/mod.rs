@@ -18,7 +18,10 @@
 //! or a step that does not decrease the residual adds `μ M` to `K` (Levenberg–Marquardt with the
 //! mass matrix as the metric), removed again as full steps succeed.
 //!
-//! Where this ends at an unstable equilibrium or at none, it starts again from where the scene's
+//! On a spatial tree without joint limits whose forces at rest derive from its potential, Newton's
+//! method starts where a descent of the potential in joint coordinates ends, at a minimum
+//! ([`descent`]). Elsewhere, where Newton's method from the scene's position ends at an unstable
+//! equilibrium or at none, it starts again from where the scene's
 //! motion with kinetic damping comes to rest ([`crate::relaxation`]): first loosely, then, while
 //! it still ends unstable, more nearly at rest ([`crate::relaxation::SHARES`]).
 //!
@@ -38,6 +41,7 @@ use dalembert_system::linalg::PatternLu;
 use dalembert_system::{ResidualTangent, TangentAt};
 use thiserror::Error;
 
+mod descent;
 mod held;
 mod reduced;
 use held::{Held, HeldRows};
@@ -188,6 +192,15 @@ impl Scene {
     /// from where the scene's motion with kinetic damping comes to rest, with the limits it
     /// rests against held there.
     fn first_equilibrium(&self) -> Result<Equilibrium, EquilibriumError> {
+        // A spatial tree whose forces at rest derive from its potential: descend to a minimum
+        // in joint coordinates first, then Newton's method on the model there.
+        if let Some(q) = descent::descend(self) {
+            if let Ok(eq) = self.equilibrium_from(&q, &[]) {
+                if eq.unstable_directions.is_empty() {
+                    return Ok(eq);
+                }
+            }
+        }
         let first = self.equilibrium_from(&self.q, &[]);
         match &first {
             Ok(eq) if eq.unstable_directions.is_empty() => return first,
@@ -436,7 +449,9 @@ impl Scene {
                 lambda = l;
             }
         }
-        let mut reduced = reduced_matrices(system, t, &q, &lambda, &mut tangent)?;
+        // A tree's admissible velocities are those its joints' rates give (no factorization).
+        let basis = self.model.spatial().and_then(|model| reduced::tree_basis(model, &q, n));
+        let mut reduced = reduced::reduced_on(system, t, &q, &lambda, &mut tangent, basis)?;
         if a > 0 {
             // A held limit keeps its joint: the admissible motions are those that keep it.
             held_rows.at(system, &q, held, &mut vec![0.0; a]);

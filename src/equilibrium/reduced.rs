@@ -56,12 +56,29 @@ pub(crate) fn reduced_matrices(
     lambda: &[f64],
     tangent: &mut ResidualTangent,
 ) -> Result<Reduced, EquilibriumError> {
+    reduced_on(system, t, q, lambda, tangent, None)
+}
+
+/// [`reduced_matrices`] on the admissible basis `basis` where given (any basis of the admissible
+/// velocities at `q` gives the same eigenvalues, stabilities and mode shapes: `K_r`, `D_r`, `M_r`
+/// change by a congruence), else coordinate partitioning's.
+pub(crate) fn reduced_on(
+    system: &dyn MultibodySystem,
+    t: f64,
+    q: &[f64],
+    lambda: &[f64],
+    tangent: &mut ResidualTangent,
+    basis: Option<DMatrix<f64>>,
+) -> Result<Reduced, EquilibriumError> {
     let sys = system.constraints();
     let n = system.layout().n_v();
     let zero = vec![0.0; n];
     let mut values = sys.values();
     sys.evaluate(t, q, &zero, &mut values);
-    let b = admissible_basis(sys, &values)?;
+    let b = match basis {
+        Some(b) => b,
+        None => admissible_basis(sys, &values)?,
+    };
     let mut mass = system.mass_storage();
     let mut scratch = sys.values();
     tangent.differentiate(
@@ -93,6 +110,27 @@ pub(crate) fn reduced_matrices(
     let d = times_b(&mut pattern.entries().zip(tangent.dr_dv()).map(|((i, j), &v)| (i, j, v)));
     let m = times_b(&mut mass.entries());
     Ok(Reduced { b, k, d, m })
+}
+
+/// The admissible velocities of a spatial tree at `q` (assembled) as the joints' rates map them,
+/// `v = J(q) q̇_joint` (`n × joints`, column `j` the model's velocities at a unit rate of joint
+/// `j`): a basis of them with no factorization (on a chain of 64 links coordinate partitioning's
+/// two full-pivot LU decompositions of the `320 × 384` Jacobian took about 20 ms). `None` where the
+/// model is not a tree that joint coordinates take.
+pub(crate) fn tree_basis(model: &dalembert_spatial::Model, q: &[f64], n: usize) -> Option<DMatrix<f64>> {
+    let jc = model.joint_coordinates_at(q, &vec![0.0; n]).ok()?;
+    let (q0, _) = jc.initial_state();
+    let joints = q0.len();
+    let mut frames = jc.frames();
+    let (mut q_abs, mut v_abs, mut rate) = (q.to_vec(), vec![0.0; n], vec![0.0; joints]);
+    let mut b = DMatrix::zeros(n, joints);
+    for j in 0..joints {
+        rate[j] = 1.0;
+        jc.absolute(&q0, &rate, &mut frames, &mut q_abs, &mut v_abs);
+        rate[j] = 0.0;
+        b.column_mut(j).copy_from_slice(&v_abs);
+    }
+    b.iter().all(|x| x.is_finite()).then_some(b)
 }
 
 /// A basis `B` (`n × dof`) of the admissible velocities at the constraint values `values`: the
