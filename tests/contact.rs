@@ -570,3 +570,111 @@ fn a_tumbling_polygon_and_segment_without_dissipation_keep_their_energy() {
         assert!(drift < 1e-6, "{what}: the energy moved {drift:e} J from {}", energy[0]);
     }
 }
+
+/// A compliant contact's output columns (`<name>.gap`, `.normal`, `.fx` … `.pz`,
+/// `docs/contact.md`, "Output") against the statics and the friction law: the ball of
+/// [`a_ball_thrown_sliding_ends_rolling_at_five_sevenths_of_its_speed`] presses with `m g` under
+/// its centre while it slides, against the sliding with `μ m g`, and without friction once it
+/// rolls (1e-9 N, 1e-12 m: measured at round-off); a box resting on its four corners with its
+/// centre of mass off the box's centre has its centre of pressure under the centre of mass (the
+/// moments balance) and the weight as its normal force (1e-8 m, measured 3e-10; the force to the resting height's
+/// 1e-9 m times the contact's stiffness, 1e-4 N, measured 2e-8; after 3 s of settling as in [`a_box_and_a_capsule_rest_on_their_corners_and_caps_by_hertz_law`]).
+#[test]
+fn a_contacts_columns_are_its_resultant_force_and_its_centre_of_pressure() {
+    let depth = (M * G / K).powf(1.0 / 1.5);
+    let table = run(&ball(R - depth, [2.0, 0.0, 0.0], [0.0; 3], 0.2, 0.3, 0.5, 1e-4, 1e-3));
+    let col = |n: &str| column(&table, n);
+    let t = col("t");
+    let star = 2.0 * 2.0 / (7.0 * 0.3 * G);
+    let (sliding, rolling) = (t.iter().position(|&s| s >= star / 2.0).unwrap(), t.len() - 1);
+    let expected = [(sliding, [-0.3 * M * G, 0.0, M * G]), (rolling, [0.0, 0.0, M * G])];
+    for (i, force) in expected {
+        for (k, f) in ["fx", "fy", "fz"].iter().zip(force) {
+            let got = col(&format!("floor.{k}"))[i];
+            assert!((got - f).abs() < 1e-9, "t = {}: floor.{k} = {got}, expected {f}", t[i]);
+        }
+        assert!((col("floor.normal")[i] - M * G).abs() < 1e-9, "t = {}", t[i]);
+        assert!((col("floor.gap")[i] + depth).abs() < 1e-12, "t = {}", t[i]);
+        let point = [col("ball.x")[i], col("ball.y")[i], col("ball.z")[i] - R];
+        for (k, p) in ["px", "py", "pz"].iter().zip(point) {
+            let got = col(&format!("floor.{k}"))[i];
+            assert!((got - p).abs() < 1e-12, "t = {}: floor.{k} = {got}, expected {p}", t[i]);
+        }
+    }
+    // The box's centre 0.1 m along x and 0.05 m along y from its centre of mass.
+    let scene = on_the_floor(
+        "type = \"box-plane\"\nsize = [0.4, 0.3, 0.2]\nat = [0.1, 0.05, 0.1]",
+        [0.0217, 0.0417, 0.0533],
+        [0.0, 0.0, 0.1],
+        ([0.0; 3], [0.0; 3]),
+        5.0,
+        3.0,
+    );
+    let table = run(&scene);
+    let last = |n: &str| *column(&table, n).last().unwrap();
+    for (p, c) in [("px", "x"), ("py", "y")] {
+        let (got, under) = (last(&format!("floor.{p}")), last(&format!("solid.{c}")));
+        assert!(
+            (got - under).abs() < 1e-8,
+            "floor.{p} = {got}, the centre of mass at {under}"
+        );
+    }
+    // The normal force's bar is the resting height's (1e-9 m) times the four corners' contact
+    // stiffness there, 4 · (3/2) K δ^½ (about 1e5 N/m): the force is the state's, which dopri5
+    // holds to its tolerance, not the static closed form's.
+    let delta = (2.0 * G / 4.0 / K).powf(1.0 / 1.5);
+    let bar = 1e-9 * 4.0 * 1.5 * K * delta.sqrt();
+    for k in ["floor.normal", "floor.fz"] {
+        let got = last(k);
+        assert!((got - 2.0 * G).abs() < bar, "{k} = {got}, expected m g = {}", 2.0 * G);
+    }
+    assert!(last("floor.gap") < 0.0);
+}
+
+/// The planar counterpart of [`a_contacts_columns_are_its_resultant_force_and_its_centre_of_pressure`]:
+/// the disk of [`a_disk_thrown_sliding_ends_rolling_at_two_thirds_of_its_speed`] presses with
+/// `m g` under its centre and against the sliding with `μ m g` (1e-9 N, 1e-12 m), and a rectangle
+/// resting on its two lower vertices with its centre of mass a quarter of the way along has its
+/// centre of pressure under the centre of mass and the weight as its normal force (1e-8 m, and
+/// the rest height's 1e-9 m times the two vertices' stiffness, about 2e-5 N).
+#[test]
+fn a_planar_contacts_columns_are_its_resultant_force_and_its_centre_of_pressure() {
+    let depth = (M * G / K).powf(1.0 / 1.5);
+    let table = run(&disk(R - depth, 2.0, 0.0, 0.2, 0.3, 0.5, 1e-4, 1e-3));
+    let col = |n: &str| column(&table, n);
+    let star = 2.0 / (3.0 * 0.3 * G);
+    let i = col("t").iter().position(|&s| s >= star / 2.0).unwrap();
+    let expected = [
+        ("ground.fx", -0.3 * M * G, 1e-9),
+        ("ground.fy", M * G, 1e-9),
+        ("ground.normal", M * G, 1e-9),
+        ("ground.gap", -depth, 1e-12),
+        ("ground.px", col("disk.x")[i], 1e-12),
+        ("ground.py", col("disk.y")[i] - R, 1e-12),
+    ];
+    for (name, value, bar) in expected {
+        let got = col(name)[i];
+        assert!((got - value).abs() < bar, "{name} = {got}, expected {value}");
+    }
+    let rectangle = "type = \"polygon-line\"\nvertices = [[-0.1, 0.0], [0.3, 0.0], [0.3, 0.2], [-0.1, 0.2]]";
+    let table = run(&on_the_line(
+        rectangle,
+        "{ rectangle = [0.4, 0.2] }",
+        [0.0, 0.1],
+        ([0.0, 0.0], 0.0),
+        5.0,
+        3.0,
+    ));
+    let last = |n: &str| *column(&table, n).last().unwrap();
+    assert!(
+        (last("floor.px") - last("solid.x")).abs() < 1e-8,
+        "floor.px = {}, the centre of mass at {}",
+        last("floor.px"),
+        last("solid.x")
+    );
+    let delta = (2.0 * G / 2.0 / K).powf(1.0 / 1.5);
+    let bar = 1e-9 * 2.0 * 1.5 * K * delta.sqrt();
+    for k in ["floor.normal", "floor.fy"] {
+        assert!((last(k) - 2.0 * G).abs() < bar, "{k} = {}", last(k));
+    }
+}

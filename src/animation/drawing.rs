@@ -134,6 +134,10 @@ pub struct Drawing {
     pub bodies: Vec<BodyDrawing>,
     /// Joints, guides, links and springs (planar scenes).
     pub marks: Vec<Mark>,
+    /// The compliant contacts' names (planar scenes): each drawn as its force's arrow at the
+    /// point where it acts (the columns `<name>.fx`, `.fy`, `.px`, `.py`; `docs/contact.md`,
+    /// "Output").
+    pub contacts: Vec<String>,
     /// A spatial scene's solids and joints, drawn by the 3D viewer (`None` for a planar scene).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub spatial: Option<super::SpatialDrawing>,

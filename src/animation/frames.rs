@@ -16,8 +16,9 @@ pub struct Frames {
     pub bodies: usize,
     /// Numbers per body in a pose: 3 (planar) or 7 (spatial).
     pub per_body: usize,
-    /// Joint reactions to draw as arrows, frame after frame (empty: none recorded): per joint of
-    /// a spatial drawing the force its second body exerts on its first, global components
+    /// Forces to draw as arrows, frame after frame (empty: none recorded): per joint of a spatial
+    /// drawing the force its second body exerts on its first, global components, then per
+    /// compliant contact its force on its body and the point where it acts
     /// ([`Frames::reaction_columns`]).
     pub reactions: Vec<f64>,
 }
@@ -66,23 +67,29 @@ impl Frames {
     }
 
     /// The output columns of the forces a drawing's arrows show: a spatial drawing's joints'
-    /// reactions (each joint's `fx, fy, fz`), a planar drawing's contacts' normal forces (each
-    /// rigid contact's `<name>.normal`).
+    /// reactions (each joint's `fx, fy, fz`) then its compliant contacts' forces (each
+    /// contact's `fx, fy, fz, px, py, pz`), a planar drawing's rigid contacts' normal forces
+    /// (each one's `<name>.normal`) then its compliant contacts' forces (`fx, fy, px, py`).
     pub fn reaction_columns(drawing: &Drawing) -> Vec<String> {
         match drawing.spatial.as_ref() {
-            Some(s) => s
-                .joints
-                .iter()
-                .flat_map(|j| ["fx", "fy", "fz"].map(|c| format!("{}.{c}", j.name)))
-                .collect(),
-            None => drawing
-                .marks
-                .iter()
-                .filter_map(|m| match m {
+            Some(s) => {
+                let joints = s
+                    .joints
+                    .iter()
+                    .flat_map(|j| ["fx", "fy", "fz"].map(|c| format!("{}.{c}", j.name)));
+                let contacts =
+                    (s.contacts.iter()).flat_map(|k| ["fx", "fy", "fz", "px", "py", "pz"].map(|c| format!("{k}.{c}")));
+                joints.chain(contacts).collect()
+            }
+            None => {
+                let rigid = drawing.marks.iter().filter_map(|m| match m {
                     super::Mark::Contact { name, force: true, .. } => Some(format!("{name}.normal")),
                     _ => None,
-                })
-                .collect(),
+                });
+                let compliant =
+                    (drawing.contacts.iter()).flat_map(|k| ["fx", "fy", "px", "py"].map(|c| format!("{k}.{c}")));
+                rigid.chain(compliant).collect()
+            }
         }
     }
 

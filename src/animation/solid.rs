@@ -100,6 +100,9 @@ pub struct SpatialDrawing {
     pub ground: Vec<Visual>,
     /// Gravity (the viewer's "up" is against it).
     pub gravity: [f64; 3],
+    /// The compliant contacts' names: each drawn as its force's arrow at the point where it acts
+    /// (the columns `<name>.fx` … `<name>.pz`; its plane, if any, is a square of `ground`).
+    pub contacts: Vec<String>,
 }
 
 /// The box with mass `m` and the principal moments `j` (ascending or not): sides
@@ -173,6 +176,7 @@ impl SpatialDrawing {
             joints,
             ground: Vec::new(),
             gravity: model.gravity().into(),
+            contacts: model.contact_names().map(String::from).collect(),
         }
     }
 }

@@ -299,12 +299,23 @@
   // ---- contacts ----------------------------------------------------------------------------
   // Each contact's shapes, and the arrow of its normal force on its first body (the frames'
   // reactions: per rigid contact, its `<name>.normal`), scaled to the largest force of the run.
+  // Then per compliant contact its force on its body and the point where it acts (`<name>.fx`,
+  // `.fy`, `.px`, `.py`), drawn from that point on the same scale.
   const reactions = data.reactions ? decode(data.reactions, Float32Array) : new Float32Array(0);
   const contacts = drawing.marks.filter((m) => m.kind === "contact");
   const forced = contacts.filter((m) => m.force);
-  const perFrame = forced.length;
+  const compliant = drawing.contacts || [];
+  const perFrame = forced.length + 4 * compliant.length;
+  const framesOfForces = perFrame ? reactions.length / perFrame : 0;
   let largestForce = 0;
-  for (let i = 0; i < reactions.length; i++) largestForce = Math.max(largestForce, Math.abs(reactions[i]));
+  for (let f = 0; f < framesOfForces; f++) {
+    const o = f * perFrame;
+    for (let j = 0; j < forced.length; j++) largestForce = Math.max(largestForce, Math.abs(reactions[o + j]));
+    for (let c = 0; c < compliant.length; c++) {
+      const k = o + forced.length + 4 * c;
+      largestForce = Math.max(largestForce, Math.hypot(reactions[k], reactions[k + 1]));
+    }
+  }
   const arrowColor = "#e6007e";
   const shade = (b) => (b === null ? "#666666" : color(b));
   // The contact point and the direction of the force on the first body, in the current pose
@@ -364,9 +375,19 @@
         arrow(p, [p[0] + L * n[0], p[1] + L * n[1]]);
       }
     });
+    if (pass !== 0 && largestForce > 0 && framesOfForces) {
+      for (let c = 0; c < compliant.length; c++) {
+        const o = k * perFrame + forced.length + 4 * c;
+        const f = [reactions[o], reactions[o + 1]], size_ = norm(f);
+        if (!(size_ > 0)) continue;
+        const p = [reactions[o + 2], reactions[o + 3]], L = (0.2 * size * size_) / largestForce;
+        arrow(p, [p[0] + (L * f[0]) / size_, p[1] + (L * f[1]) / size_]);
+      }
+    }
     document.body.dataset.contactForces = JSON.stringify(
       forced.map((m, j) => (perFrame ? reactions[k * perFrame + j] : null)),
     );
+    document.body.dataset.compliantContacts = String(framesOfForces ? compliant.length : 0);
   }
   function arrow(a, b) {
     line(a, b, 3, arrowColor);

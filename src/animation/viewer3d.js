@@ -1,9 +1,11 @@
 // dalembert 3D viewer: plays the poses of a spatial run with three.js (inlined in the page).
 // Data: the JSON element #dalembert-data (drawing.spatial, traces, base64 times and poses: per
-// body x, y, z, e0, e1, e2, e3; optionally reactions: per joint fx, fy, fz). Address options:
-// #t=1.5 opens paused at t = 1.5 s; &reactions shows the reaction arrows.
+// body x, y, z, e0, e1, e2, e3; optionally reactions: per joint fx, fy, fz, then per compliant
+// contact fx, fy, fz, px, py, pz). Address options: #t=1.5 opens paused at t = 1.5 s; &reactions
+// shows the reaction arrows (the contact forces' arrows are shown unless &nocontacts).
 // The page reports on <body>: data-status, data-time, data-errors, data-viewport,
-// data-first-draw-ms, data-meshes (the visual meshes drawn), data-reactions (the arrows) and
+// data-first-draw-ms, data-meshes (the visual meshes drawn), data-reactions and data-contacts (the
+// arrows) and
 // data-reaction-scale (newtons per metre of arrow); on the canvas, data-view: the camera's view-projection matrix, the canvas'
 // place in the window and the bodies' colours (the rendering test projects with them).
 "use strict";
@@ -225,35 +227,54 @@ for (const j of drawing.joints) {
   }
 }
 // Reactions: per joint an arrow at its point on its first body, the force its second body exerts
-// on its first (as in the CSV); the largest force of the run is 0.3 of the scene's size.
+// on its first (as in the CSV); then per compliant contact an arrow of its force on its body at
+// the point where it acts. One scale for both: the largest force of the run is 0.3 of the scene's
+// size.
 const reactions = data.reactions ? decode(data.reactions, Float32Array) : new Float32Array(0);
 const nj = drawing.joints.length;
-const R = 3 * nj;
+const nc = (drawing.contacts || []).length;
+const R = 3 * nj + 6 * nc;
 const REACTION = "#c0392b";
+const CONTACT = "#16a085";
+const recorded = R > 0 && reactions.length === R * nf;
 let largestForce = 0;
-for (let k = 0; k + 2 < reactions.length; k += 3) {
-  largestForce = Math.max(largestForce, Math.hypot(reactions[k], reactions[k + 1], reactions[k + 2]));
-}
-const reactionArrows = [];
-const metresPerNewton = largestForce > 0 ? (0.3 * radius) / largestForce : 0;
-if (reactions.length === R * nf && nj > 0 && largestForce > 0) {
-  for (let j = 0; j < nj; j++) {
-    const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1, REACTION,
-      0.2 * 0.3 * radius, 0.08 * 0.3 * radius);
-    arrow.visible = false;
-    arrow.cone.material.depthTest = false;
-    arrow.line.material.depthTest = false;
-    arrow.renderOrder = 11;
-    scene.add(arrow);
-    reactionArrows.push(arrow);
+for (let f = 0; recorded && f < nf; f++) {
+  for (let j = 0; j < nj + nc; j++) {
+    const k = f * R + (j < nj ? 3 * j : 3 * nj + 6 * (j - nj));
+    largestForce = Math.max(largestForce, Math.hypot(reactions[k], reactions[k + 1], reactions[k + 2]));
   }
-  document.getElementById("reactions-label").hidden = false;
-  document.getElementById("reaction-scale").textContent =
-    "(1 m = " + (1 / metresPerNewton).toPrecision(3) + " N)";
-  document.body.dataset.reactions = String(nj);
+}
+const metresPerNewton = largestForce > 0 ? (0.3 * radius) / largestForce : 0;
+const forceArrow = (colour) => {
+  const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 1, colour,
+    0.2 * 0.3 * radius, 0.08 * 0.3 * radius);
+  arrow.visible = false;
+  arrow.cone.material.depthTest = false;
+  arrow.line.material.depthTest = false;
+  arrow.renderOrder = 11;
+  scene.add(arrow);
+  return arrow;
+};
+const reactionArrows = [];
+const contactArrows = [];
+const scaleText = largestForce > 0 ? "(1 m = " + (1 / metresPerNewton).toPrecision(3) + " N)" : "";
+if (recorded && largestForce > 0) {
   document.body.dataset.reactionScale = String(1 / metresPerNewton);
+  if (nj > 0) {
+    for (let j = 0; j < nj; j++) reactionArrows.push(forceArrow(REACTION));
+    document.getElementById("reactions-label").hidden = false;
+    document.getElementById("reaction-scale").textContent = scaleText;
+    document.body.dataset.reactions = String(nj);
+  }
+  if (nc > 0) {
+    for (let c = 0; c < nc; c++) contactArrows.push(forceArrow(CONTACT));
+    document.getElementById("contacts-label").hidden = false;
+    document.getElementById("contact-scale").textContent = scaleText;
+    document.body.dataset.contacts = String(nc);
+  }
 }
 let showReactions = false;
+let showContacts = true;
 
 // Centres of mass: small dark squares of fixed size (4 px), drawn over everything.
 const markerGeometry = new THREE.BufferGeometry();
@@ -379,14 +400,16 @@ function setPose(t) {
   }
   markerGeometry.attributes.position.needsUpdate = true;
   for (const line of traces) line.geometry.setDrawRange(0, frame + 1);
+  const place = (arrow, f, length, shown) => {
+    arrow.visible = shown && length > 1e-3 * radius;
+    if (length > 0) {
+      arrow.setDirection(f.normalize());
+      arrow.setLength(length, Math.min(0.2 * 0.3 * radius, 0.5 * length), Math.min(0.08 * 0.3 * radius, 0.2 * length));
+    }
+  };
+  const mix = (k) => (1 - s) * reactions[a * R + k] + s * reactions[b * R + k];
   for (let j = 0; j < reactionArrows.length; j++) {
-    const arrow = reactionArrows[j];
-    const oa = a * R + 3 * j, ob = b * R + 3 * j;
-    const f = new THREE.Vector3(
-      (1 - s) * reactions[oa] + s * reactions[ob],
-      (1 - s) * reactions[oa + 1] + s * reactions[ob + 1],
-      (1 - s) * reactions[oa + 2] + s * reactions[ob + 2]);
-    const length = f.length() * metresPerNewton;
+    const f = new THREE.Vector3(mix(3 * j), mix(3 * j + 1), mix(3 * j + 2));
     const joint = drawing.joints[j];
     const at = v3(joint.points[0]);
     if (joint.bodies[0] !== null) {
@@ -394,12 +417,14 @@ function setPose(t) {
       g.updateMatrixWorld();
       at.applyMatrix4(g.matrixWorld);
     }
-    arrow.position.copy(at);
-    arrow.visible = showReactions && length > 1e-3 * radius;
-    if (length > 0) {
-      arrow.setDirection(f.normalize());
-      arrow.setLength(length, Math.min(0.2 * 0.3 * radius, 0.5 * length), Math.min(0.08 * 0.3 * radius, 0.2 * length));
-    }
+    reactionArrows[j].position.copy(at);
+    place(reactionArrows[j], f, f.length() * metresPerNewton, showReactions);
+  }
+  for (let c = 0; c < contactArrows.length; c++) {
+    const o = 3 * nj + 6 * c;
+    const f = new THREE.Vector3(mix(o), mix(o + 1), mix(o + 2));
+    contactArrows[c].position.set(mix(o + 3), mix(o + 4), mix(o + 5));
+    place(contactArrows[c], f, f.length() * metresPerNewton, showContacts);
   }
 }
 
@@ -470,6 +495,10 @@ document.getElementById("reactions").addEventListener("change", (e) => {
   showReactions = e.target.checked;
   draw(current);
 });
+document.getElementById("contacts").addEventListener("change", (e) => {
+  showContacts = e.target.checked;
+  draw(current);
+});
 document.getElementById("centres").addEventListener("change", (e) => {
   markers.visible = e.target.checked;
   render();
@@ -486,6 +515,10 @@ window.addEventListener("resize", () => { layout(); draw(current); });
 // #t=1.5: that instant, paused.
 const hash = new URLSearchParams(location.hash.slice(1));
 const start = hash.has("t") ? parseFloat(hash.get("t")) : NaN;
+if (hash.has("nocontacts") && contactArrows.length) {
+  showContacts = false;
+  document.getElementById("contacts").checked = false;
+}
 if (hash.has("reactions") && reactionArrows.length) {
   showReactions = true;
   document.getElementById("reactions").checked = true;

@@ -20,7 +20,7 @@
 //!
 //! On a spatial tree without joint limits whose forces at rest derive from its potential, Newton's
 //! method starts where a descent of the potential in joint coordinates ends, at a minimum
-//! ([`descent`]). Elsewhere, where Newton's method from the scene's position ends at an unstable
+//! (`src/equilibrium/descent.rs`). Elsewhere, where Newton's method from the scene's position ends at an unstable
 //! equilibrium or at none, it starts again from where the scene's
 //! motion with kinetic damping comes to rest ([`crate::relaxation`]): first loosely, then, while
 //! it still ends unstable, more nearly at rest ([`crate::relaxation::SHARES`]).

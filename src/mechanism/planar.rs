@@ -12,6 +12,10 @@ use std::sync::Arc;
 /// rates.
 pub const PLANAR_BODY_COLUMNS: [&str; 6] = ["x", "y", "angle", "vx", "vy", "omega"];
 
+/// The columns of a planar compliant contact (`docs/contact.md`, "Output"): its gap, normal
+/// force, the force on its body (global) and the point where it acts.
+pub const PLANAR_CONTACT_COLUMNS: [&str; 6] = ["gap", "normal", "fx", "fy", "px", "py"];
+
 impl ModelKind for Model {
     fn system(&self) -> &dyn MultibodySystem {
         self
@@ -57,10 +61,17 @@ impl ModelKind for Model {
     fn columns(self: Arc<Self>) -> Box<dyn ColumnWriter> {
         let sys = self.constraints();
         let roles: Vec<ConstraintRole> = sys.constraints().iter().map(|c| c.role()).collect();
+        // The compliant contacts: the force elements that have a gap (whatever the state).
+        let q = vec![0.0; 3 * self.bodies().len()];
+        let contacts = (self.forces().iter().enumerate())
+            .filter(|(_, f)| f.contact_gap(self.bodies(), &q).is_some())
+            .map(|(k, _)| k)
+            .collect();
         Box::new(PlanarColumns {
             values: sys.values(),
             reactions: vec![Reaction::default(); roles.len()],
             roles,
+            contacts,
             model: self,
         })
     }
@@ -81,6 +92,8 @@ struct PlanarColumns {
     roles: Vec<ConstraintRole>,
     values: ConstraintValues,
     reactions: Vec<Reaction>,
+    /// The force elements that are compliant contacts (`docs/contact.md`, "Output").
+    contacts: Vec<usize>,
 }
 
 impl ColumnWriter for PlanarColumns {
@@ -121,6 +134,11 @@ impl ColumnWriter for PlanarColumns {
         for c in self.model.rigid_contacts() {
             names.push(format!("{}.gap", c.name));
             names.push(format!("{}.normal", c.name));
+        }
+        // Compliant contacts: gap, normal force, force on the body and where it acts.
+        for &k in &self.contacts {
+            let name = self.model.forces()[k].name();
+            names.extend(PLANAR_CONTACT_COLUMNS.map(|c| format!("{name}.{c}")));
         }
         names
     }
@@ -164,6 +182,12 @@ impl ColumnWriter for PlanarColumns {
         for (k, c) in self.model.rigid_contacts().iter().enumerate() {
             row.push(c.gap(s.q));
             row.push(s.limit.get(first + k).copied().unwrap_or(0.0));
+        }
+        for &k in &self.contacts {
+            let f = &self.model.forces()[k];
+            let r = f.contact_resultant(self.model.bodies(), s.q, s.qd).unwrap_or_default();
+            row.extend([r.gap, r.normal]);
+            row.extend(r.force.iter().chain(&r.point));
         }
     }
 

@@ -20,6 +20,10 @@ pub const SPATIAL_BODY_COLUMNS: [&str; 13] = [
 /// exerts on its first, global components.
 pub const SPATIAL_JOINT_COLUMNS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
 
+/// The columns of a compliant contact (`docs/contact.md`, "Output"): its gap, normal force, the
+/// force on its body (global) and the point where it acts.
+pub const SPATIAL_CONTACT_COLUMNS: [&str; 8] = ["gap", "normal", "fx", "fy", "fz", "px", "py", "pz"];
+
 /// The joint-space columns of a revolute or prismatic joint, after all the bodies' columns: its
 /// angle (continuous over a run) or displacement, 0 in the file's configuration, and its rate
 /// ([`dalembert_spatial::joint_values`]).
@@ -74,6 +78,7 @@ impl ModelKind for Model {
             joint_values: vec![(0.0, 0.0); self.joint_value_names().count()],
             joint_accelerations: vec![0.0; self.joint_value_names().count()],
             previous: vec![0.0; self.joint_value_names().count()],
+            contacts: vec![Default::default(); self.contact_names().count()],
             model: self,
         })
     }
@@ -100,6 +105,8 @@ struct SpatialColumns {
     /// Each joint value of the previous row (0 before the first): angles are unwrapped against
     /// it so that a joint's angle is continuous over a run.
     previous: Vec<f64>,
+    /// Scratch space of the compliant contacts' resultants.
+    contacts: Vec<dalembert_system::ContactResultant<3>>,
 }
 
 impl ColumnWriter for SpatialColumns {
@@ -139,6 +146,10 @@ impl ColumnWriter for SpatialColumns {
             } else {
                 names.push(format!("{}.limit", l.name));
             }
+        }
+        // Compliant contacts: gap, normal force, force on the body and where it acts.
+        for c in self.model.contact_names() {
+            names.extend(SPATIAL_CONTACT_COLUMNS.map(|k| format!("{c}.{k}")));
         }
         names
     }
@@ -189,6 +200,11 @@ impl ColumnWriter for SpatialColumns {
                 ));
             }
             row.push(s.limit.get(k).copied().unwrap_or(0.0));
+        }
+        self.model.contact_resultants_into(s.q, s.qd, &mut self.contacts);
+        for c in &self.contacts {
+            row.extend([c.gap, c.normal]);
+            row.extend(c.force.iter().chain(&c.point));
         }
     }
 

@@ -346,6 +346,11 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         .and_then(|m| m.with_limits(limits))
         .and_then(|m| m.with_rigid_contacts(rigid_contacts, &b.q))
         .map_err(|e| b.ctx.err(None, e.to_string()))?;
+    // The compliant contacts, whose forces the viewer draws: the elements with a gap.
+    drawing.contacts = (model.forces().iter())
+        .filter(|f| f.contact_gap(model.bodies(), &b.q).is_some())
+        .map(|f| f.name().to_string())
+        .collect();
     let mechanism: Mechanism = Arc::new(model).into();
     let settings = settings(
         b.ctx.file,

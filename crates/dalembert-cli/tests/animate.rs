@@ -778,6 +778,147 @@ fn the_3d_viewer_draws_each_joint_reaction_along_its_force() {
     }
 }
 
+/// Contact force arrows (shown unless `#nocontacts`): a ball set down on a floor at its resting
+/// penetration, sliding at 2 m/s with `μ = 0.3`. While it slides the arrow at its contact point
+/// (the CSV's `floor.px, py, pz`) points along the contact's force on it (`floor.fx, fy, fz`:
+/// `m g` up and `μ m g` against the sliding, at the page's own scale, `data-reaction-scale`): its
+/// head, drawn in #16a085, lies 90 % of the way to the tip (at least 3 pixels of that colour
+/// within 3 px) and nothing of it on the opposite side; `#nocontacts` hides it.
+#[test]
+fn the_3d_viewer_draws_each_contact_force_at_its_point() {
+    let Some(browser) = chromium_or_skip() else {
+        return;
+    };
+    let budget = "--virtual-time-budget=5000";
+    let size = (800, 560);
+    let path = tmp("sliding-ball.toml");
+    let depth = (9.81f64 / 1e6).powf(1.0 / 1.5);
+    std::fs::write(
+        &path,
+        format!("[scene]\ngravity = [0.0, 0.0, -9.81]\n[[bodies]]\nname = \"ball\"\nmass = 1.0\nshape = {{ sphere = 0.1 }}\nposition = [0.0, 0.0, {}]\nvelocity = [2.0, 0.0, 0.0]\n[[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\nplane = {{ point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}\nstiffness = 1e6\nfriction = 0.3\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", 0.1 - depth),
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let (csv, page) = (tmp("sliding-ball.csv"), tmp("sliding-ball.html"));
+    let (ok, _, err) = dalembert(&["simulate", path, "--output", csv.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&["animate", path, "--output", page.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let mut rdr = csv::Reader::from_path(&csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let rows: Vec<Vec<f64>> = rdr
+        .records()
+        .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let dump = dump_window(&browser, &format!("file://{}#t=0", page.display()), size, &[budget]);
+    let green = [0x16, 0xa0, 0x85];
+    for t in [0.05, 0.08] {
+        let url = format!("file://{}#t={t}", page.display());
+        let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);
+        assert_eq!(attribute(&dom, "<body", "data-errors"), None, "script errors");
+        assert_eq!(attribute(&dom, "<body", "data-contacts").as_deref(), Some("1"));
+        let scale: f64 = attribute(&dom, "<body", "data-reaction-scale")
+            .unwrap()
+            .parse()
+            .unwrap();
+        let view = attribute(&dom, "<canvas", "data-view").unwrap();
+        let row = rows.iter().find(|r| (r[col("t")] - t).abs() < 1e-9).unwrap();
+        let f = ["fx", "fy", "fz"].map(|k| row[col(&format!("floor.{k}"))]);
+        let p = ["px", "py", "pz"].map(|k| row[col(&format!("floor.{k}"))]);
+        assert!(f[0] < -0.25 * f[2], "t = {t}: sliding, the friction is {f:?}");
+        let along = |k: f64| [0, 1, 2].map(|i| p[i] + k * f[i] / scale);
+        for (hash, shown) in [("", true), ("&nocontacts", false)] {
+            let shot = tmp(&format!("ball-{t}{hash}.png"));
+            browse(
+                &browser,
+                &format!("{url}{hash}"),
+                size,
+                &[&format!("--screenshot={}", shot.display()), budget],
+            );
+            let png = Png::read(&shot);
+            let head = count_near(&png, project(&view, along(0.9)), 3, green, 10);
+            let behind = count_near(&png, project(&view, along(-0.9)), 3, green, 10);
+            match shown {
+                true => assert!(
+                    head >= 3,
+                    "t = {t}: no arrow head at 90 % of the force {f:?} ({head} pixels)"
+                ),
+                false => assert_eq!(head, 0, "t = {t}: #nocontacts still draws the arrow"),
+            }
+            assert_eq!(behind, 0, "t = {t}: the arrow points the other way");
+        }
+    }
+}
+
+/// A planar compliant contact's force (the CSV's `ground.fx, fy` at `ground.px, py`): a disk set
+/// down on a line at its resting penetration, sliding at 2 m/s with `μ = 0.3`. At two times the
+/// page draws an arrow (#e6007e) from the contact point along the force (`m g` up, `μ m g`
+/// against the sliding): 2 cm along it, and nothing 2 cm the other way.
+#[test]
+fn the_planar_viewer_draws_a_compliant_contact_force_at_its_point() {
+    let Some(browser) = chromium_or_skip() else {
+        return;
+    };
+    let path = tmp("sliding-disk.toml");
+    let depth = (9.81f64 / 1e6).powf(1.0 / 1.5);
+    std::fs::write(
+        &path,
+        format!("[scene]\ngravity = [0.0, -9.81]\n[[bodies]]\nname = \"disk\"\nmass = 1.0\nshape = {{ disk = 0.1 }}\nposition = [0.0, {}]\nvelocity = [2.0, 0.0]\n[[forces]]\nname = \"ground\"\ntype = \"circle-line\"\nbody = \"disk\"\nradius = 0.1\nline = {{ point = [0.0, 0.0], normal = [0.0, 1.0] }}\nstiffness = 1e6\nfriction = 0.3\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", 0.1 - depth),
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let (csv, page) = (tmp("sliding-disk.csv"), tmp("sliding-disk.html"));
+    let (ok, _, err) = dalembert(&["simulate", path, "--output", csv.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = dalembert(&["animate", path, "--output", page.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let mut rdr = csv::Reader::from_path(&csv).unwrap();
+    let header = rdr.headers().unwrap().clone();
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
+    let rows: Vec<Vec<f64>> = rdr
+        .records()
+        .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let size = (900, 600);
+    let magenta = hex("#e6007e");
+    for t in [0.05, 0.1] {
+        let url = format!("file://{}#t={t}", page.display());
+        let dump_size = dump_window(&browser, &url, size, &[]);
+        let dom = browse(&browser, &url, dump_size, &["--dump-dom"]);
+        assert_eq!(attribute(&dom, "<body", "data-errors"), None, "console errors");
+        assert_eq!(
+            attribute(&dom, "<body", "data-compliant-contacts").as_deref(),
+            Some("1")
+        );
+        let view = attribute(&dom, "<canvas", "data-view").unwrap();
+        let (scale, ox, oy) = (
+            json_number(&view, "scale"),
+            json_number(&view, "ox"),
+            json_number(&view, "oy"),
+        );
+        let to_px = |p: [f64; 2]| (ox + scale * p[0], oy - scale * p[1]);
+        let row = rows.iter().find(|r| (r[col("t")] - t).abs() < 1e-9).unwrap();
+        let f = [row[col("ground.fx")], row[col("ground.fy")]];
+        let p = [row[col("ground.px")], row[col("ground.py")]];
+        assert!(f[0] < -0.25 * f[1], "t = {t}: sliding, the friction is {f:?}");
+        let unit = f.map(|c| c / f[0].hypot(f[1]));
+        let shot = tmp(&format!("sliding-disk-{t}.png"));
+        browse(&browser, &url, size, &[&format!("--screenshot={}", shot.display())]);
+        let png = Png::read(&shot);
+        let (x, y) = to_px([p[0] + 0.02 * unit[0], p[1] + 0.02 * unit[1]]);
+        assert!(
+            png.has_color_near(x, y, 3, magenta),
+            "t = {t}: no arrow 2 cm along the force {f:?} at ({x:.0}, {y:.0}) px"
+        );
+        let (x, y) = to_px([p[0] - 0.02 * unit[0], p[1] - 0.02 * unit[1]]);
+        assert!(
+            !png.has_color_near(x, y, 3, magenta),
+            "t = {t}: an arrow the other way at ({x:.0}, {y:.0}) px"
+        );
+    }
+}
+
 #[test]
 fn the_planar_viewer_draws_a_cam_profile_and_the_contact_force_along_its_normal() {
     // scenes/cam-roller.toml at t = 0.125 s (the cam a quarter turn round): the page draws the

@@ -294,6 +294,27 @@ impl Model {
         self.force_names.iter().map(|n| n.as_str())
     }
 
+    /// Names of the compliant contact elements (`docs/contact.md`), in the order of the force
+    /// elements: those [`Model::contact_resultants_into`] fills.
+    pub fn contact_names(&self) -> impl Iterator<Item = &str> {
+        self.forces
+            .iter()
+            .zip(&self.force_names)
+            .filter(|(f, _)| f.is_contact())
+            .map(|(_, n)| n.as_str())
+    }
+
+    /// Each compliant contact's resultant at the state `(q, v)` into `out` (one per
+    /// [`Model::contact_names`]): its gap, normal force, force on its body and centre of pressure
+    /// ([`dalembert_system::ContactResultant`]). Allocates nothing.
+    pub fn contact_resultants_into(&self, q: &[f64], v: &[f64], out: &mut [dalembert_system::ContactResultant<3>]) {
+        let frame = |b: Option<usize>| self.frame(b, q, v);
+        let resultants = self.forces.iter().filter_map(|f| f.resultant(&frame));
+        for (slot, r) in out.iter_mut().zip(resultants) {
+            *slot = r;
+        }
+    }
+
     /// Names of the force elements that do work beyond their potential (dampers, actuators,
     /// applied forces and torques), in order.
     pub fn nonconservative_force_names(&self) -> impl Iterator<Item = &str> {

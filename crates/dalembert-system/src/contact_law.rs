@@ -66,3 +66,62 @@ impl ContactLaw {
         self.dissipation == 0.0 && self.friction == 0.0
     }
 }
+
+/// A compliant contact's resultant at a state, in `D` dimensions, as the output columns give it
+/// (`<name>.gap`, `.normal`, the force's and the point's components; `docs/contact.md`,
+/// "Output"): built by [`ContactResultant::add`] at each point in contact, then
+/// [`ContactResultant::finish`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactResultant<const D: usize> {
+    /// The gap (m): positive apart, minus the deepest penetration in contact.
+    pub gap: f64,
+    /// The sum of the normal forces (N, never negative).
+    pub normal: f64,
+    /// The contact force on the element's body (a plane or line contact's `body`, a two-sphere
+    /// or two-circle contact's second body), global components (N): normal forces and friction.
+    pub force: [f64; D],
+    /// Where it acts (global): the centre of pressure of the points in contact, `Σ F_n,k x_k /
+    /// Σ F_n,k`, or the nearest point out of contact.
+    pub point: [f64; D],
+}
+
+impl<const D: usize> Default for ContactResultant<D> {
+    fn default() -> Self {
+        ContactResultant {
+            gap: 0.0,
+            normal: 0.0,
+            force: [0.0; D],
+            point: [0.0; D],
+        }
+    }
+}
+
+impl<const D: usize> ContactResultant<D> {
+    /// None yet, with the gap `gap`.
+    pub fn new(gap: f64) -> Self {
+        ContactResultant {
+            gap,
+            ..Default::default()
+        }
+    }
+
+    /// Adds a point in contact at `x` with the force `force` on the body, of which `normal` is
+    /// the normal force (the point summed weighted by it until [`ContactResultant::finish`]).
+    pub fn add(&mut self, force: [f64; D], normal: f64, x: [f64; D]) {
+        self.normal += normal;
+        for k in 0..D {
+            self.force[k] += force[k];
+            self.point[k] += normal * x[k];
+        }
+    }
+
+    /// The centre of pressure from the weighted sum, or `nearest` where no normal force acts.
+    pub fn finish(mut self, nearest: [f64; D]) -> Self {
+        self.point = if self.normal > 0.0 {
+            self.point.map(|p| p / self.normal)
+        } else {
+            nearest
+        };
+        self
+    }
+}

@@ -50,7 +50,7 @@ pub mod tree;
 pub use axis_law::AxisLaw;
 pub use blocks::BlockDiagonal;
 pub use constraint_set::{ConstraintPattern, ConstraintSet, ConstraintValues, Segment};
-pub use contact_law::ContactLaw;
+pub use contact_law::{ContactLaw, ContactResultant};
 pub use data::{Data, Stage};
 pub use error::{ConstraintError, EquationRef};
 pub use evaluated_at::EvaluatedAt;

@@ -1,6 +1,6 @@
 use super::{add_point_force, check_body, ForceElement};
 use crate::{Body, BodyRef, BodyState, PointState, Vec2};
-use dalembert_system::{ContactLaw, ModelError};
+use dalembert_system::{ContactLaw, ContactResultant, ModelError};
 
 /// Compliant contact of a circle on a body with a line of the ground (`docs/contact.md`), the
 /// planar counterpart of the spatial sphere–plane element.
@@ -82,21 +82,29 @@ impl CircleLine {
 
 /// A circle of radius `radius` centred at `centre` (body coordinates) of `body` in state `s`
 /// against the ground's line through `point` with unit `normal`: its penetration, and where it
-/// penetrates its contact force's generalized force added to `q_e` (the law of [`CircleLine`]).
-/// The one computation of every circle, segment and polygon element on a line.
+/// penetrates its contact force's generalized force added to `q_e` and its force, normal force
+/// and point to `resultant` (the law of [`CircleLine`]). The one computation of every circle,
+/// segment and polygon element on a line.
 pub(super) fn press(
     (body, s): (BodyRef, &BodyState),
     (centre, radius): (Vec2, f64),
     (point, normal): (Vec2, Vec2),
     law: &ContactLaw,
     q_e: Option<&mut [f64]>,
+    resultant: Option<&mut ContactResultant<2>>,
 ) -> f64 {
     let c = PointState::new(s, centre);
     let depth = radius - normal.dot(&(c.position - point));
-    if let (true, Some(q_e)) = (depth > 0.0, q_e) {
+    if depth > 0.0 && (q_e.is_some() || resultant.is_some()) {
         let normal_force = law.normal_force(depth, -normal.dot(&c.velocity));
         let x = point_at(s, c.position - radius * normal);
-        add_point_force(body, &x, contact_force(law, normal_force, normal, x.velocity), q_e);
+        let force = contact_force(law, normal_force, normal, x.velocity);
+        if let Some(q_e) = q_e {
+            add_point_force(body, &x, force, q_e);
+        }
+        if let Some(r) = resultant {
+            r.add(force.into(), normal_force, x.position.into());
+        }
     }
     depth
 }
@@ -118,7 +126,23 @@ impl ForceElement for CircleLine {
             (self.point, self.normal),
             &self.law,
             Some(q_e),
+            None,
         );
+    }
+
+    fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
+        let s = BodyState::of(self.body, q, qd);
+        let mut out = ContactResultant::new(-self.penetration(q));
+        press(
+            (self.body, &s),
+            (self.centre, self.radius),
+            (self.point, self.normal),
+            &self.law,
+            None,
+            Some(&mut out),
+        );
+        let lowest = PointState::new(&s, self.centre).position - self.radius * self.normal;
+        Some(out.finish(lowest.into()))
     }
 
     /// The elastic part's potential, counted whether or not the element dissipates (the
@@ -177,6 +201,27 @@ impl CircleCircle {
     }
 }
 
+impl CircleCircle {
+    /// The contact force on the second body (on the first: its opposite), the normal force and
+    /// the middle of the overlap as each body's point, or `None` apart (or concentric: no
+    /// direction to push along).
+    fn load(&self, q: &[f64], qd: &[f64]) -> Option<(Vec2, f64, [PointState; 2])> {
+        let (ci, cj, depth) = self.geometry(q, qd);
+        let d = cj.position - ci.position;
+        let length = d.norm();
+        if depth <= 0.0 || length == 0.0 {
+            return None;
+        }
+        let n = d / length;
+        let normal_force = self.law.normal_force(depth, -n.dot(&(cj.velocity - ci.velocity)));
+        let x = ci.position + (self.radii.0 - 0.5 * depth) * n;
+        let (si, sj) = (BodyState::of(self.bodies.0, q, qd), BodyState::of(self.bodies.1, q, qd));
+        let (xi, xj) = (point_at(&si, x), point_at(&sj, x));
+        let force = contact_force(&self.law, normal_force, n, xj.velocity - xi.velocity);
+        Some((force, normal_force, [xi, xj]))
+    }
+}
+
 impl ForceElement for CircleCircle {
     fn bodies(&self) -> Option<Vec<BodyRef>> {
         Some(vec![self.bodies.0, self.bodies.1])
@@ -187,21 +232,21 @@ impl ForceElement for CircleCircle {
     }
 
     fn add_generalized_force(&self, _t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
+        if let Some((force, _, [xi, xj])) = self.load(q, qd) {
+            add_point_force(self.bodies.1, &xj, force, q_e);
+            add_point_force(self.bodies.0, &xi, -force, q_e);
+        }
+    }
+
+    fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
         let (ci, cj, depth) = self.geometry(q, qd);
         let d = cj.position - ci.position;
-        let length = d.norm();
-        if depth <= 0.0 || length == 0.0 {
-            // Apart, or concentric (no direction to push along).
-            return;
+        let n = if d.norm() > 0.0 { d / d.norm() } else { Vec2::zeros() };
+        let mut out = ContactResultant::new(-depth);
+        if let Some((force, normal_force, [_, xj])) = self.load(q, qd) {
+            out.add(force.into(), normal_force, xj.position.into());
         }
-        let n = d / length;
-        let normal_force = self.law.normal_force(depth, -n.dot(&(cj.velocity - ci.velocity)));
-        let x = ci.position + (self.radii.0 - 0.5 * depth) * n;
-        let (si, sj) = (BodyState::of(self.bodies.0, q, qd), BodyState::of(self.bodies.1, q, qd));
-        let (xi, xj) = (point_at(&si, x), point_at(&sj, x));
-        let force = contact_force(&self.law, normal_force, n, xj.velocity - xi.velocity);
-        add_point_force(self.bodies.1, &xj, force, q_e);
-        add_point_force(self.bodies.0, &xi, -force, q_e);
+        Some(out.finish((ci.position + (self.radii.0 - 0.5 * depth) * n).into()))
     }
 
     /// The elastic part's potential where the circles overlap.

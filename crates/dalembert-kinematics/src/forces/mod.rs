@@ -54,6 +54,18 @@ pub trait ForceElement: Send + Sync + std::fmt::Debug {
         None
     }
 
+    /// A compliant contact's resultant at `(q, q̇)` (its gap, normal force, force on its body and
+    /// centre of pressure: [`dalembert_system::ContactResultant`], the output columns of
+    /// `docs/contact.md`, "Output"). `None` (the default) for an element that is not a contact.
+    fn contact_resultant(
+        &self,
+        _bodies: &[Body],
+        _q: &[f64],
+        _qd: &[f64],
+    ) -> Option<dalembert_system::ContactResultant<2>> {
+        None
+    }
+
     /// Checks that every body the element refers to exists in a model of `bodies` moving bodies.
     fn validate(&self, _bodies: usize) -> Result<(), dalembert_system::ModelError> {
         Ok(())

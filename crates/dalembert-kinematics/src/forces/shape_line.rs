@@ -13,7 +13,7 @@
 use super::circle_line::press;
 use super::{check_body, ForceElement};
 use crate::{Body, BodyRef, BodyState, Vec2};
-use dalembert_system::{ContactLaw, ModelError};
+use dalembert_system::{ContactLaw, ContactResultant, ModelError};
 
 /// Circles of one radius on a body (a polygon's vertices with radius 0, a segment's ends with its
 /// radius) against a line of the ground.
@@ -48,6 +48,7 @@ impl ShapeLine {
                     (self.point, self.normal),
                     &self.law,
                     None,
+                    None,
                 )
             })
             .fold(f64::NEG_INFINITY, f64::max)
@@ -72,8 +73,31 @@ impl ForceElement for ShapeLine {
                 (self.point, self.normal),
                 &self.law,
                 Some(&mut *q_e),
+                None,
             );
         }
+    }
+
+    fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
+        let s = BodyState::of(self.body, q, qd);
+        let mut out = ContactResultant::new(-self.penetration(q));
+        let mut deepest = (f64::NEG_INFINITY, Vec2::zeros());
+        for &c in &self.centres {
+            let place = (self.point, self.normal);
+            let depth = press(
+                (self.body, &s),
+                (c, self.radius),
+                place,
+                &self.law,
+                None,
+                Some(&mut out),
+            );
+            if depth > deepest.0 {
+                let centre = crate::PointState::new(&s, c).position;
+                deepest = (depth, centre - self.radius * self.normal);
+            }
+        }
+        Some(out.finish(deepest.1.into()))
     }
 
     /// The elastic part's potential of every circle that penetrates.
@@ -85,7 +109,7 @@ impl ForceElement for ShapeLine {
                 .iter()
                 .map(|&c| {
                     self.law
-                        .potential(press((self.body, &s), (c, self.radius), line, &self.law, None))
+                        .potential(press((self.body, &s), (c, self.radius), line, &self.law, None, None))
                 })
                 .sum(),
         )

@@ -28,7 +28,7 @@
 
 use super::{add_point_force, V3};
 use crate::frame::Frame;
-use dalembert_system::ContactLaw;
+use dalembert_system::{ContactLaw, ContactResultant};
 
 /// Two spheres on two bodies (either may be the ground).
 #[derive(Debug, Clone)]
@@ -51,14 +51,14 @@ impl SphereSphere {
         (frames, arms, centres, depth)
     }
 
-    /// Adds the contact force's generalized forces on both bodies.
-    pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
+    /// The contact force on the second sphere's body (on the first: its opposite) and where it
+    /// acts (global), or `None` apart (or concentric: no direction to push along).
+    fn load(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<(V3, V3)> {
         let ([fi, fj], [si, sj], [ci, cj], depth) = self.geometry(frame);
         let d = cj - ci;
         let length = d.norm();
         if depth <= 0.0 || length == 0.0 {
-            // Apart, or concentric (no direction to push along).
-            return;
+            return None;
         }
         let n = d / length;
         let rate = -n.dot(&(fj.point_velocity(&sj) - fi.point_velocity(&si)));
@@ -68,13 +68,37 @@ impl SphereSphere {
         let (ai, aj) = (x - fi.r, x - fj.r);
         let slip = fj.point_velocity(&aj) - fi.point_velocity(&ai);
         let (sliding, speed) = sliding_speed(&slip, &n);
-        let force = normal_force * n - self.law.friction_factor(normal_force, speed) * sliding;
-        if let Some(b) = self.ends[1].0 {
-            add_point_force(out, b, &fj, &aj, &force);
+        Some((
+            normal_force * n - self.law.friction_factor(normal_force, speed) * sliding,
+            x,
+        ))
+    }
+
+    /// Adds the contact force's generalized forces on both bodies.
+    pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
+        let Some((force, x)) = self.load(frame) else {
+            return;
+        };
+        for (end, sign) in self.ends.iter().zip([-1.0, 1.0]) {
+            if let Some(b) = end.0 {
+                let f = frame(Some(b));
+                add_point_force(out, b, &f, &(x - f.r), &(sign * force));
+            }
         }
-        if let Some(b) = self.ends[0].0 {
-            add_point_force(out, b, &fi, &ai, &(-force));
+    }
+
+    /// The contact's resultant at the state behind `frame` (`docs/contact.md`, "Output"): the
+    /// force on the second body, its normal part, and the middle of the overlap (where the
+    /// spheres are apart: the middle of the gap between their surfaces).
+    pub fn resultant(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> ContactResultant<3> {
+        let (_, _, [ci, cj], depth) = self.geometry(frame);
+        let d = cj - ci;
+        let n = if d.norm() > 0.0 { d / d.norm() } else { V3::zeros() };
+        let mut out = ContactResultant::new(-depth);
+        if let Some((force, point)) = self.load(frame) {
+            out.add(force.into(), force.dot(&n), point.into());
         }
+        out.finish((ci + (self.radii[0] - 0.5 * depth) * n).into())
     }
 
     /// The overlap `δ` at the state behind `frame` (negative: the gap).
@@ -126,9 +150,9 @@ impl SpherePlane {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
-    /// Adds each penetrating sphere's contact force's generalized force (K1, K2).
-    pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
-        let f = frame(Some(self.body));
+    /// Calls `visit(arm, force, normal force)` for each penetrating sphere's contact force (K1,
+    /// K2): its global force on the body at the global arm from the body's origin.
+    fn each(&self, f: &Frame, visit: &mut dyn FnMut(&V3, &V3, f64)) {
         for c in &self.centres {
             let s_centre = f.global(c);
             let depth = self.depth(&(f.r + s_centre));
@@ -140,8 +164,31 @@ impl SpherePlane {
             let arm = s_centre - self.radius * self.normal;
             let (sliding, speed) = sliding_speed(&f.point_velocity(&arm), &self.normal);
             let force = normal_force * self.normal - self.law.friction_factor(normal_force, speed) * sliding;
-            add_point_force(out, self.body, &f, &arm, &force);
+            visit(&arm, &force, normal_force);
         }
+    }
+
+    /// Adds each penetrating sphere's contact force's generalized force (K1, K2).
+    pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
+        let f = frame(Some(self.body));
+        self.each(&f, &mut |arm, force, _| add_point_force(out, self.body, &f, arm, force));
+    }
+
+    /// The contact's resultant at the state behind `frame` (`docs/contact.md`, "Output"): the
+    /// sum of the spheres' forces on the body, of their normal forces, and their centre of
+    /// pressure (the contact points weighted by their normal forces; out of contact, or where
+    /// the normal forces vanish, the deepest sphere's lowest point).
+    pub fn resultant(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> ContactResultant<3> {
+        let f = frame(Some(self.body));
+        let mut out = ContactResultant::new(-self.penetration(frame));
+        self.each(&f, &mut |arm, load, n| out.add((*load).into(), n, (f.r + arm).into()));
+        let deepest = self
+            .centres
+            .iter()
+            .map(|c| f.point(c))
+            .max_by(|a, b| self.depth(a).total_cmp(&self.depth(b)))
+            .unwrap_or(f.r);
+        out.finish((deepest - self.radius * self.normal).into())
     }
 
     /// `Σ k δⁿ⁺¹ / (n + 1)` over the spheres that penetrate.

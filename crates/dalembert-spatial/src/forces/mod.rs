@@ -721,6 +721,17 @@ impl ForceData {
         }
     }
 
+    /// A compliant contact's resultant at the state behind `frame`
+    /// ([`dalembert_system::ContactResultant`]);
+    /// `None` for the other elements.
+    pub fn resultant(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<dalembert_system::ContactResultant<3>> {
+        match self {
+            ForceData::SpherePlane(c) => Some(c.resultant(frame)),
+            ForceData::SphereSphere(c) => Some(c.resultant(frame)),
+            _ => None,
+        }
+    }
+
     /// True for a contact element (it has a gap: [`ForceData::gap`]).
     pub fn is_contact(&self) -> bool {
         matches!(self, ForceData::SpherePlane(_) | ForceData::SphereSphere(_))
