@@ -25,7 +25,10 @@ pub struct Args {
     #[arg(long, default_value = "equilibrium", value_parser = ["equilibrium", "initial"])]
     at: String,
     /// Write the matrices as one CSV: a row per state rate, then per output; columns `row`,
-    /// `at` (the value at the operating point), the states (A, C), the inputs (B, D).
+    /// `at` (the value at the operating point), the states (A, C), the inputs (B, D). A name
+    /// ending in `.npz` writes NumPy's archive instead (`numpy.load`): arrays `A`, `B`, `C`, `D`,
+    /// `drift`, `at` (the outputs at the operating point), `t`, and `states`, `inputs`,
+    /// `outputs` (strings).
     #[arg(long)]
     output: Option<PathBuf>,
 }
@@ -81,7 +84,12 @@ pub fn linearize(a: Args) -> Result<(), String> {
         );
     }
     if let Some(path) = &a.output {
-        write_csv(path, &lin).map_err(|e| format!("{}: {e}", path.display()))?;
+        let npz = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("npz"));
+        match npz {
+            true => write_npz(path, &lin),
+            false => write_csv(path, &lin),
+        }
+        .map_err(|e| format!("{}: {e}", path.display()))?;
         outln!("\nwritten      {}", path.display());
     }
     Ok(())
@@ -119,6 +127,29 @@ fn table(rows: &[String], columns: &[String], value: impl Fn(usize, usize) -> f6
             .collect();
         outln!("{r:label$}  {}", line.join("  "));
     }
+}
+
+/// The linear model as NumPy's `.npz` archive ([`crate::npz`]).
+fn write_npz(path: &PathBuf, lin: &Linearization) -> std::io::Result<()> {
+    use crate::npz::Array;
+    // NumPy's arrays here are in C order (by rows).
+    let by_rows = |(r, c): (usize, usize), at: &dyn Fn(usize, usize) -> f64| {
+        Array::Numbers((0..r).flat_map(|i| (0..c).map(move |j| at(i, j))).collect(), vec![r, c])
+    };
+    let vector = |v: &[f64]| Array::Numbers(v.to_vec(), vec![v.len()]);
+    let bytes = crate::npz::archive(&[
+        ("A", by_rows(lin.a.shape(), &|i, j| lin.a[(i, j)])),
+        ("B", by_rows(lin.b.shape(), &|i, j| lin.b[(i, j)])),
+        ("C", by_rows(lin.c.shape(), &|i, j| lin.c[(i, j)])),
+        ("D", by_rows(lin.d.shape(), &|i, j| lin.d[(i, j)])),
+        ("drift", vector(&lin.drift)),
+        ("at", vector(&lin.outputs_at)),
+        ("t", Array::Numbers(vec![lin.t], Vec::new())),
+        ("states", Array::Strings(&lin.states)),
+        ("inputs", Array::Strings(&lin.inputs)),
+        ("outputs", Array::Strings(&lin.outputs)),
+    ]);
+    std::fs::write(path, bytes)
 }
 
 /// The matrices `[A B; C D]` with row names and the operating point's values (`at`).

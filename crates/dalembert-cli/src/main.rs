@@ -53,6 +53,7 @@ mod check;
 mod inverse;
 mod linearize;
 mod method_args;
+mod npz;
 mod paths;
 mod plot;
 mod simulate;

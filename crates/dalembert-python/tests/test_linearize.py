@@ -1,11 +1,15 @@
 """Linearization from Python against a textbook closed form: a cart-pole (point mass on a
 massless pole) upright, pushed by a named input: ẍ = (m g / M) θ + u / M,
-θ̈ = (M + m) g / (M l) θ + u / (M l); and requests naming what is wrong."""
+θ̈ = (M + m) g / (M l) θ + u / (M l); the command line's NumPy archive of it read by `numpy.load`;
+and requests naming what is wrong."""
+
+import subprocess
 
 import numpy as np
 import pytest
 
 import dalembert
+from conftest import cli
 
 G = 9.81
 M, m, L = 2.0, 0.5, 0.8
@@ -104,3 +108,29 @@ def test_a_simulator_linearizes_where_it_is():
     # Upright at rest, pushed by u = 3: the drift is B u (the model is linear in u).
     assert pushed["drift"][2] == pytest.approx(3.0 / M, rel=1e-9)
     assert pushed["drift"][3] == pytest.approx(3.0 / (M * L), rel=1e-9)
+
+
+def test_the_cli_writes_the_linear_model_as_a_numpy_archive(tmp_path):
+    """`dalembert linearize --output lin.npz` writes A, B, C, D, the drift, the outputs at the
+    operating point and the names as `numpy.load` reads them (its own reader of the format), the
+    same numbers as `scene.linearize` (one computation: equal to the last bit)."""
+    path = tmp_path / "cart-pole.toml"
+    path.write_text(CART_POLE)
+    out = tmp_path / "lin.npz"
+    subprocess.run(
+        [cli(), "linearize", path, "--inputs", "u", "--outputs", "pole.x,rail.fy", "--at", "initial",
+         "--states", "cart.x,pole.angle", "--output", out],
+        check=True,
+        capture_output=True,
+    )
+    lin = dalembert.Scene.load(path).linearize(inputs=["u"], outputs=["pole.x", "rail.fy"], at="initial",
+                                               states=["cart.x", "pole.angle"])
+    with np.load(out, allow_pickle=False) as saved:
+        assert sorted(saved.files) == ["A", "B", "C", "D", "at", "drift", "inputs", "outputs", "states", "t"]
+        for key in ["A", "B", "C", "D", "drift"]:
+            assert saved[key].dtype == np.float64 and saved[key].shape == np.shape(lin[key])
+            np.testing.assert_array_equal(saved[key], lin[key])
+        np.testing.assert_array_equal(saved["at"], lin["outputs_at"])
+        for key in ["states", "inputs", "outputs"]:
+            assert saved[key].tolist() == lin[key]
+        assert saved["t"].shape == () and saved["t"] == 0.0
