@@ -965,3 +965,53 @@ fn a_stop_that_holds_keeps_its_joint_through_another_joints_impact() {
         }
     }
 }
+
+/// A rigid contact's output columns (`<name>.fx` … `<name>.pz`, as a compliant contact's,
+/// `docs/contact.md`, "Output"): a ball set at rest on a frictionless rigid incline of 30° slides
+/// down it without turning, pressed by `N = m g cos α` along the incline's normal at its point
+/// of contact `c − R n` (a free-body diagram: the normal force balances the weight across the
+/// incline, 1e-9 N and 1e-12 m), the gap 0 (1e-12 m); every formulation, RK4 and dopri5.
+#[test]
+fn a_rigid_contacts_columns_are_its_normal_force_at_its_point() {
+    let alpha = std::f64::consts::FRAC_PI_6;
+    let n = [0.0, -alpha.sin(), alpha.cos()];
+    for formulation in FORMULATIONS {
+        for integrator in METHODS {
+            let text = format!(
+                "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+                 [[bodies]]\nname = \"ball\"\nmass = 2.0\ninertia = [0.008, 0.008, 0.008]\nposition = [{:?}, {:?}, {:?}]\n\
+                 [[forces]]\nname = \"slope\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\n\
+                 plane = {{ point = [0.0, 0.0, 0.0], normal = {n:?} }}\nrigid = true\n\
+                 [simulation]\nend = 0.5\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                 step = 1e-3\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.05\n",
+                0.1 * n[0],
+                0.1 * n[1],
+                0.1 * n[2]
+            );
+            let table = run(&Scene::from_toml(&text, "ball on an incline").unwrap());
+            let normal = 2.0 * 9.81 * alpha.cos();
+            let t = column(&table, "t");
+            for k in 0..t.len() {
+                let at = |c: &str| column(&table, c)[k];
+                let what = format!("{formulation} {integrator} at t = {}", t[k]);
+                assert!(
+                    (at("slope.normal") - normal).abs() < 1e-9,
+                    "{what}: {}",
+                    at("slope.normal")
+                );
+                assert!(at("slope.gap").abs() < 1e-12, "{what}: gap {}", at("slope.gap"));
+                for (i, (f, p)) in [("fx", "px"), ("fy", "py"), ("fz", "pz")].into_iter().enumerate() {
+                    let centre = at(&format!("ball.{}", ["x", "y", "z"][i]));
+                    assert!(
+                        (at(&format!("slope.{f}")) - normal * n[i]).abs() < 1e-9,
+                        "{what}: slope.{f}"
+                    );
+                    assert!(
+                        (at(&format!("slope.{p}")) - (centre - 0.1 * n[i])).abs() < 1e-12,
+                        "{what}: slope.{p}"
+                    );
+                }
+            }
+        }
+    }
+}

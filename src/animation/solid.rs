@@ -100,8 +100,9 @@ pub struct SpatialDrawing {
     pub ground: Vec<Visual>,
     /// Gravity (the viewer's "up" is against it).
     pub gravity: [f64; 3],
-    /// The compliant contacts' names: each drawn as its force's arrow at the point where it acts
-    /// (the columns `<name>.fx` … `<name>.pz`; its plane, if any, is a square of `ground`).
+    /// The contacts' names, rigid and compliant: each drawn as its force's arrow at the point
+    /// where it acts (the columns `<name>.fx` … `<name>.pz`; its plane, if any, is a square of
+    /// `ground`).
     pub contacts: Vec<String>,
 }
 
@@ -176,7 +177,12 @@ impl SpatialDrawing {
             joints,
             ground: Vec::new(),
             gravity: model.gravity().into(),
-            contacts: model.contact_names().map(String::from).collect(),
+            // The rigid contacts (limits of the model) and the compliant ones (force elements).
+            contacts: (model.limit_specs().iter())
+                .filter(|l| l.element == "contact")
+                .map(|l| l.name.clone())
+                .chain(model.contact_names().map(String::from))
+                .collect(),
         }
     }
 }

@@ -79,6 +79,7 @@ impl ModelKind for Model {
             joint_accelerations: vec![0.0; self.joint_value_names().count()],
             previous: vec![0.0; self.joint_value_names().count()],
             contacts: vec![Default::default(); self.contact_names().count()],
+            rigid: vec![Default::default(); self.rigid_contact_count()],
             model: self,
         })
     }
@@ -107,6 +108,8 @@ struct SpatialColumns {
     previous: Vec<f64>,
     /// Scratch space of the compliant contacts' resultants.
     contacts: Vec<dalembert_system::ContactResultant<3>>,
+    /// And of the rigid contacts' (their normal forces the run's limit forces).
+    rigid: Vec<dalembert_system::ContactResultant<3>>,
 }
 
 impl ColumnWriter for SpatialColumns {
@@ -138,11 +141,11 @@ impl ColumnWriter for SpatialColumns {
                 .iter()
                 .map(|f| format!("{}.friction", f.name)),
         );
-        // Rigid contacts: the gap (m) and the normal force on the body (N).
+        // Rigid contacts: the gap (m), the normal force on the body (N), that force (global) and
+        // the contact point, as a compliant contact's columns.
         for l in self.model.limit_specs() {
             if l.element == "contact" {
-                names.push(format!("{}.gap", l.name));
-                names.push(format!("{}.normal", l.name));
+                names.extend(SPATIAL_CONTACT_COLUMNS.map(|k| format!("{}.{k}", l.name)));
             } else {
                 names.push(format!("{}.limit", l.name));
             }
@@ -187,19 +190,17 @@ impl ColumnWriter for SpatialColumns {
         } else {
             row.extend(std::iter::repeat_n(0.0, frictions));
         }
-        let mut gap_row = dalembert_system::SlipRow::default();
+        self.model.rigid_contact_resultants_into(s.q, s.limit, &mut self.rigid);
+        let mut rigid = self.rigid.iter();
         for (k, l) in self.model.limit_specs().iter().enumerate() {
+            let force = s.limit.get(k).copied().unwrap_or(0.0);
             if l.element == "contact" {
-                row.push(dalembert_system::MultibodySystem::limit_row(
-                    self.model.as_ref(),
-                    k,
-                    s.t,
-                    s.q,
-                    &[],
-                    &mut gap_row,
-                ));
+                let c = rigid.next().copied().unwrap_or_default();
+                row.extend([c.gap, force]);
+                row.extend(c.force.iter().chain(&c.point));
+            } else {
+                row.push(force);
             }
-            row.push(s.limit.get(k).copied().unwrap_or(0.0));
         }
         self.model.contact_resultants_into(s.q, s.qd, &mut self.contacts);
         for c in &self.contacts {

@@ -779,7 +779,8 @@ fn the_3d_viewer_draws_each_joint_reaction_along_its_force() {
 }
 
 /// Contact force arrows (shown unless `#nocontacts`): a ball set down on a floor at its resting
-/// penetration, sliding at 2 m/s with `μ = 0.3`. While it slides the arrow at its contact point
+/// penetration, sliding at 2 m/s with `μ = 0.3`, and a ball resting on a rigid frictionless
+/// incline of 30° (pressed along its normal). While it slides the arrow at its contact point
 /// (the CSV's `floor.px, py, pz`) points along the contact's force on it (`floor.fx, fy, fz`:
 /// `m g` up and `μ m g` against the sliding, at the page's own scale, `data-reaction-scale`): its
 /// head, drawn in #16a085, lies 90 % of the way to the tip (at least 3 pixels of that colour
@@ -789,17 +790,24 @@ fn the_3d_viewer_draws_each_contact_force_at_its_point() {
     let Some(browser) = chromium_or_skip() else {
         return;
     };
+    let depth = (9.81f64 / 1e6).powf(1.0 / 1.5);
+    let compliant = format!("[scene]\ngravity = [0.0, 0.0, -9.81]\n[[bodies]]\nname = \"ball\"\nmass = 1.0\nshape = {{ sphere = 0.1 }}\nposition = [0.0, 0.0, {}]\nvelocity = [2.0, 0.0, 0.0]\n[[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\nplane = {{ point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}\nstiffness = 1e6\nfriction = 0.3\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", 0.1 - depth);
+    // A rigid frictionless contact: a ball at rest on a 30° incline, pressed along its normal.
+    let (s, c) = (0.5f64, 0.75f64.sqrt());
+    let rigid = format!("[scene]\ngravity = [0.0, 0.0, -9.81]\n[[bodies]]\nname = \"ball\"\nmass = 1.0\nshape = {{ sphere = 0.1 }}\nposition = [0.0, {:?}, {:?}]\n[[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\nplane = {{ point = [0.0, 0.0, 0.0], normal = [0.0, {:?}, {c:?}] }}\nrigid = true\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", -0.1 * s, 0.1 * c, -s);
+    contact_arrows(&browser, "sliding-ball", &compliant, true);
+    contact_arrows(&browser, "ball-on-incline", &rigid, false);
+}
+
+/// [`the_3d_viewer_draws_each_contact_force_at_its_point`] on the scene `text` (a ball and its
+/// contact `floor`), whose force has friction against the sliding along x where `sliding`.
+fn contact_arrows(browser: &Path, name: &str, text: &str, sliding: bool) {
     let budget = "--virtual-time-budget=5000";
     let size = (800, 560);
-    let path = tmp("sliding-ball.toml");
-    let depth = (9.81f64 / 1e6).powf(1.0 / 1.5);
-    std::fs::write(
-        &path,
-        format!("[scene]\ngravity = [0.0, 0.0, -9.81]\n[[bodies]]\nname = \"ball\"\nmass = 1.0\nshape = {{ sphere = 0.1 }}\nposition = [0.0, 0.0, {}]\nvelocity = [2.0, 0.0, 0.0]\n[[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\nplane = {{ point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }}\nstiffness = 1e6\nfriction = 0.3\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", 0.1 - depth),
-    )
-    .unwrap();
+    let path = tmp(&format!("{name}.toml"));
+    std::fs::write(&path, text).unwrap();
     let path = path.to_str().unwrap();
-    let (csv, page) = (tmp("sliding-ball.csv"), tmp("sliding-ball.html"));
+    let (csv, page) = (tmp(&format!("{name}.csv")), tmp(&format!("{name}.html")));
     let (ok, _, err) = dalembert(&["simulate", path, "--output", csv.to_str().unwrap()]);
     assert!(ok, "{err}");
     let (ok, _, err) = dalembert(&["animate", path, "--output", page.to_str().unwrap()]);
@@ -811,11 +819,11 @@ fn the_3d_viewer_draws_each_contact_force_at_its_point() {
         .records()
         .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
         .collect();
-    let dump = dump_window(&browser, &format!("file://{}#t=0", page.display()), size, &[budget]);
+    let dump = dump_window(browser, &format!("file://{}#t=0", page.display()), size, &[budget]);
     let green = [0x16, 0xa0, 0x85];
     for t in [0.05, 0.08] {
         let url = format!("file://{}#t={t}", page.display());
-        let dom = browse(&browser, &url, dump, &["--dump-dom", budget]);
+        let dom = browse(browser, &url, dump, &["--dump-dom", budget]);
         assert_eq!(attribute(&dom, "<body", "data-errors"), None, "script errors");
         assert_eq!(attribute(&dom, "<body", "data-contacts").as_deref(), Some("1"));
         let scale: f64 = attribute(&dom, "<body", "data-reaction-scale")
@@ -826,12 +834,14 @@ fn the_3d_viewer_draws_each_contact_force_at_its_point() {
         let row = rows.iter().find(|r| (r[col("t")] - t).abs() < 1e-9).unwrap();
         let f = ["fx", "fy", "fz"].map(|k| row[col(&format!("floor.{k}"))]);
         let p = ["px", "py", "pz"].map(|k| row[col(&format!("floor.{k}"))]);
-        assert!(f[0] < -0.25 * f[2], "t = {t}: sliding, the friction is {f:?}");
+        if sliding {
+            assert!(f[0] < -0.25 * f[2], "{name} t = {t}: sliding, the friction is {f:?}");
+        }
         let along = |k: f64| [0, 1, 2].map(|i| p[i] + k * f[i] / scale);
         for (hash, shown) in [("", true), ("&nocontacts", false)] {
-            let shot = tmp(&format!("ball-{t}{hash}.png"));
+            let shot = tmp(&format!("{name}-{t}{hash}.png"));
             browse(
-                &browser,
+                browser,
                 &format!("{url}{hash}"),
                 size,
                 &[&format!("--screenshot={}", shot.display()), budget],
@@ -842,11 +852,11 @@ fn the_3d_viewer_draws_each_contact_force_at_its_point() {
             match shown {
                 true => assert!(
                     head >= 3,
-                    "t = {t}: no arrow head at 90 % of the force {f:?} ({head} pixels)"
+                    "{name} t = {t}: no arrow head at 90 % of the force {f:?} ({head} pixels)"
                 ),
-                false => assert_eq!(head, 0, "t = {t}: #nocontacts still draws the arrow"),
+                false => assert_eq!(head, 0, "{name} t = {t}: #nocontacts still draws the arrow"),
             }
-            assert_eq!(behind, 0, "t = {t}: the arrow points the other way");
+            assert_eq!(behind, 0, "{name} t = {t}: the arrow points the other way");
         }
     }
 }

@@ -20,7 +20,7 @@
 use crate::frame::NV;
 use crate::joints::JointKind;
 use crate::Model;
-use dalembert_system::{JointLimit, ModelError, SlipRow};
+use dalembert_system::{ContactResultant, JointLimit, ModelError, SlipRow};
 use nalgebra::Vector3;
 
 impl Model {
@@ -169,7 +169,7 @@ pub(crate) enum ContactData {
     Spheres {
         bodies: [Option<usize>; 2],
         centres: [Vector3<f64>; 2],
-        reach: f64,
+        radii: [f64; 2],
     },
 }
 
@@ -260,12 +260,65 @@ impl Model {
             let data = ContactData::Spheres {
                 bodies: c.bodies,
                 centres: [local(c.bodies[0], c.centres[0]), local(c.bodies[1], c.centres[1])],
-                reach: c.radii[0] + c.radii[1],
+                radii: c.radii,
             };
             self.limits.push(spec);
             self.contacts.push(data);
         }
         Ok(self)
+    }
+
+    /// Rigid contact `k`'s unit normal (the direction in which it pushes its body: a plane's
+    /// sphere, or the second of two spheres) and its contact point at `q`, global: the sphere's
+    /// point nearest the plane, or the first sphere's point towards the second.
+    fn contact_geometry(&self, k: usize, q: &[f64]) -> (Vector3<f64>, Vector3<f64>) {
+        match &self.contacts[k] {
+            ContactData::Plane {
+                body,
+                centre,
+                radius,
+                plane_body,
+                normal,
+                ..
+            } => {
+                let (fi, fj) = (self.frame(*plane_body, q, &[]), self.frame(Some(*body), q, &[]));
+                let n = fi.a * normal;
+                (n, fj.point(centre) - *radius * n)
+            }
+            ContactData::Spheres { bodies, centres, radii } => {
+                let (ci, cj) = (
+                    self.frame(bodies[0], q, &[]).point(&centres[0]),
+                    self.frame(bodies[1], q, &[]).point(&centres[1]),
+                );
+                let d = cj - ci;
+                let n = if d.norm() > 0.0 { d / d.norm() } else { Vector3::zeros() };
+                (n, ci + radii[0] * n)
+            }
+        }
+    }
+
+    /// The number of rigid contacts (the last limits, after the joints').
+    pub fn rigid_contact_count(&self) -> usize {
+        self.contacts.len()
+    }
+
+    /// Each rigid contact's resultant at `q` into `out` (one per rigid contact, in order), with
+    /// `limit_forces` the run's force of every limit (the joints' first, then the contacts'):
+    /// its gap, normal force, force on its body (`force · n`) and contact point
+    /// ([`dalembert_system::ContactResultant`]).
+    pub fn rigid_contact_resultants_into(&self, q: &[f64], limit_forces: &[f64], out: &mut [ContactResultant<3>]) {
+        let first = self.limits.len() - self.contacts.len();
+        let mut row = SlipRow::default();
+        for (k, slot) in out.iter_mut().enumerate().take(self.contacts.len()) {
+            let gap = self.contact_row_into(k, q, &[], &mut row);
+            let (n, point) = self.contact_geometry(k, q);
+            let force = limit_forces.get(first + k).copied().unwrap_or(0.0);
+            let mut r = ContactResultant::new(gap);
+            if force != 0.0 {
+                r.add((force * n).into(), force, point.into());
+            }
+            *slot = r.finish(point.into());
+        }
     }
 
     /// The gap row of rigid contact `k` (after the joint limits) at `(q, v)`, and the gap.
@@ -303,7 +356,8 @@ impl Model {
                 row.bias = fi.w.cross(&n_dot).dot(&d) + 2.0 * n_dot.dot(&d_dot) + n.dot(&centripetal);
                 n.dot(&d) - radius
             }
-            ContactData::Spheres { bodies, centres, reach } => {
+            ContactData::Spheres { bodies, centres, radii } => {
+                let reach = radii[0] + radii[1];
                 let fi = self.frame(bodies[0], q, v);
                 let fj = self.frame(bodies[1], q, v);
                 let (si, sj) = (fi.a * centres[0], fj.a * centres[1]);
