@@ -799,11 +799,9 @@ fn the_3d_viewer_draws_each_contact_force_at_its_point() {
     contact_arrows(&browser, "ball-on-incline", &rigid, false);
 }
 
-/// [`the_3d_viewer_draws_each_contact_force_at_its_point`] on the scene `text` (a ball and its
-/// contact `floor`), whose force has friction against the sliding along x where `sliding`.
-fn contact_arrows(browser: &Path, name: &str, text: &str, sliding: bool) {
-    let budget = "--virtual-time-budget=5000";
-    let size = (800, 560);
+/// The scene `text` written as `<name>.toml`, simulated into `<name>.csv` and animated into
+/// `<name>.html`: the CSV's header and rows, and the page.
+fn simulated_page(name: &str, text: &str) -> (csv::StringRecord, Vec<Vec<f64>>, PathBuf) {
     let path = tmp(&format!("{name}.toml"));
     std::fs::write(&path, text).unwrap();
     let path = path.to_str().unwrap();
@@ -814,11 +812,20 @@ fn contact_arrows(browser: &Path, name: &str, text: &str, sliding: bool) {
     assert!(ok, "{err}");
     let mut rdr = csv::Reader::from_path(&csv).unwrap();
     let header = rdr.headers().unwrap().clone();
-    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
-    let rows: Vec<Vec<f64>> = rdr
+    let rows = rdr
         .records()
         .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
         .collect();
+    (header, rows, page)
+}
+
+/// [`the_3d_viewer_draws_each_contact_force_at_its_point`] on the scene `text` (a ball and its
+/// contact `floor`), whose force has friction against the sliding along x where `sliding`.
+fn contact_arrows(browser: &Path, name: &str, text: &str, sliding: bool) {
+    let budget = "--virtual-time-budget=5000";
+    let size = (800, 560);
+    let (header, rows, page) = simulated_page(name, text);
+    let col = |n: &str| header.iter().position(|h| h == n).unwrap();
     let dump = dump_window(browser, &format!("file://{}#t=0", page.display()), size, &[budget]);
     let green = [0x16, 0xa0, 0x85];
     for t in [0.05, 0.08] {
@@ -870,26 +877,10 @@ fn the_planar_viewer_draws_a_compliant_contact_force_at_its_point() {
     let Some(browser) = chromium_or_skip() else {
         return;
     };
-    let path = tmp("sliding-disk.toml");
     let depth = (9.81f64 / 1e6).powf(1.0 / 1.5);
-    std::fs::write(
-        &path,
-        format!("[scene]\ngravity = [0.0, -9.81]\n[[bodies]]\nname = \"disk\"\nmass = 1.0\nshape = {{ disk = 0.1 }}\nposition = [0.0, {}]\nvelocity = [2.0, 0.0]\n[[forces]]\nname = \"ground\"\ntype = \"circle-line\"\nbody = \"disk\"\nradius = 0.1\nline = {{ point = [0.0, 0.0], normal = [0.0, 1.0] }}\nstiffness = 1e6\nfriction = 0.3\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", 0.1 - depth),
-    )
-    .unwrap();
-    let path = path.to_str().unwrap();
-    let (csv, page) = (tmp("sliding-disk.csv"), tmp("sliding-disk.html"));
-    let (ok, _, err) = dalembert(&["simulate", path, "--output", csv.to_str().unwrap()]);
-    assert!(ok, "{err}");
-    let (ok, _, err) = dalembert(&["animate", path, "--output", page.to_str().unwrap()]);
-    assert!(ok, "{err}");
-    let mut rdr = csv::Reader::from_path(&csv).unwrap();
-    let header = rdr.headers().unwrap().clone();
+    let text = format!("[scene]\ngravity = [0.0, -9.81]\n[[bodies]]\nname = \"disk\"\nmass = 1.0\nshape = {{ disk = 0.1 }}\nposition = [0.0, {}]\nvelocity = [2.0, 0.0]\n[[forces]]\nname = \"ground\"\ntype = \"circle-line\"\nbody = \"disk\"\nradius = 0.1\nline = {{ point = [0.0, 0.0], normal = [0.0, 1.0] }}\nstiffness = 1e6\nfriction = 0.3\n[simulation]\nend = 0.2\nintegrator = \"rk4\"\nstep = 1e-4\noutput_every = 0.01\n", 0.1 - depth);
+    let (header, rows, page) = simulated_page("sliding-disk", &text);
     let col = |n: &str| header.iter().position(|h| h == n).unwrap();
-    let rows: Vec<Vec<f64>> = rdr
-        .records()
-        .map(|r| r.unwrap().iter().map(|v| v.parse().unwrap()).collect())
-        .collect();
     let size = (900, 600);
     let magenta = hex("#e6007e");
     for t in [0.05, 0.1] {

@@ -51,9 +51,10 @@ impl SphereSphere {
         (frames, arms, centres, depth)
     }
 
-    /// The contact force on the second sphere's body (on the first: its opposite) and where it
-    /// acts (global), or `None` apart (or concentric: no direction to push along).
-    fn load(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<(V3, V3)> {
+    /// The contact force on the second sphere's body (on the first: its opposite), where it acts
+    /// (global) and the two bodies' frames, or `None` apart (or concentric: no direction to push
+    /// along).
+    fn load(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<(V3, V3, [Frame; 2])> {
         let ([fi, fj], [si, sj], [ci, cj], depth) = self.geometry(frame);
         let d = cj - ci;
         let length = d.norm();
@@ -68,21 +69,18 @@ impl SphereSphere {
         let (ai, aj) = (x - fi.r, x - fj.r);
         let slip = fj.point_velocity(&aj) - fi.point_velocity(&ai);
         let (sliding, speed) = sliding_speed(&slip, &n);
-        Some((
-            normal_force * n - self.law.friction_factor(normal_force, speed) * sliding,
-            x,
-        ))
+        let force = normal_force * n - self.law.friction_factor(normal_force, speed) * sliding;
+        Some((force, x, [fi, fj]))
     }
 
     /// Adds the contact force's generalized forces on both bodies.
     pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
-        let Some((force, x)) = self.load(frame) else {
+        let Some((force, x, frames)) = self.load(frame) else {
             return;
         };
-        for (end, sign) in self.ends.iter().zip([-1.0, 1.0]) {
+        for ((end, f), sign) in self.ends.iter().zip(&frames).zip([-1.0, 1.0]) {
             if let Some(b) = end.0 {
-                let f = frame(Some(b));
-                add_point_force(out, b, &f, &(x - f.r), &(sign * force));
+                add_point_force(out, b, f, &(x - f.r), &(sign * force));
             }
         }
     }
@@ -95,7 +93,7 @@ impl SphereSphere {
         let d = cj - ci;
         let n = if d.norm() > 0.0 { d / d.norm() } else { V3::zeros() };
         let mut out = ContactResultant::new(-depth);
-        if let Some((force, point)) = self.load(frame) {
+        if let Some((force, point, _)) = self.load(frame) {
             out.add(force.into(), force.dot(&n), point.into());
         }
         out.finish((ci + (self.radii[0] - 0.5 * depth) * n).into())
