@@ -766,16 +766,22 @@ fn the_3d_viewer_draws_each_joint_reaction_along_its_force() {
         let png = Png::read(&shot);
         let row = rows.iter().find(|r| (r[ft] - t).abs() < 1e-9).unwrap();
         let f = [row[fx], row[fy], row[fz]];
-        let along = |k: f64| f.map(|c| k * c / scale);
-        let red = [0xc0, 0x39, 0x2b];
-        let head = count_near(&png, project(&view, along(0.9)), 3, red, 10);
-        let behind = count_near(&png, project(&view, along(-0.9)), 3, red, 10);
+        let (head, behind) = arrow_pixels(&png, &view, ([0.0; 3], f, scale), [0xc0, 0x39, 0x2b]);
         assert!(
             head >= 3,
             "t = {t}: no arrow head at 90 % of the force {f:?} ({head} pixels)"
         );
         assert_eq!(behind, 0, "t = {t}: the arrow points the other way");
     }
+}
+
+/// The pixels of `colour` within 3 px of where the 3D viewer's arrow of force `f` from `from`
+/// (`scale` newtons per metre, the page's `data-reaction-scale`) has its head, 90 % of the way
+/// to its tip, and of the point as far on the opposite side: `(head, behind)`.
+fn arrow_pixels(png: &Png, view: &str, (from, f, scale): ([f64; 3], [f64; 3], f64), colour: [u8; 3]) -> (usize, usize) {
+    let along = |k: f64| [0, 1, 2].map(|i| from[i] + k * f[i] / scale);
+    let count = |k: f64| count_near(png, project(view, along(k)), 3, colour, 10);
+    (count(0.9), count(-0.9))
 }
 
 /// Contact force arrows (shown unless `#nocontacts`): a ball set down on a floor at its resting
@@ -844,7 +850,6 @@ fn contact_arrows(browser: &Path, name: &str, text: &str, sliding: bool) {
         if sliding {
             assert!(f[0] < -0.25 * f[2], "{name} t = {t}: sliding, the friction is {f:?}");
         }
-        let along = |k: f64| [0, 1, 2].map(|i| p[i] + k * f[i] / scale);
         for (hash, shown) in [("", true), ("&nocontacts", false)] {
             let shot = tmp(&format!("{name}-{t}{hash}.png"));
             browse(
@@ -854,8 +859,7 @@ fn contact_arrows(browser: &Path, name: &str, text: &str, sliding: bool) {
                 &[&format!("--screenshot={}", shot.display()), budget],
             );
             let png = Png::read(&shot);
-            let head = count_near(&png, project(&view, along(0.9)), 3, green, 10);
-            let behind = count_near(&png, project(&view, along(-0.9)), 3, green, 10);
+            let (head, behind) = arrow_pixels(&png, &view, (p, f, scale), green);
             match shown {
                 true => assert!(
                     head >= 3,
