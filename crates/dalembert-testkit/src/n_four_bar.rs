@@ -84,16 +84,7 @@ impl NFourBar {
     /// (classic RK4 with 1000 substeps per grid interval of at most 0.05 s: step ≤ 5e-5 s, global
     /// error below 1e-13 rad over 20 s, measured by halving).
     pub fn reference(&self, every: f64, end: f64) -> Vec<(f64, f64, f64)> {
-        let (k, c) = self.reduced();
-        let (mut th, mut w) = (FRAC_PI_2, -1.0);
-        let count = (end / every).round() as usize;
-        let sub = 1000.max((every / 5e-5).ceil() as usize);
-        let mut out = vec![(0.0, th, w)];
-        for j in 1..=count {
-            (th, w) = crank_rk4(th, w, k, c, every / sub as f64, sub);
-            out.push((j as f64 * every, th, w));
-        }
-        out
+        self.reference_from((FRAC_PI_2, -1.0), every, end)
     }
 
     /// Position of `B₀` (tip of the first crank) from the planar coordinates `q` (3 per body).
@@ -126,39 +117,134 @@ pub fn crank_rk4(theta: f64, omega: f64, k: f64, c: f64, h: f64, steps: usize) -
 }
 
 /// One way of writing the benchmark's model ([`NFourBar::variant`]): the same bodies, masses,
-/// joints and initial state as [`NFourBar::toml`], listed and stated differently.
+/// joints and link lengths as [`NFourBar::toml`], listed and stated differently, from a start on
+/// the same motion.
 #[derive(Debug, Clone)]
 pub struct Variant {
     /// The scene.
     pub toml: String,
     /// Index of the first crank (whose tip is `B₀`) among the scene's bodies.
     pub first_crank: usize,
+    /// The start `(θ(0), θ̇(0))` on the reduction (the benchmark's `(π/2, −1)`, or moved by up
+    /// to 1e-12): pass it to [`NFourBar::reference_from`].
+    pub start: (f64, f64),
     /// What was varied, for messages.
     pub description: String,
 }
 
 impl NFourBar {
+    /// `θ(t)` and `θ̇(t)` of the reduction on the grid of [`NFourBar::reference`], from the start
+    /// `(θ(0), θ̇(0))`.
+    pub fn reference_from(&self, start: (f64, f64), every: f64, end: f64) -> Vec<(f64, f64, f64)> {
+        let (k, c) = self.reduced();
+        let (mut th, mut w) = start;
+        let count = (end / every).round() as usize;
+        let sub = 1000.max((every / 5e-5).ceil() as usize);
+        let mut out = vec![(0.0, th, w)];
+        for j in 1..=count {
+            (th, w) = crank_rk4(th, w, k, c, every / sub as f64, sub);
+            out.push((j as f64 * every, th, w));
+        }
+        out
+    }
+
     /// The model written the `seed`-th way: bodies and joints in shuffled orders, each joint's
     /// bodies in either order, each joint given by its global point (`at`) or by the two bodies'
-    /// local points (`points`), and (for odd seeds) every body's position and angle moved by up to
-    /// 1e-12 (the start is assembled again, so the state stays consistent). Seed 0 is
-    /// [`NFourBar::toml`] as written.
+    /// local points (`points`); for odd seeds the initial state is moved by up to 1e-12 (the
+    /// crank angle along the motion by up to 1e-12 rad, the first crank's rate by up to
+    /// 1e-12 rad/s; every body and every `at` point is placed at the moved start, so the link
+    /// lengths stay those of the benchmark), seeds 3, 7, 11, … also move each body by its own up
+    /// to 1e-12 and give every joint by its bodies' local points (the start is assembled again),
+    /// and the run goes to 21 s. Seed 0 is [`NFourBar::toml`] as written.
+    ///
+    /// Moving each body by its own 1e-12 would not be a change of state alone: a joint given by
+    /// `at` takes its local points from the bodies' written poses, so its links would come out up
+    /// to 1e-12 longer or shorter. That is another mechanism, one with no passage
+    /// ([`NFourBar::with_lengths_moved`]).
     pub fn variant(&self, end: f64, seed: u64) -> Variant {
         use crate::fuzz::Rng;
         if seed == 0 {
             return Variant {
                 toml: self.toml(end),
                 first_crank: Self::FIRST_CRANK,
+                start: (FRAC_PI_2, -1.0),
                 description: "as written".into(),
             };
         }
-        let n = self.n;
         let mut rng = Rng::new(seed);
+        let moved = seed % 2 == 1;
+        let mut tiny = || 1e-12 * (2.0 * (rng.next_u64() as f64 / u64::MAX as f64) - 1.0);
+        let start = if moved {
+            (FRAC_PI_2 + tiny(), -1.0 + tiny())
+        } else {
+            (FRAC_PI_2, -1.0)
+        };
+        let jostled: Option<Vec<f64>> = (seed % 4 == 3).then(|| (0..3 * (2 * self.n + 1)).map(|_| tiny()).collect());
+        let (th, w) = start;
+        // The crank tips relative to their pivots: exactly (0, 1) at the benchmark's start.
+        let tip = if moved { [th.cos(), th.sin()] } else { [0.0, 1.0] };
+        let stated = match &jostled {
+            Some(noise) => Stated::BodiesMoved(noise),
+            None => Stated::AsIs,
+        };
+        let mut written = self.written(end, &mut rng, tip, (th, w), stated);
+        written.description = format!(
+            "variant {seed}: {}{}",
+            written.description,
+            match (moved, jostled.is_some()) {
+                (true, true) => ", the start moved by up to 1e-12 along the motion and each body by its own",
+                (true, false) => ", the start moved by up to 1e-12 along the motion",
+                _ => "",
+            }
+        );
+        written.start = start;
+        written
+    }
+
+    /// The benchmark at its start with every joint given by its global point `at`, each moved by
+    /// up to 1e-12, shuffled as [`NFourBar::variant`]: every link is up to about 1e-12 longer or
+    /// shorter than the benchmark's (the start is assembled again).
+    ///
+    /// That is no longer the benchmark's mechanism. Each window is a four-bar whose links meet
+    /// Grashof's change-point condition `s + l = p + q` only to 1e-12; off it, the branch a window
+    /// follows turns within about √1e-12 = 1e-6 rad of the flat position onto the folding motion
+    /// (one crank held near the axis while the other swings), so its exact motion is not the
+    /// reduction's. A step of 1 ms passes over that turn; what a method returns there is not the
+    /// benchmark's answer and is not held to it.
+    pub fn with_lengths_moved(&self, end: f64, seed: u64) -> Variant {
+        let mut rng = crate::fuzz::Rng::new(seed);
+        let noise: Vec<f64> = (0..2 * (3 * self.n + 1))
+            .map(|_| 1e-12 * (2.0 * (rng.next_u64() as f64 / u64::MAX as f64) - 1.0))
+            .collect();
+        let stated = Stated::JointsMoved(&noise);
+        let mut written = self.written(end, &mut rng, [0.0, 1.0], (FRAC_PI_2, -1.0), stated);
+        written.description = format!("lengths moved, seed {seed}: {}", written.description);
+        written
+    }
+
+    /// The scene, run to `end`, with the crank tips at `tip` from their pivots and the start
+    /// `(th, w)` (crank angle, first crank's rate), bodies and joints shuffled by `rng`, the
+    /// poses and joints `stated` so.
+    fn written(
+        &self,
+        end: f64,
+        rng: &mut crate::fuzz::Rng,
+        tip: [f64; 2],
+        (th, w): (f64, f64),
+        stated: Stated,
+    ) -> Variant {
+        let n = self.n;
         // Bodies: (name, centre, angle); joints: (name, body a, body b, global point, local a, local b).
         let mut bodies: Vec<(String, [f64; 2], f64)> = (0..=n)
-            .map(|i| (format!("crank-{i}"), [i as f64, 0.5], FRAC_PI_2))
-            .chain((0..n).map(|i| (format!("coupler-{i}"), [i as f64 + 0.5, 1.0], 0.0)))
+            .map(|i| (format!("crank-{i}"), [i as f64 + 0.5 * tip[0], 0.5 * tip[1]], th))
+            .chain((0..n).map(|i| (format!("coupler-{i}"), [i as f64 + 0.5 + tip[0], tip[1]], 0.0)))
             .collect();
+        if let Stated::BodiesMoved(noise) = stated {
+            for (b, d) in bodies.iter_mut().zip(noise.chunks(3)) {
+                b.1 = [b.1[0] + d[0], b.1[1] + d[1]];
+                b.2 += d[2];
+            }
+        }
         type Joint = (String, String, String, [f64; 2], [f64; 2], [f64; 2]);
         let mut joints: Vec<Joint> = Vec::new();
         for i in 0..=n {
@@ -169,36 +255,26 @@ impl NFourBar {
         for i in 0..n {
             let x = i as f64;
             let (left, right, coupler) = (format!("crank-{i}"), format!("crank-{}", i + 1), format!("coupler-{i}"));
-            joints.push((
-                format!("L{i}"),
-                left,
-                coupler.clone(),
-                [x, 1.0],
-                [0.5, 0.0],
-                [-0.5, 0.0],
-            ));
-            joints.push((format!("R{i}"), coupler, right, [x + 1.0, 1.0], [0.5, 0.0], [0.5, 0.0]));
+            let (l, r) = ([x + tip[0], tip[1]], [x + 1.0 + tip[0], tip[1]]);
+            joints.push((format!("L{i}"), left, coupler.clone(), l, [0.5, 0.0], [-0.5, 0.0]));
+            joints.push((format!("R{i}"), coupler, right, r, [0.5, 0.0], [0.5, 0.0]));
         }
-        shuffle(&mut rng, &mut bodies);
-        shuffle(&mut rng, &mut joints);
-        let perturb = seed % 2 == 1;
-        let mut s =
-            format!("[scene]\nname = \"N-four-bar, N = {n} (IFToMM A02), variant {seed}\"\ngravity = [0.0, -{G}]\n\n");
-        for (name, c, angle) in &bodies {
-            let mut d = [0.0; 3];
-            if perturb {
-                for v in &mut d {
-                    *v = 1e-12 * (2.0 * (rng.next_u64() as f64 / u64::MAX as f64) - 1.0);
-                }
+        if let Stated::JointsMoved(noise) = stated {
+            for (j, d) in joints.iter_mut().zip(noise.chunks(2)) {
+                j.3 = [j.3[0] + d[0], j.3[1] + d[1]];
             }
+        }
+        shuffle(rng, &mut bodies);
+        shuffle(rng, &mut joints);
+        let mut s =
+            format!("[scene]\nname = \"N-four-bar, N = {n} (IFToMM A02), a variant\"\ngravity = [0.0, -{G}]\n\n");
+        for (name, c, angle) in &bodies {
             s += &format!(
-                "[[bodies]]\nname = \"{name}\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [{:?}, {:?}]\nangle = {:?}\n",
-                c[0] + d[0],
-                c[1] + d[1],
-                angle + d[2]
+                "[[bodies]]\nname = \"{name}\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [{:?}, {:?}]\nangle = {angle:?}\n",
+                c[0], c[1]
             );
             if name == "crank-0" {
-                s += "angular_velocity = -1.0\n";
+                s += &format!("angular_velocity = {w:?}\n");
             }
             s += "\n";
         }
@@ -210,7 +286,12 @@ impl NFourBar {
                 (a, b, la, lb)
             };
             s += &format!("[[joints]]\nname = \"{name}\"\ntype = \"revolute\"\nbodies = [\"{a}\", \"{b}\"]\n");
-            if rng.below(2) == 1 {
+            let local = match stated {
+                Stated::AsIs => rng.below(2) == 1,
+                Stated::BodiesMoved(_) => true,
+                Stated::JointsMoved(_) => false,
+            };
+            if local {
                 by_points += 1;
                 s += &format!("points = [[{:?}, {:?}], [{:?}, {:?}]]\n\n", la[0], la[1], lb[0], lb[1]);
             } else {
@@ -222,13 +303,26 @@ impl NFourBar {
         Variant {
             toml: s,
             first_crank,
+            start: (th, w),
             description: format!(
-                "variant {seed}: bodies and joints shuffled (crank-0 is body {first_crank}), {by_points} of {} joints by local points{}",
-                joints.len(),
-                if perturb { ", positions moved by up to 1e-12" } else { "" }
+                "bodies and joints shuffled (crank-0 is body {first_crank}), {by_points} of {} joints by local points",
+                joints.len()
             ),
         }
     }
+}
+
+/// How [`NFourBar::written`] states the bodies' poses and the joints.
+#[derive(Clone, Copy)]
+enum Stated<'a> {
+    /// Poses at the start; each joint by `at` or `points` at random.
+    AsIs,
+    /// Each body's position and angle moved by its three numbers (in the unshuffled order); every
+    /// joint by its bodies' local points, so the link lengths stay the benchmark's.
+    BodiesMoved(&'a [f64]),
+    /// Every joint by its global point `at`, moved by its two numbers (in the unshuffled order):
+    /// the link lengths change.
+    JointsMoved(&'a [f64]),
 }
 
 /// Fisher–Yates shuffle with `rng`.
