@@ -574,3 +574,80 @@ fn a_re_partition_keeps_the_degrees_of_freedom() {
     let (p, _) = tracker.factor(0.0, sys, &values).unwrap();
     assert_eq!((p.rows.len(), p.independent.len()), (29, 1));
 }
+
+/// A partition changes only between steps, and changing it leaves the state as it was. The
+/// spatial slider-crank at its (consistent) start, with a named independent coordinate that is
+/// regular but not the one full pivoting picks: inside a step ([`PartitionTracker::begin_step`]) a threshold no
+/// partition meets changes nothing; the next step's first evaluation re-partitions; and the
+/// projection with either partition moves `(q, v)` by round-off only (bar 1e-12: the start is
+/// assembled to 1e-12 and the state is of order 1).
+#[test]
+fn a_partition_changes_only_between_steps_and_keeps_the_state() {
+    use dalembert::system::PartitionTracker;
+    let scene = Scene::from_path(root().join("scenes/slider-crank-3d.toml")).unwrap();
+    let model = scene.model.system();
+    let sys = model.constraints();
+    let mut values = sys.values();
+    sys.evaluate(0.0, &scene.q, &scene.qd, &mut values);
+    let picked = PartitionTracker::new(1e3)
+        .factor(0.0, sys, &values)
+        .unwrap()
+        .0
+        .independent
+        .clone();
+    let named = (0..sys.num_coordinates())
+        .filter(|&k| vec![k] != picked)
+        .find(|&k| {
+            let mut t = PartitionTracker::new(1e3).with_independent(sys, vec![k]);
+            let kept = t.factor(0.0, sys, &values).is_some_and(|(p, _)| p.independent == [k]);
+            kept && t.count() == 0
+        })
+        .expect("a regular named partition");
+    let moved = |tracker: &mut PartitionTracker| {
+        let (mut q, mut v, mut values) = (scene.q.clone(), scene.qd.clone(), sys.values());
+        tracker.project(0.0, sys, &mut values, &mut q, &mut v, 1e-10).unwrap();
+        let dq = q.iter().zip(&scene.q).fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        dq.max(v.iter().zip(&scene.qd).fold(0.0f64, |m, (a, b)| m.max((a - b).abs())))
+    };
+    let mut tracker = PartitionTracker::new(1e3).with_independent(sys, vec![named]);
+    tracker.begin_step();
+    assert_eq!(tracker.factor(0.0, sys, &values).unwrap().0.independent, [named]);
+    tracker.threshold = 0.0; // every partition is now "too ill-conditioned"
+    for _ in 0..3 {
+        let (p, _) = tracker.factor(0.0, sys, &values).unwrap();
+        assert_eq!(p.independent, [named], "a stage re-partitioned");
+    }
+    assert_eq!(tracker.count(), 0);
+    let before = moved(&mut PartitionTracker::new(1e3).with_independent(sys, vec![named]));
+    tracker.begin_step();
+    let (p, _) = tracker.factor(0.0, sys, &values).unwrap();
+    assert_ne!(
+        p.independent,
+        [named],
+        "the step's first evaluation keeps the partition"
+    );
+    assert_eq!(tracker.count(), 1);
+    tracker.threshold = 1e3;
+    let after = moved(&mut tracker);
+    assert!(
+        before < 1e-12 && after < 1e-12,
+        "projection moved the state by {before:e} / {after:e}"
+    );
+}
+
+/// A named partition on redundant equations (Bricard's loop: 30 equations of rank 29, one
+/// coordinate named independent) has no square `C_qd`; it is chosen again at the first
+/// evaluation with the loop's rank, instead of indexing out of bounds (it panicked until
+/// 2026-11-28).
+#[test]
+fn a_named_partition_on_redundant_equations_is_chosen_again() {
+    use dalembert::system::PartitionTracker;
+    let scene = Scene::from_path(root().join("scenes/bricard.toml")).unwrap();
+    let model = scene.model.system();
+    let sys = model.constraints();
+    let mut values = sys.values();
+    sys.evaluate(0.0, &scene.q, &scene.qd, &mut values);
+    let mut tracker = PartitionTracker::new(1e3).with_independent(sys, vec![0]);
+    let (p, _) = tracker.factor(0.0, sys, &values).unwrap();
+    assert_eq!((p.rows.len(), p.independent.len()), (29, 1));
+}

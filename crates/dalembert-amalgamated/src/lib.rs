@@ -307,6 +307,12 @@ impl Formulation for Amalgamated {
         )
     }
 
+    /// The partition may change at this step's first evaluation, and is then kept through its
+    /// stages ([`dalembert_system::PartitionTracker::begin_step`]).
+    fn begin_step(&mut self) {
+        self.tracker.begin_step();
+    }
+
     fn stats(&self) -> FormulationStats {
         self.stats
     }

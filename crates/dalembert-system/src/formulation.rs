@@ -288,6 +288,12 @@ pub trait Formulation: Send {
     /// Cumulative counters.
     fn stats(&self) -> FormulationStats;
 
+    /// A step of the run begins at an accepted state, before its first evaluation. A formulation
+    /// that chooses which coordinates are independent (coordinate partitioning) changes that
+    /// choice only at a step's first evaluation or in [`Formulation::project`], never between the
+    /// stages of one step (docs/stability.md). Default: nothing.
+    fn begin_step(&mut self) {}
+
     /// True when this formulation's own equations are the augmented index-3 system
     /// `M v̇ + C_qᵀ λ = Q, C(q, t) = 0` that generalized-α integrates. Integrators that solve that
     /// system themselves refuse a formulation for which this is false, rather than silently

@@ -319,6 +319,10 @@ impl Formulation for Frictional {
         self.inner.system()
     }
 
+    fn begin_step(&mut self) {
+        self.inner.begin_step();
+    }
+
     /// `v̇₀`, `λ₀` without friction and limits; each element's response to a unit force along
     /// it (not a free limit's: it has no force); then (F1)–(F3) of `docs/friction.md` and
     /// (L1)–(L2) of `docs/limits.md`.

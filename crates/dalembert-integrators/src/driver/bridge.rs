@@ -125,6 +125,7 @@ impl Bridge {
             let hs = h / parts as f64;
             for k in 0..parts {
                 let ts = t + k as f64 * hs;
+                f.begin_step();
                 if !matches!(stepper.step_unchecked(f, ts, hs, state), Ok(true)) {
                     return false;
                 }

@@ -626,6 +626,7 @@ impl Integration {
                             // and its events looked for anew.
                             stepper.state_changed();
                             tangents.discard();
+                            f.begin_step();
                             outcome = stepper.step(f, ts, h, y)?;
                             restarted = true;
                             continue 'locate;
@@ -636,6 +637,7 @@ impl Integration {
                     stepper.state_changed();
                     tangents.discard();
                     h = theta * full;
+                    f.begin_step();
                     outcome = stepper.step(f, ts, h, y)?;
                     located = true;
                     tries += 1;

@@ -200,6 +200,7 @@ impl Tangents {
         h: f64,
         y: &mut [f64],
     ) -> Result<StepOutcome, IntegrationError> {
+        f.begin_step();
         if self.is_empty() {
             return stepper.step(f, t, h, y);
         }
@@ -239,6 +240,7 @@ impl Tangents {
                 for i in 0..start.len() {
                     side.y[i] = start[i] + sign * *delta * s[i];
                 }
+                side.f.begin_step();
                 let taken = if adaptive {
                     side.stepper.step_unchecked(side.f.as_mut(), t, h, &mut side.y)?
                 } else {
