@@ -302,6 +302,18 @@ impl PartitionTracker {
         self.last()
     }
 
+    /// [`PartitionTracker::factor`] in a projection, between steps: it may re-partition at the
+    /// threshold ([`PartitionTracker::begin_step`]).
+    fn factor_between_steps(
+        &mut self,
+        t: f64,
+        sys: &(impl ConstraintSet + ?Sized),
+        values: &ConstraintValues,
+    ) -> Option<(&Partition, &mut VelocityTransform)> {
+        self.free = true;
+        self.factor(t, sys, values)
+    }
+
     /// After the first choice: the storage of the next ones (see [`PartitionTracker`]).
     fn set_up_next(&mut self, sys: &(impl ConstraintSet + ?Sized), first: &Partition, vt: &VelocityTransform) {
         let (m, n) = (sys.num_equations(), sys.num_coordinates());
@@ -371,28 +383,11 @@ impl PartitionTracker {
         tolerance: f64,
         stats: &mut crate::FormulationStats,
     ) -> Result<usize, crate::DynamicsError> {
-        // Between steps: the projection may re-partition at every factorization.
-        let stepping = std::mem::replace(&mut self.stepping, false);
-        let projected = self.project_or_hand_over_free(t, model, values, (q, qd), tolerance, stats);
-        self.stepping = stepping;
-        projected
-    }
-
-    /// [`PartitionTracker::project_or_hand_over`] with every factorization free to re-partition.
-    fn project_or_hand_over_free(
-        &mut self,
-        t: f64,
-        model: &dyn MultibodySystem,
-        values: &mut ConstraintValues,
-        (q, qd): (&mut [f64], &mut [f64]),
-        tolerance: f64,
-        stats: &mut crate::FormulationStats,
-    ) -> Result<usize, crate::DynamicsError> {
         let sys = model.constraints();
         if self.handover.is_some() {
             let before = self.count;
             sys.evaluate(t, q, qd, values);
-            let singular = match self.factor(t, sys, values) {
+            let singular = match self.factor_between_steps(t, sys, values) {
                 None => true,
                 Some((_, vt)) => vt.condition > HANDOVER_CONDITION || vt.condition.is_nan(),
             };
@@ -460,7 +455,7 @@ impl PartitionTracker {
                 if iterations == MAX_ITERATIONS || !res.is_finite() {
                     return Err(crate::ConstraintError::not_converged(sys, &values.c, t, iterations, tolerance).into());
                 }
-                let Some((p, vt)) = self.factor(t, sys, values) else {
+                let Some((p, vt)) = self.factor_between_steps(t, sys, values) else {
                     return Err(sys.redundancy_error(t, values));
                 };
                 y.clear();
@@ -473,7 +468,7 @@ impl PartitionTracker {
                 sys.correct_positions(q, &delta);
                 iterations += 1;
             }
-            let Some((p, vt)) = self.factor(t, sys, values) else {
+            let Some((p, vt)) = self.factor_between_steps(t, sys, values) else {
                 return Err(sys.redundancy_error(t, values));
             };
             for &d in &p.dependent {
