@@ -36,6 +36,12 @@ pub struct Partition {
 }
 
 impl Partition {
+    /// Whether `C_qd` is square: one dependent coordinate per equation kept. A partition named on
+    /// redundant equations ([`PartitionTracker::with_independent`]) is not.
+    pub fn is_square(&self) -> bool {
+        self.rows.len() == self.dependent.len()
+    }
+
     /// Chooses the partition by LU with full pivoting of `C_q` (rows) and of the selected rows'
     /// columns: the pivot columns become the dependent coordinates.
     pub fn choose(sys: &(impl ConstraintSet + ?Sized), values: &ConstraintValues, rank_tolerance: f64) -> Partition {
@@ -224,7 +230,7 @@ impl PartitionTracker {
         self.free = false;
         // A named partition on redundant equations has more rows than dependent coordinates: its
         // `C_qd` is not square, so it is chosen again here as where it is singular.
-        if let Some(p) = self.current.as_ref().filter(|p| p.rows.len() == p.dependent.len()) {
+        if let Some(p) = self.current.as_ref().filter(|p| p.is_square()) {
             let vt = self.vt.get_or_insert_with(|| VelocityTransform::new(p, sys));
             let limit = if held {
                 HELD_CONDITION.max(self.threshold)
@@ -247,11 +253,7 @@ impl PartitionTracker {
             // A new partition keeps the number of independent equations of the one it replaces;
             // only where that is singular (a rank loss of the mechanism itself) is the rank found
             // again at this state.
-            let same_rank = self
-                .current
-                .as_ref()
-                .filter(|p| p.rows.len() == p.dependent.len())
-                .map(|p| p.rows.len());
+            let same_rank = self.current.as_ref().filter(|p| p.is_square()).map(|p| p.rows.len());
             let mut fresh = std::mem::take(&mut self.spare);
             match &mut self.choice {
                 Some(choice) => choice.choose(sys, values, self.rank_tolerance, same_rank, &mut fresh),
