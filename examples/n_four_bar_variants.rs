@@ -7,8 +7,8 @@
 //! (`NFourBar::with_lengths_moved`): another mechanism, off the change point, whose exact motion
 //! leaves the reduction at the first flat position; their error is printed, not judged.
 //!
-//! Run: `cargo run --release --example n_four_bar_variants -- [N] [VARIANTS] [ALI3-P STEP] [each]`
-//! (defaults 2, 10 and 1e-3 s; `each` prints every variant's error).
+//! Run: `cargo run --release --example n_four_bar_variants -- [N] [VARIANTS] [ALI3-P STEP] [each|all]
+//! [RK4 STEP]` (defaults 2, 10, 1e-3 s, all and 1e-3 s; `each` prints every variant's error).
 
 use dalembert::integrators::{IntegratorOptions, Method, Stabilization};
 use dalembert::scene::Scene;
@@ -22,14 +22,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let count: u64 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(10);
     let ali3p_step: f64 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1e-3);
     let per_variant = args.next().is_some_and(|a| a == "each");
+    let rk4_step: f64 = args.next().map(|a| a.parse()).transpose()?.unwrap_or(1e-3);
     let bar = NFourBar { n };
     let every = 0.05;
     let projection = Stabilization::Projection { tolerance: 1e-12 };
     let ali3p_name = format!("ali3-p, h = {ali3p_step:e}");
+    let rk4_name = format!("rk4 + projection, h = {rk4_step:e}");
     let settings: Vec<(&str, IntegratorOptions, bool)> = vec![
         (
-            "rk4 + projection, h = 1 ms",
-            IntegratorOptions::fixed(Method::rk4(), 1e-3, every).with_stabilization(projection),
+            &rk4_name,
+            IntegratorOptions::fixed(Method::rk4(), rk4_step, every).with_stabilization(projection),
             false,
         ),
         (

@@ -289,11 +289,15 @@ pub fn run(a: Args) -> Result<(), String> {
         );
     }
     outln!(
-        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions{}{}{}",
+        "statistics   {} steps ({} rejected), {} evaluations, {} factorizations, {} Newton iterations, {} re-partitions{}{}{}{}",
         stats.steps, stats.rejected, stats.evaluations, stats.factorizations, stats.newton_iterations, stats.repartitions,
         match stats.handovers {
             0 => String::new(),
             k => format!(", {k} projections handed over to the mass-orthogonal one at singular positions"),
+        },
+        match stats.kicks_undone {
+            0 => String::new(),
+            k => format!(", {k} kicks of the energy at singular positions undone"),
         },
         match stats.bridges {
             0 => String::new(),

@@ -8,8 +8,14 @@
 //! - the share of `T_max` one step's velocity projection removes, `T(q, v − v_p) / T_max`
 //!   ([`BRANCH_SWITCH_SHARE`]): the step left the branch and the projection put it on another;
 //! - for a conservative model stepped at a fixed step, the change of `T + V` in one step over
-//!   `T_max` ([`BRANCH_SWITCH_ENERGY`]): the step itself crossed to another branch, the spurious
-//!   constraint forces near the singular position doing work.
+//!   `T_max` ([`BRANCH_SWITCH_ENERGY`]) that could not be given back: a step that changes the
+//!   energy by [`BRANCH_SWITCH_JUMP`] times the steps before near a singular position has its
+//!   velocities scaled back to the energy it started from first ([`BranchMonitor::kicked`]: a
+//!   stage near the singular position amplifies the rounding in the state into such a kick, on a
+//!   branch it keeps; `docs/stability.md`, "Kicks at singular positions").
+//!
+//! Every stop of either sign examined on the IFToMM A02 N-four-bar with the check off had kept its
+//! branch (a kicked step); the run cannot tell the two apart, and stops.
 //!
 //! Either sign counts only where `C_q` is nearly singular after the step (singular values below
 //! [`NEAR`] of the largest: links close to lining up; the equations involved are named): a jump
@@ -150,8 +156,13 @@ impl BranchMonitor {
     /// Changes above round-off of the run's energy scale only: at rest there is no motion to
     /// switch.
     fn share(&self, change: f64) -> Option<f64> {
-        let scale = self.energy_scale();
-        (self.largest_kinetic > 0.0 && change > 1e-12 * scale).then(|| change / self.largest_kinetic)
+        self.share_with(change, self.largest_kinetic)
+    }
+
+    /// [`BranchMonitor::share`] with `largest` for the largest kinetic energy seen.
+    fn share_with(&self, change: f64, largest: f64) -> Option<f64> {
+        let scale = largest.max(self.energy0.abs());
+        (largest > 0.0 && change > 1e-12 * scale).then(|| change / largest)
     }
 
     /// After the projection of the step ending at `t` to `(q, v)`: the share of the kinetic energy
@@ -191,6 +202,29 @@ impl BranchMonitor {
             stats.max_projection_share = stats.max_projection_share.max(share);
         }
         Ok(())
+    }
+
+    /// The energy the step ending at `t` at `(q, v)` with `energy` started from, when its change
+    /// of energy is a kick to undo: [`BRANCH_SWITCH_JUMP`] times the earlier steps' changes,
+    /// near a singular position, for a conservative model at a fixed step.
+    pub(crate) fn kicked(
+        &mut self,
+        f: &dyn Formulation,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        energy: dalembert_system::Energy,
+        first: bool,
+    ) -> Option<f64> {
+        if !self.energy_check || first {
+            return None;
+        }
+        let largest = self.largest_kinetic.max(energy.kinetic);
+        let share = self.share_with((energy.total() - self.last_energy).abs(), largest)?;
+        (share > BRANCH_SWITCH_JUMP * self.energy.reference
+            && self
+                .check
+                .is_near_singular(f.system().constraints(), t, (q, v), NEAR, RANK_TOLERANCE))
+        .then_some(self.last_energy)
     }
 
     /// After the step ending at `t` at the state `(q, v)` with `energy` (the monitor's, so nothing

@@ -52,12 +52,15 @@ pub enum IntegrationError {
         /// Why the method cannot go on there, and what to pick instead.
         advice: &'static str,
     },
-    /// In one step the motion left its branch at a singular position of a closed chain (links
-    /// lining up): the step's projection removed a large share of the kinetic energy at once
-    /// ([`crate::BRANCH_SWITCH_SHARE`]), or the energy of a conservative model jumped
-    /// ([`crate::BRANCH_SWITCH_ENERGY`]). The run stops there rather than go on with another
-    /// motion; every sample before it has been observed.
-    #[error("t = {t}: {sign} {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}) near a singular position of the mechanism (constraint Jacobian nearly rank deficient; equations involved: {}): the motion left its branch there and the run stops here rather than go on along another branch; where the steps fall near that position decides the branch: retry with another step size (docs/stability.md)", list(.involved), t = dalembert_system::Shortest(*.time))]
+    /// A step at a singular position of a closed chain (links lining up) looked like a departure
+    /// from the branch of the motion: the step's projection removed a large share of the kinetic
+    /// energy at once ([`crate::BRANCH_SWITCH_SHARE`]), or the energy of a conservative model
+    /// jumped and could not be given back ([`crate::BRANCH_SWITCH_ENERGY`]). Either sign also
+    /// follows a step kicked by a stage near the singular position that kept its branch
+    /// (`docs/stability.md`, "Kicks at singular positions"); the run cannot tell the two apart
+    /// and stops there rather than go on with another motion; every sample before it has been
+    /// observed.
+    #[error("t = {t}: {sign} {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}) near a singular position of the mechanism (constraint Jacobian nearly rank deficient; equations involved: {}): the step left its branch there or was kicked off it by a stage near that position, and the run stops here rather than go on along another branch; where the steps fall near that position decides it: retry with another step size (docs/stability.md)", list(.involved), t = dalembert_system::Shortest(*.time))]
     BranchSwitch {
         /// Time at the end of the step.
         time: f64,

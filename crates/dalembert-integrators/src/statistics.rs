@@ -24,6 +24,11 @@ pub struct Statistics {
     /// steps (one step against two half steps; integrators/src/driver/bridge.rs). A bridged run is
     /// accurate to about 31 × its tolerances there, not to its tolerances.
     pub bridges: u64,
+    /// Steps of a conservative model at a fixed step whose change of `T + V` near a singular
+    /// position (links lining up) was 100 times the earlier steps' and was undone by scaling the
+    /// velocities: a stage that lands near the singular position amplifies the rounding in the
+    /// state into a kick (`docs/stability.md`, "Kicks at singular positions").
+    pub kicks_undone: u64,
     /// Events (a contact beginning or ending) a step was shortened to end at
     /// ([`dalembert_system::MultibodySystem::events`]).
     pub events: u64,
@@ -78,6 +83,7 @@ impl Statistics {
             newton_iterations: self.newton_iterations + later.newton_iterations,
             repartitions: self.repartitions + later.repartitions,
             handovers: self.handovers + later.handovers,
+            kicks_undone: self.kicks_undone + later.kicks_undone,
             bridges: self.bridges + later.bridges,
             events: self.events + later.events,
             tangents_carried: self.tangents_carried + later.tangents_carried,

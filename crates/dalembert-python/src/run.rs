@@ -35,6 +35,7 @@ pub fn statistics_dict<'py>(py: Python<'py>, s: &Statistics) -> PyResult<Bound<'
     d.set_item("repartitions", s.repartitions)?;
     d.set_item("handovers", s.handovers)?;
     d.set_item("bridges", s.bridges)?;
+    d.set_item("kicks_undone", s.kicks_undone)?;
     d.set_item("events", s.events)?;
     d.set_item("wall_time_s", s.wall_time.as_secs_f64())?;
     d.set_item("max_constraint_violation", s.max_constraint_violation)?;

@@ -151,4 +151,26 @@ impl SingularityCheck {
         }
         svd.rows_of_vectors(sys, 1e-3, |s, largest| nearly_singular_range(s, largest, near, rank))
     }
+
+    /// Whether [`SingularityCheck::near_singular`] finds a nearly singular `C_q` at `(t, q, v)`,
+    /// without naming its equations: allocates nothing.
+    pub fn is_near_singular<S: ConstraintSet + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+        near: f64,
+        rank: f64,
+    ) -> bool {
+        let Some(svd) = self.svd.as_mut() else {
+            return false;
+        };
+        sys.evaluate(t, q, v, &mut self.values);
+        if !svd.decompose(sys, &self.values) {
+            return false;
+        }
+        let s = svd.singular_values();
+        let largest = s.iter().cloned().fold(0.0, f64::max);
+        nearly_singular_range(s, largest, near, rank).is_some()
+    }
 }

@@ -675,6 +675,8 @@ impl Integration {
             };
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
+            // Like the projection, not told to the method.
+            mon.undo_kick(f, t_after, y);
             // The loop does not tell a fixed-step method that its state was projected.
             tangents.follow(ts, h, mon.n, false)?;
             if located {

@@ -76,6 +76,31 @@ impl Monitors {
         Ok(())
     }
 
+    /// Undoes a kick: where the step ending at `t` at `y` changed a conservative model's energy
+    /// by [`crate::BRANCH_SWITCH_JUMP`] times the earlier steps near a singular position
+    /// ([`BranchMonitor::kicked`]), the velocities are scaled to give back the energy the step
+    /// started from. Returns whether it did.
+    pub fn undo_kick(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64]) -> bool {
+        if !self.branch.watches_energy() {
+            return false;
+        }
+        let (q, v) = y.split_at_mut(self.n);
+        let energy = f.energy(t, q, v);
+        let Some(start) = self.branch.kicked(f, t, (q, v), energy, self.stats.steps == 0) else {
+            return false;
+        };
+        let room = start - energy.potential;
+        if energy.kinetic <= 0.0 || room <= 0.0 {
+            return false;
+        }
+        let scale = (room / energy.kinetic).sqrt();
+        for x in v {
+            *x *= scale;
+        }
+        self.stats.kicks_undone += 1;
+        true
+    }
+
     /// Counts a rejected step; fails when the next step would fall below the minimum.
     pub fn rejected(&mut self, t: f64, next: f64, error: f64, min_step: f64) -> Result<(), IntegrationError> {
         self.stats.rejected += 1;
