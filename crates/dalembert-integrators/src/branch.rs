@@ -17,8 +17,10 @@
 //! The projection's sign counts only where the velocities also turned
 //! ([`BRANCH_SWITCH_TURN`]): a kick the projection removed leaves them on their course.
 //!
-//! Every stop of either sign examined on the IFToMM A02 N-four-bar with the check off had kept its
-//! branch (a kicked step); the run cannot tell the two apart, and stops.
+//! On the IFToMM A02 N-four-bar both signs fired on kicked steps of runs that kept their branch
+//! (checked with the checks off); the undo and the turn leave those runs going. A kick that turned
+//! the velocities, or whose energy cannot be given back, still stops a run that may have kept its
+//! branch.
 //!
 //! Either sign counts only where `C_q` is nearly singular after the step (singular values below
 //! [`NEAR`] of the largest: links close to lining up; the equations involved are named): a jump
