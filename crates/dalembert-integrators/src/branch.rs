@@ -14,13 +14,11 @@
 //!   stage near the singular position amplifies the rounding in the state into such a kick, on a
 //!   branch it keeps; `docs/stability.md`, "Kicks at singular positions").
 //!
-//! The projection's sign counts only where the velocities also turned
-//! ([`BRANCH_SWITCH_TURN`]): a kick the projection removed leaves them on their course.
-//!
-//! On the IFToMM A02 N-four-bar both signs fired on kicked steps of runs that kept their branch
-//! (checked with the checks off); the undo and the turn leave those runs going. A kick that turned
-//! the velocities, or whose energy cannot be given back, still stops a run that may have kept its
-//! branch.
+//! Either sign also fires on a step kicked by a stage near the singular position on a branch the
+//! run keeps (IFToMM A02 N-four-bar, checked with the checks off), and the kick has moved the
+//! state by then (1e-6 … 4e-5 of the crank's path at the end on A02 N = 2 and 4); a run that truly
+//! left its branch showed the same sign (A02 N = 2 written another way, amalgamated, 0.1 ms). The
+//! run cannot tell the two apart from these signs, and stops.
 //!
 //! Either sign counts only where `C_q` is nearly singular after the step (singular values below
 //! [`NEAR`] of the largest: links close to lining up; the equations involved are named): a jump
@@ -40,21 +38,6 @@ use dalembert_system::{EquationRef, Formulation};
 /// most 8.7e-6 in one step (mostly below 1e-7); the two that left it (B₀ error 0.28 and 0.38)
 /// removed 9.0e-3 and 4.6e-3 in the step where they left.
 pub const BRANCH_SWITCH_SHARE: f64 = 1e-3;
-
-/// How far the velocities after a step's projection may depart from the straight extrapolation of
-/// the two steps before (`v_k + (h / h_prev)(v_k − v_(k−1))`, largest component, over the largest
-/// velocity of either step) for the projection's sign ([`BRANCH_SWITCH_SHARE`]) to count: a switch
-/// turns the velocities onto the other branch; a kick the projection removed leaves them on their
-/// course.
-///
-/// Measured on the A02 N-four-bar (RK4 + projection; `docs/stability.md`, "Kicks at singular
-/// positions"): the steps whose projection removed 1.4e-3 and 7.4e-3 of the kinetic energy on runs
-/// that kept their branch (N = 4 augmented and N = 40 embedding at h = 0.25 ms) departed by 7.7e-5
-/// and 1.0e-4; the step where a run left it (N = 2 written another way, amalgamated, 0.1 ms: its
-/// cranks 124 rad apart by the end) by 1.0, and where a model with its link lengths moved leaves
-/// the reduction (N = 40) by 0.19. A kept branch also departed by 7.5e-2 once (N = 2, augmented,
-/// 0.1 ms; it still stops there). Until two steps are known, the sign counts without it.
-pub const BRANCH_SWITCH_TURN: f64 = 1e-2;
 
 /// Change of `T + V` in one fixed step, as a share of the largest kinetic energy, above which a run
 /// of a conservative model stops as a branch switch, when it is also [`BRANCH_SWITCH_JUMP`] times
@@ -121,67 +104,10 @@ impl Jump {
     }
 }
 
-/// The velocities of the last two projected steps, to extrapolate the next one's
-/// ([`BRANCH_SWITCH_TURN`]).
-struct Trend {
-    /// The velocities after the last projection.
-    v: Vec<f64>,
-    /// Their change over the step that ended there.
-    dv: Vec<f64>,
-    /// When that step ended.
-    t: f64,
-    /// Its length.
-    h: f64,
-    /// How many projected steps are known (up to 2).
-    known: u8,
-}
-
-impl Trend {
-    /// No step known yet, for `n` velocities.
-    fn new(n: usize) -> Self {
-        Trend {
-            v: vec![0.0; n],
-            dv: vec![0.0; n],
-            t: f64::NAN,
-            h: f64::NAN,
-            known: 0,
-        }
-    }
-
-    /// How far the velocities `v` at `t` are from the straight extrapolation of the last two,
-    /// over the largest velocity of either (`None` until two are known).
-    fn turn(&self, t: f64, v: &[f64]) -> Option<f64> {
-        if self.known < 2 {
-            return None;
-        }
-        let r = (t - self.t) / self.h;
-        let (mut off, mut size) = (0.0f64, 0.0f64);
-        for ((&x, &last), &d) in v.iter().zip(&self.v).zip(&self.dv) {
-            off = off.max((x - last - r * d).abs());
-            size = size.max(x.abs()).max(last.abs());
-        }
-        (size > 0.0).then(|| off / size)
-    }
-
-    /// Keeps the velocities `v` after the projection at `t`.
-    fn record(&mut self, t: f64, v: &[f64]) {
-        for ((d, last), &x) in self.dv.iter_mut().zip(self.v.iter_mut()).zip(v) {
-            *d = x - *last;
-            *last = x;
-        }
-        self.h = t - self.t;
-        self.t = t;
-        self.known = (self.known + 1).min(2);
-    }
-}
-
 /// The monitor of one run.
 pub(crate) struct BranchMonitor {
     /// The velocities before a step's projection (length `n_v`).
     v_stepped: Vec<f64>,
-    /// The velocities after the last projection, their change over the step before it, that
-    /// step's end time and length, and how many of the two are known.
-    trend: Trend,
     /// The largest kinetic energy seen (initial state, after every projection and every accepted
     /// step).
     largest_kinetic: f64,
@@ -204,7 +130,6 @@ impl BranchMonitor {
     pub(crate) fn new(f: &dyn Formulation, q0: &[f64], v0: &[f64], energy0: f64, energy_check: bool) -> Self {
         BranchMonitor {
             v_stepped: vec![0.0; v0.len()],
-            trend: Trend::new(v0.len()),
             largest_kinetic: f.system().kinetic_energy(q0, v0),
             energy0,
             last_energy: energy0,
@@ -260,15 +185,10 @@ impl BranchMonitor {
         let share = self.share(f.system().kinetic_energy(q, &self.v_stepped));
         let mut involved = None;
         let check = &mut self.check;
-        let turn = self.trend.turn(t, v);
-        // A kick the projection removed leaves the velocities on their course; a switch turns them.
         let confirm = || {
-            turn.is_none_or(|turn| turn > BRANCH_SWITCH_TURN) && {
-                involved = check.near_singular(f.system().constraints(), t, (q, v), NEAR, RANK_TOLERANCE);
-                involved.is_some()
-            }
+            involved = check.near_singular(f.system().constraints(), t, (q, v), NEAR, RANK_TOLERANCE);
+            involved.is_some()
         };
-        self.trend.record(t, v);
         if let Some(before) = self
             .projection
             .record(share, BRANCH_SWITCH_SHARE, stats.steps == 0, confirm)

@@ -54,12 +54,12 @@ pub enum IntegrationError {
     },
     /// A step at a singular position of a closed chain (links lining up) looked like a departure
     /// from the branch of the motion: the step's projection removed a large share of the kinetic
-    /// energy at once and turned the velocities ([`crate::BRANCH_SWITCH_SHARE`],
-    /// [`crate::BRANCH_SWITCH_TURN`]), or the energy of a conservative model jumped and could not
-    /// be given back ([`crate::BRANCH_SWITCH_ENERGY`]). A step kicked by a stage near the singular
-    /// position can show either sign on a branch it kept (`docs/stability.md`, "Kicks at singular
-    /// positions"); the run stops there rather than go on with another motion; every sample
-    /// before it has been observed.
+    /// energy at once ([`crate::BRANCH_SWITCH_SHARE`]), or the energy of a conservative model
+    /// jumped and could not be given back ([`crate::BRANCH_SWITCH_ENERGY`]). Either sign also
+    /// follows a step kicked by a stage near the singular position that kept its branch
+    /// (`docs/stability.md`, "Kicks at singular positions"); the run cannot tell the two apart
+    /// and stops there rather than go on with another motion; every sample before it has been
+    /// observed.
     #[error("t = {t}: {sign} {share:.1e} of the largest kinetic energy (earlier steps up to {before:.1e}) near a singular position of the mechanism (constraint Jacobian nearly rank deficient; equations involved: {}): the step left its branch there or was kicked off it by a stage near that position, and the run stops here rather than go on along another branch; where the steps fall near that position decides it: retry with another step size (docs/stability.md)", list(.involved), t = dalembert_system::Shortest(*.time))]
     BranchSwitch {
         /// Time at the end of the step.

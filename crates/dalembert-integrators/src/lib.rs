@@ -38,7 +38,7 @@ mod statistics;
 mod stepper;
 mod vector_state;
 
-pub use branch::{BRANCH_SWITCH_ENERGY, BRANCH_SWITCH_JUMP, BRANCH_SWITCH_SHARE, BRANCH_SWITCH_TURN};
+pub use branch::{BRANCH_SWITCH_ENERGY, BRANCH_SWITCH_JUMP, BRANCH_SWITCH_SHARE};
 pub use driver::{
     integrate, integrate_cancellable, integrate_sensitivities, Integration, Perturbed, PerturbedSide, Sample,
 };
