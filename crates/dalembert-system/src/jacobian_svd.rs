@@ -133,6 +133,18 @@ impl SingularityCheck {
         }
     }
 
+    /// `C_q` at `(t, q, v)` decomposed, or `None` (not checked, or the decomposition failed).
+    fn decomposed_at<S: ConstraintSet + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        (q, v): (&[f64], &[f64]),
+    ) -> Option<&JacobianSvd> {
+        let svd = self.svd.as_mut()?;
+        sys.evaluate(t, q, v, &mut self.values);
+        svd.decompose(sys, &self.values).then_some(&*svd)
+    }
+
     /// The equations of a nearly singular `C_q` at `(t, q, v)` (relative singular values below
     /// `near` and above `rank`, as [`crate::structure::near_singular`]), or `None` (a
     /// well-conditioned `C_q`, or not checked). Allocates only a `Some` answer.
@@ -140,16 +152,12 @@ impl SingularityCheck {
         &mut self,
         sys: &S,
         t: f64,
-        (q, v): (&[f64], &[f64]),
+        state: (&[f64], &[f64]),
         near: f64,
         rank: f64,
     ) -> Option<Vec<EquationRef>> {
-        let svd = self.svd.as_mut()?;
-        sys.evaluate(t, q, v, &mut self.values);
-        if !svd.decompose(sys, &self.values) {
-            return None;
-        }
-        svd.rows_of_vectors(sys, 1e-3, |s, largest| nearly_singular_range(s, largest, near, rank))
+        self.decomposed_at(sys, t, state)?
+            .rows_of_vectors(sys, 1e-3, |s, largest| nearly_singular_range(s, largest, near, rank))
     }
 
     /// Whether [`SingularityCheck::near_singular`] finds a nearly singular `C_q` at `(t, q, v)`,
@@ -158,19 +166,14 @@ impl SingularityCheck {
         &mut self,
         sys: &S,
         t: f64,
-        (q, v): (&[f64], &[f64]),
+        state: (&[f64], &[f64]),
         near: f64,
         rank: f64,
     ) -> bool {
-        let Some(svd) = self.svd.as_mut() else {
-            return false;
-        };
-        sys.evaluate(t, q, v, &mut self.values);
-        if !svd.decompose(sys, &self.values) {
-            return false;
-        }
-        let s = svd.singular_values();
-        let largest = s.iter().cloned().fold(0.0, f64::max);
-        nearly_singular_range(s, largest, near, rank).is_some()
+        self.decomposed_at(sys, t, state).is_some_and(|svd| {
+            let s = svd.singular_values();
+            let largest = s.iter().cloned().fold(0.0, f64::max);
+            nearly_singular_range(s, largest, near, rank).is_some()
+        })
     }
 }
