@@ -676,7 +676,7 @@ impl Integration {
             normalize(f, y, mon.n);
             mon.project_step(f, t_after, y, *stabilization)?;
             // Like the projection, not told to the method.
-            mon.undo_kick(f, t_after, y);
+            let energy = mon.undo_kick(f, t_after, y);
             // The loop does not tell a fixed-step method that its state was projected.
             tangents.follow(ts, h, mon.n, false)?;
             if located {
@@ -685,7 +685,7 @@ impl Integration {
                 events.accepted(f, t_after, y, mon.n);
             }
             *t = t_after;
-            mon.monitor(f, t_after, y, h, cancel)?;
+            mon.monitor(f, t_after, y, h, energy, cancel)?;
             if located {
                 mon.stats.events += 1;
                 // The rest of the interval from the event, at the run's step.
@@ -763,7 +763,7 @@ impl Integration {
                     a.h = step.min(a.max_step);
                     a.guard.rearm();
                 }
-                mon.monitor(f, te, y, half, cancel)?;
+                mon.monitor(f, te, y, half, None, cancel)?;
                 return Ok(());
             }
             // A collapse found after the last step: across the singular position with checked
@@ -838,7 +838,7 @@ impl Integration {
                 a.bridge.steady();
                 a.h = outcome.next_step.min(a.max_step);
                 a.pending = collapse;
-                mon.monitor(f, t_new, y, h, cancel)?;
+                mon.monitor(f, t_new, y, h, None, cancel)?;
                 return Ok(());
             } else if collapse.is_none() {
                 mon.rejected(*t, outcome.next_step, outcome.error, opts.min_step)?;

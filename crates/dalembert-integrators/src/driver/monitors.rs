@@ -5,7 +5,7 @@
 use super::{inf_norm, project};
 use crate::branch::BranchMonitor;
 use crate::{IntegrationError, Stabilization, Statistics};
-use dalembert_system::{Baumgarte, DynamicsError, Formulation, FormulationStats};
+use dalembert_system::{Baumgarte, DynamicsError, Energy, Formulation, FormulationStats};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Monitors, counters and output buffers of one run.
@@ -34,13 +34,15 @@ pub(super) struct Monitors {
 
 impl Monitors {
     /// Updates the monitors after an accepted step; fails on blow-up, and with
-    /// [`IntegrationError::Interrupted`] when `cancel` is set.
+    /// [`IntegrationError::Interrupted`] when `cancel` is set. `energy` is the energy at `y` where
+    /// the step already evaluated it ([`Monitors::undo_kick`]).
     pub fn monitor(
         &mut self,
         f: &mut dyn Formulation,
         t: f64,
         y: &[f64],
         h: f64,
+        energy: Option<Energy>,
         cancel: &AtomicBool,
     ) -> Result<(), IntegrationError> {
         let size = inf_norm(y);
@@ -64,7 +66,7 @@ impl Monitors {
         let s = &mut self.stats;
         s.max_constraint_violation = s.max_constraint_violation.max(inf_norm(&self.c));
         s.max_velocity_violation = s.max_velocity_violation.max(inf_norm(&self.cdot));
-        let energy = f.energy(t, q, qd);
+        let energy = energy.unwrap_or_else(|| f.energy(t, q, qd));
         s.max_energy_change = s.max_energy_change.max((energy.total() - self.energy0).abs());
         self.branch.after_step(f, t, (q, qd), energy, s.steps == 0)?;
         s.steps += 1;
@@ -79,26 +81,28 @@ impl Monitors {
     /// Undoes a kick: where the step ending at `t` at `y` changed a conservative model's energy
     /// by [`crate::BRANCH_SWITCH_JUMP`] times the earlier steps near a singular position
     /// ([`BranchMonitor::kicked`]), the velocities are scaled to give back the energy the step
-    /// started from. Returns whether it did.
-    pub fn undo_kick(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64]) -> bool {
+    /// started from. Returns the energy at `y` where the run watches the energy and left `y` as
+    /// it was (for [`Monitors::monitor`], so it is evaluated once per step).
+    pub fn undo_kick(&mut self, f: &mut dyn Formulation, t: f64, y: &mut [f64]) -> Option<Energy> {
         if !self.branch.watches_energy() {
-            return false;
+            return None;
         }
         let (q, v) = y.split_at_mut(self.n);
         let energy = f.energy(t, q, v);
         let Some(start) = self.branch.kicked(f, t, (q, v), energy, self.stats.steps == 0) else {
-            return false;
+            return Some(energy);
         };
         let room = start - energy.potential;
         if energy.kinetic <= 0.0 || room <= 0.0 {
-            return false;
+            return Some(energy);
         }
         let scale = (room / energy.kinetic).sqrt();
         for x in v {
             *x *= scale;
         }
         self.stats.kicks_undone += 1;
-        true
+        // Evaluated again at the scaled state: its rounding, not the product's.
+        None
     }
 
     /// Counts a rejected step; fails when the next step would fall below the minimum.
