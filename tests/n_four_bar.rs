@@ -319,7 +319,7 @@ fn kicks_at_the_passes_are_undone() {
     // -- 2 10 1e-3 each 2.5e-4`): worst over ten ways 8.8e-8 / 2.6e-7 / 5.0e-9 (augmented /
     // embedding / amalgamated). Asserted: no stop, the 1e-6 against the reduction, the
     // energy (a first integral here) within 1e-9 of its scale, and the undo exercised.
-    // This step is below the documented 1 ms, where the place of the stages fall still decides some
+    // This step is below the documented 1 ms, where the place the stages fall still decides some
     // runs: taking the energy after an undo from the scaled product instead of evaluating it
     // again (a change of the last bit) made the amalgamated run of seed 1 stop at 12.88 s on
     // the projection's sign. A change of rounding that moves this test is to be read that way
