@@ -353,6 +353,15 @@ pub trait Formulation: Send {
         self.system().events(t, q, v, out);
     }
 
+    /// True when a fixed-step method must shorten a step to end where event function `i` changes
+    /// sign; false where the law does not change there (a stuck friction joint that its friction
+    /// could not hold, already slipping by (F3), whose rate leaves the stick speed: (F3) is (F1),
+    /// `docs/friction.md`), so that the switch is made at the step's end
+    /// ([`Formulation::at_event`]) without taking the step again. Default: true.
+    fn event_needs_location(&self, _i: usize) -> bool {
+        true
+    }
+
     /// At the end of a step shortened to end at an event, where `crossed[i]` says which event
     /// functions ([`MultibodySystem::events`]) changed sign over it: whatever the event asks of
     /// the state and the law (a joint whose slip stopped there made to stick, one whose stick

@@ -169,6 +169,11 @@ pub struct FrictionTerms {
     pub direction: f64,
     /// The force that would hold a stuck or held element (`ẇ = 0`) at the last evaluation.
     pub hold: f64,
+    /// True when the element's force is given: already in the `a` and `λ` that
+    /// [`solve_friction`] starts from, which leaves it as it is and reads neither its row's
+    /// coupling nor its response (a slipping element in [`crate::Frictional`]'s iteration on the
+    /// slipping elements' forces).
+    pub given: bool,
 }
 
 impl FrictionTerms {
@@ -183,6 +188,7 @@ impl FrictionTerms {
             mode: Mode::Stick,
             direction: 0.0,
             hold: 0.0,
+            given: false,
         }
     }
 }
@@ -198,6 +204,9 @@ const SETTLING: usize = 12;
 pub struct FrictionWork {
     /// `W_kj = g_k·A_j` (row-major, `K × K`).
     coupling: Vec<f64>,
+    /// The elements whose forces are found (not a free limit, not given): the rows and columns
+    /// of `coupling`, `jacobian` and the entries of the vectors below, in this order.
+    active: Vec<usize>,
     /// Newton matrix (row-major, `K × K`).
     jacobian: Vec<f64>,
     /// Residuals, then the Newton step.
@@ -226,6 +235,7 @@ impl FrictionWork {
     pub fn new(k: usize, m: usize) -> Self {
         FrictionWork {
             coupling: vec![0.0; k * k],
+            active: Vec::with_capacity(k),
             jacobian: vec![0.0; k * k],
             residual: vec![0.0; k],
             alpha0: vec![0.0; k],
@@ -267,11 +277,13 @@ impl Load {
 }
 
 /// Solves (F1)–(F3) for every friction element in its mode, and (L1)–(L2) of
-/// `docs/limits.md` for every joint limit after them: on entry `a`, `lambda` are the
-/// frictionless `v̇₀`, `λ₀` and `terms[k]` hold the rows, responses and modes (the friction
-/// elements of [`MultibodySystem::frictions`] first, then the limits of
-/// [`MultibodySystem::limits`]; a free limit's response is not read); on exit `a`, `lambda`
-/// include the forces, and `terms[k].force`, `terms[k].sticks` say what each element does.
+/// `docs/limits.md` for every joint limit after them: on entry `acc`, `lambda` are the
+/// frictionless `v̇₀`, `λ₀` (with the given forces' part, [`FrictionTerms::given`]) and
+/// `terms[k]` hold the rows, responses and modes (the friction elements of
+/// [`MultibodySystem::frictions`] first, then the limits of [`MultibodySystem::limits`]; a free
+/// limit's response and a given element's are not read); on exit `acc`, `lambda` include the
+/// forces, and `terms[k].force`, `terms[k].sticks` say what each element does. The Newton
+/// system is the size of the elements whose forces are found.
 ///
 /// The forces couple through the accelerations (`ẇ = ẇ₀ + W F`, `W_kj = g_k·A_j`) and the loads
 /// (`λ = λ₀ + Σ Λ_j F_j`), so the equations are solved together by Newton's method: a held
@@ -283,13 +295,12 @@ pub fn solve_friction(
     system: &dyn MultibodySystem,
     t: f64,
     v: &[f64],
-    (a, lambda): (&mut [f64], &mut [f64]),
+    (acc, lambda): (&mut [f64], &mut [f64]),
     terms: &mut [FrictionTerms],
     work: &mut FrictionWork,
 ) -> Result<(), DynamicsError> {
     let frictions = system.frictions();
     let limits = system.limits();
-    let k_len = terms.len();
     let name = |k: usize| -> &str {
         if k < frictions.len() {
             &frictions[k].name
@@ -313,52 +324,49 @@ pub fn solve_friction(
             }
         }
     };
-    let all = |what: String| DynamicsError::Friction {
+    let all = |what: String, active: &[usize]| DynamicsError::Friction {
         time: t,
-        joint: (0..k_len).map(name).collect::<Vec<_>>().join("', '"),
+        joint: active.iter().map(|&k| name(k)).collect::<Vec<_>>().join("', '"),
         what,
     };
-    if terms.iter().all(|term| term.mode == Mode::Free) {
-        // Every stop free and no friction joint: no force, and nothing to solve (what the
-        // iteration below would find, without its two solves of the identity).
-        for term in terms.iter_mut() {
-            term.force = 0.0;
+    // The elements whose forces are found: not a free limit (no force) and not given.
+    work.active.clear();
+    for (k, term) in terms.iter_mut().enumerate() {
+        if term.mode == Mode::Free || term.given {
+            if !term.given {
+                term.force = 0.0;
+            }
             term.sticks = false;
             term.direction = 0.0;
+            term.hold = 0.0;
+        } else {
+            work.active.push(k);
         }
+    }
+    let n = work.active.len();
+    if n == 0 {
+        // Nothing to solve (what the iteration below would find, without its two solves).
         return Ok(());
     }
-    for (k, term) in terms.iter().enumerate() {
-        if term.mode == Mode::Free {
-            // No force and no response: the element couples with nothing.
-            work.alpha0[k] = 0.0;
-            for j in 0..k_len {
-                work.coupling[k * k_len + j] = 0.0;
-                work.coupling[j * k_len + k] = 0.0;
-            }
-            continue;
+    for a in 0..n {
+        let term = &terms[work.active[a]];
+        work.alpha0[a] = term.row.dot(acc) + term.row.bias;
+        for b in 0..n {
+            work.coupling[a * n + b] = term.row.dot(&terms[work.active[b]].dv);
         }
-        work.alpha0[k] = term.row.dot(a) + term.row.bias;
-        for (j, other) in terms.iter().enumerate() {
-            work.coupling[k * k_len + j] = if other.mode == Mode::Free {
-                0.0
-            } else {
-                term.row.dot(&other.dv)
-            };
-        }
-        let d = work.coupling[k * k_len + k];
+        let d = work.coupling[a * n + a];
         if !(d > 0.0 && d.is_finite()) {
             return Err(fail(
-                k,
+                work.active[a],
                 format!("a force along the joint does not move it (its response is {d:e})"),
             ));
         }
     }
     // From the last evaluation's forces (the stages of a step are near each other, so Newton's
-    // method starts close); a free element has none.
-    for term in terms.iter_mut() {
-        if term.mode == Mode::Free || !term.force.is_finite() {
-            term.force = 0.0;
+    // method starts close).
+    for &k in &work.active {
+        if !terms[k].force.is_finite() {
+            terms[k].force = 0.0;
         }
     }
     work.holding.iter_mut().for_each(|h| *h = false);
@@ -370,7 +378,8 @@ pub fn solve_friction(
     for iteration in 0..MAX_ITERATIONS {
         // λ(F) and the residuals and Newton matrix at F.
         work.lambda.copy_from_slice(lambda);
-        for term in terms.iter() {
+        for &k in &work.active {
+            let term = &terms[k];
             work.lambda
                 .iter_mut()
                 .zip(&term.dlambda)
@@ -378,20 +387,19 @@ pub fn solve_friction(
         }
         let mut changed = false;
         let mut scale = 0.0f64;
-        for k in 0..k_len {
-            let term = &terms[k];
-            let row = k * k_len;
-            let alpha: f64 = work.alpha0[k] + (0..k_len).map(|j| work.coupling[row + j] * terms[j].force).sum::<f64>();
-            let hold = if term.mode == Mode::Free {
-                0.0
-            } else {
-                term.force - alpha / work.coupling[row + k]
-            };
+        for a in 0..n {
+            let k = work.active[a];
+            let row = a * n;
+            let alpha: f64 = work.alpha0[a]
+                + (0..n)
+                    .map(|b| work.coupling[row + b] * terms[work.active[b]].force)
+                    .sum::<f64>();
+            let hold = terms[k].force - alpha / work.coupling[row + a];
             // After `SETTLING` iterations an element found unable to hold stays so: the laws
             // then change only one way and the iteration ends (a joint grazing the limit of its
             // friction can make the laws cycle).
-            let stays_loose = iteration >= SETTLING && !work.holding[k];
-            let law = match term.mode {
+            let stays_loose = iteration >= SETTLING && !work.holding[a];
+            let law = match terms[k].mode {
                 Mode::Free => Law::Zero,
                 Mode::Held(sign) => {
                     if sign * hold >= -work.adhesion && !stays_loose {
@@ -405,39 +413,40 @@ pub fn solve_friction(
                     let bound = Load::at(&frictions[k], &work.lambda).bound;
                     if hold.abs() <= bound && !stays_loose {
                         Law::Hold
-                    } else if stays_loose && work.direction[k] != 0.0 {
-                        Law::Slip(work.direction[k])
+                    } else if stays_loose && work.direction[a] != 0.0 {
+                        Law::Slip(work.direction[a])
                     } else {
                         Law::Slip(-hold.signum())
                     }
                 }
             };
             let holding = law == Law::Hold;
-            work.direction[k] = if let Law::Slip(sign) = law { sign } else { 0.0 };
-            changed |= holding != work.holding[k];
-            work.holding[k] = holding;
+            work.direction[a] = if let Law::Slip(sign) = law { sign } else { 0.0 };
+            changed |= holding != work.holding[a];
+            work.holding[a] = holding;
             terms[k].hold = hold;
             let term = &terms[k];
             match law {
                 Law::Hold => {
-                    work.residual[k] = alpha;
-                    work.jacobian[row..row + k_len].copy_from_slice(&work.coupling[row..row + k_len]);
+                    work.residual[a] = alpha;
+                    work.jacobian[row..row + n].copy_from_slice(&work.coupling[row..row + n]);
                     scale = scale.max(term.force.abs());
                 }
                 Law::Zero => {
-                    work.residual[k] = term.force;
-                    for j in 0..k_len {
-                        work.jacobian[row + j] = if j == k { 1.0 } else { 0.0 };
+                    work.residual[a] = term.force;
+                    for b in 0..n {
+                        work.jacobian[row + b] = if b == a { 1.0 } else { 0.0 };
                     }
                 }
                 Law::Slip(sign) => {
                     let spec = &frictions[k];
                     let load = Load::at(spec, &work.lambda);
                     let w = term.row.dot(v);
-                    work.residual[k] = term.force + spec.viscous * w + sign * load.bound;
-                    for (j, other) in terms.iter().enumerate() {
-                        let e = if j == k { 1.0 } else { 0.0 };
-                        work.jacobian[row + j] = e + sign * load.change(spec, &work.lambda, &other.dlambda);
+                    work.residual[a] = term.force + spec.viscous * w + sign * load.bound;
+                    for b in 0..n {
+                        let e = if b == a { 1.0 } else { 0.0 };
+                        let other = &terms[work.active[b]];
+                        work.jacobian[row + b] = e + sign * load.change(spec, &work.lambda, &other.dlambda);
                     }
                     scale = scale.max(term.force.abs()).max(load.bound);
                     let slope = load.change(spec, &work.lambda, &term.dlambda).abs();
@@ -453,11 +462,11 @@ pub fn solve_friction(
                 }
             }
         }
-        if !solve_dense(&mut work.jacobian, &mut work.residual, k_len) {
+        if !solve_dense(&mut work.jacobian[..n * n], &mut work.residual[..n], n) {
             let what = "the friction and limit forces of these joints are not determined (their joints move together)";
             // Name the elements that hold (a stop or a sticking joint): theirs are the forces in
             // question; when only stops hold, say so.
-            let held: Vec<usize> = (0..k_len).filter(|&k| work.holding[k]).collect();
+            let held: Vec<usize> = (0..n).filter(|&a| work.holding[a]).map(|a| work.active[a]).collect();
             if !held.is_empty() && held.iter().all(|&k| k >= frictions.len()) {
                 let names: Vec<&str> = held.iter().map(|&k| name(k)).collect();
                 return Err(DynamicsError::Limit {
@@ -466,41 +475,56 @@ pub fn solve_friction(
                     what: "their forces are not determined (their joints move together, as a coupling or a loop makes them)".into(),
                 });
             }
-            return Err(all(what.into()));
+            return Err(all(what.into(), &work.active));
         }
         let mut step = 0.0f64;
-        for (term, d) in terms.iter_mut().zip(&work.residual) {
-            term.force -= d;
+        for a in 0..n {
+            let d = work.residual[a];
+            terms[work.active[a]].force -= d;
             step = step.max(d.abs());
         }
         if iteration > 0 && !changed && step <= 1e-13 * scale.max(f64::MIN_POSITIVE) {
             break;
         }
         if iteration + 1 == MAX_ITERATIONS {
-            return Err(all(format!(
-                "the friction and limit forces did not settle in {MAX_ITERATIONS} iterations"
-            )));
+            return Err(all(
+                format!("the friction and limit forces did not settle in {MAX_ITERATIONS} iterations"),
+                &work.active,
+            ));
         }
     }
-    for (k, term) in terms.iter_mut().enumerate() {
+    for a in 0..n {
+        let k = work.active[a];
+        let term = &mut terms[k];
         if !term.force.is_finite() {
             return Err(fail(k, "the force along the joint is not finite".into()));
         }
-        term.sticks = work.holding[k];
+        term.sticks = work.holding[a];
         term.direction = match (term.mode, term.sticks) {
-            (Mode::Stick, false) => work.direction[k],
+            (Mode::Stick, false) => work.direction[a],
             _ => 0.0,
         };
         if term.force == 0.0 {
             continue;
         }
-        a.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * term.force);
+        acc.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * term.force);
         lambda
             .iter_mut()
             .zip(&term.dlambda)
             .for_each(|(x, r)| *x += r * term.force);
     }
     Ok(())
+}
+
+/// The force (F1) of friction element `spec` slipping in direction `sign` at slip rate `w`
+/// under the multipliers `lambda`: `−c w − σ (μ N + f₀)`.
+pub fn slip_force(spec: &JointFriction, sign: f64, w: f64, lambda: &[f64]) -> f64 {
+    -spec.viscous * w - sign * Load::at(spec, lambda).bound
+}
+
+/// The friction bound `μ N + f₀` of `spec` under the multipliers `lambda`.
+pub fn friction_bound(spec: &JointFriction, lambda: &[f64]) -> f64 {
+    Load::at(spec, lambda).bound
 }
 
 /// The law an element follows at one Newton iterate.

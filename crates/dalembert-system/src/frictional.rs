@@ -4,8 +4,8 @@
 //! [`crate::friction`] and the impact law of [`crate::limit`] on top. One code for every
 //! formulation.
 
+use crate::friction::{slip_force, solve_friction, FrictionTerms, FrictionWork, Mode};
 use crate::friction::{solve_dense, RELEASE_SHARE};
-use crate::friction::{solve_friction, FrictionTerms, FrictionWork, Mode};
 use crate::limit::{impact_impulse, impact_loss, unwrap_angle, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
@@ -46,6 +46,21 @@ pub struct Frictional {
     impact_g: Vec<f64>,
     impact_lu: Vec<f64>,
     impact_p: Vec<f64>,
+    /// `v̇₀`, `λ₀` of the last evaluation: the inner formulation's, without friction and limits.
+    base_qdd: Vec<f64>,
+    base_lambda: Vec<f64>,
+    /// The response to the slipping elements' forces together ([`Frictional::slipping`]).
+    slip_dv: Vec<f64>,
+    slip_dlambda: Vec<f64>,
+    /// How the slipping elements' forces were found, over the run: by their iteration, and by
+    /// Newton's method on every element after it gave up ([`Frictional::slipping`]).
+    iterations: (usize, usize),
+    /// The forces of the last two evaluations at different times, and those times (NaN where
+    /// there is none): the forces at the next time are extrapolated from them
+    /// ([`Frictional::predict`]).
+    past: Vec<f64>,
+    latest: Vec<f64>,
+    times: (f64, f64),
 }
 
 impl std::fmt::Debug for Frictional {
@@ -99,6 +114,14 @@ impl Frictional {
             impact_g: vec![0.0; count * count],
             impact_lu: vec![0.0; count * count],
             impact_p: vec![0.0; count],
+            base_qdd: vec![0.0; n],
+            base_lambda: vec![0.0; m],
+            slip_dv: vec![0.0; n],
+            slip_dlambda: vec![0.0; m],
+            iterations: (0, 0),
+            past: vec![0.0; count],
+            latest: vec![0.0; count],
+            times: (f64::NAN, f64::NAN),
         })
     }
 
@@ -167,6 +190,158 @@ impl Frictional {
             *r = (l - l0) / scale;
         }
         Ok(())
+    }
+
+    /// The forces the solutions start from at time `t`: where the two evaluations before were at
+    /// times `t_a < t_b < t` (a step's stages), extrapolated along the line through their forces
+    /// (the stages of a step at `h/2` from each other: the start is off by `O(h²)` instead of
+    /// `O(h)`, a step saves an iteration or two); otherwise the last evaluation's.
+    fn predict(&mut self, t: f64) {
+        let (ta, tb) = self.times;
+        if !(t > tb && tb > ta && t - tb <= 2.0 * (tb - ta)) {
+            return;
+        }
+        let s = (t - tb) / (tb - ta);
+        for ((term, &now), &before) in self.terms.iter_mut().zip(&self.latest).zip(&self.past) {
+            if term.mode != Mode::Free {
+                term.force = now + s * (now - before);
+            }
+        }
+    }
+
+    /// Keeps the forces an evaluation at time `t` found ([`Frictional::predict`]).
+    fn record(&mut self, t: f64) {
+        let (_, tb) = self.times;
+        if t > tb {
+            std::mem::swap(&mut self.past, &mut self.latest);
+            self.times = (tb, t);
+        } else if t != tb {
+            // Back in time (a step taken again): no line to extend.
+            self.times = (f64::NAN, t);
+        }
+        for (f, term) in self.latest.iter_mut().zip(&self.terms) {
+            *f = term.force;
+        }
+    }
+
+    /// [`Frictional::response`] of element `k` after an evaluation at `(t, q, v)`, from that
+    /// evaluation's frictionless `v̇₀`, `λ₀`.
+    fn response_from_base(
+        &mut self,
+        k: usize,
+        at: (f64, &[f64], &[f64]),
+        baumgarte: Option<Baumgarte>,
+    ) -> Result<(), DynamicsError> {
+        let qdd0 = std::mem::take(&mut self.base_qdd);
+        let lambda0 = std::mem::take(&mut self.base_lambda);
+        let result = self.response(k, at, baumgarte, (&qdd0, &lambda0));
+        self.base_qdd = qdd0;
+        self.base_lambda = lambda0;
+        result
+    }
+
+    /// The forces of the slipping friction elements, by iterating on them (`docs/friction.md`,
+    /// "Cost"): from the last evaluation's forces, the formulation's response to all of them
+    /// together (one solve), the holding elements' forces by [`solve_friction`] on that, and each
+    /// slipping element's (F1) at the loads found, again until the forces settle. The iteration
+    /// contracts by about `μ |L Λ|` (below 1 where the law determines the force). Into `qdd`,
+    /// `lambda` (the base `v̇₀`, `λ₀` kept); true when found, false when the iteration gave up
+    /// (it contracts by less than half, or the formulation cannot respond to a force outright):
+    /// Newton's method on every element then decides, and names a Painlevé configuration.
+    fn slipping(&mut self, t: f64, v: &[f64], qdd: &mut [f64], lambda: &mut [f64]) -> Result<bool, DynamicsError> {
+        for term in &mut self.terms[..self.frictions] {
+            if matches!(term.mode, Mode::Slip(_)) {
+                term.given = true;
+                if !term.force.is_finite() {
+                    term.force = 0.0;
+                }
+            }
+        }
+        let found = self.iterate_slipping(t, v, qdd, lambda);
+        for term in &mut self.terms[..self.frictions] {
+            term.given = false;
+        }
+        let found = found?;
+        if found {
+            self.iterations.0 += 1;
+        } else {
+            self.iterations.1 += 1;
+        }
+        Ok(found)
+    }
+
+    /// The iteration of [`Frictional::slipping`], the slipping elements marked given.
+    fn iterate_slipping(
+        &mut self,
+        t: f64,
+        v: &[f64],
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
+        let mut last = f64::INFINITY;
+        for _ in 0..SLIP_ITERATIONS {
+            // Σ g_p F_p over the slipping elements, and the response to it.
+            self.dense.iter_mut().for_each(|x| *x = 0.0);
+            for term in self.terms[..self.frictions].iter().filter(|term| term.given) {
+                for &(i, g) in term.row.entries() {
+                    self.dense[i] += g * term.force;
+                }
+            }
+            if !self
+                .inner
+                .force_response(t, &self.dense, &mut self.slip_dv, &mut self.slip_dlambda)?
+            {
+                return Ok(false);
+            }
+            for ((a, a0), d) in qdd.iter_mut().zip(&self.base_qdd).zip(&self.slip_dv) {
+                *a = a0 + d;
+            }
+            for ((l, l0), d) in lambda.iter_mut().zip(&self.base_lambda).zip(&self.slip_dlambda) {
+                *l = l0 + d;
+            }
+            let system = self.inner.system();
+            // The holding elements' forces under these; a failure is Newton's on every element
+            // to report.
+            if solve_friction(system, t, v, (qdd, lambda), &mut self.terms, &mut self.work).is_err() {
+                return Ok(false);
+            }
+            // (F1) at the loads found, into `forces` (overwritten after the evaluation).
+            let (mut change, mut scale) = (0.0f64, 0.0f64);
+            let frictions = system.frictions();
+            for (k, term) in self.terms[..self.frictions].iter().enumerate() {
+                scale = scale.max(term.force.abs());
+                if let (true, Mode::Slip(sign)) = (term.given, term.mode) {
+                    let next = slip_force(&frictions[k], sign, term.row.dot(v), lambda);
+                    change = change.max((next - term.force).abs());
+                    scale = scale.max(next.abs());
+                    self.forces[k] = next;
+                }
+            }
+            if !change.is_finite() {
+                return Ok(false);
+            }
+            // Settled when the change is at round-off, or when what the contraction seen leaves
+            // of it is (`ρ / (1 − ρ)` of the last change); the forces of this iterate are kept,
+            // so `v̇`, `λ` are theirs.
+            let ratio = change / last;
+            let fast = last.is_finite() && ratio < 0.5;
+            if change <= 1e-15 * scale
+                || (fast && ratio / (1.0 - ratio) * change <= 1e-15 * scale)
+                || (last.is_finite() && !fast && change <= 1e-13 * scale)
+            {
+                return Ok(true);
+            }
+            if last.is_finite() && !fast {
+                return Ok(false);
+            }
+            for (term, &next) in self.terms[..self.frictions].iter_mut().zip(&self.forces) {
+                if term.given {
+                    term.force = next;
+                }
+            }
+            last = change;
+        }
+        Ok(false)
     }
 
     /// An impact of limit `k` (its index among the elements) at `(t, q, v)`, by (L3) of
@@ -279,6 +454,9 @@ impl Frictional {
     }
 }
 
+/// The most iterations of [`Frictional::slipping`] (each contracts by half or more).
+const SLIP_ITERATIONS: usize = 40;
+
 /// The rate (m/s or rad/s) below which a limit that starts at its bound and moves away from it
 /// starts held: round-off of a rate that is zero (a cam's surface sliding along its follower).
 const START_RATE: f64 = 1e-12;
@@ -357,21 +535,40 @@ impl Formulation for Frictional {
                     });
                 }
             }
-            if self.terms[k].mode != Mode::Free {
+            // A slipping element's force is found by the iteration on them all (no response).
+            if !matches!(self.terms[k].mode, Mode::Free | Mode::Slip(_)) {
                 self.response(k, (t, q, qd), baumgarte, (qdd, lambda))?;
             }
         }
-        solve_friction(
-            self.inner.system(),
-            t,
-            qd,
-            (qdd, lambda),
-            &mut self.terms,
-            &mut self.work,
-        )?;
+        self.base_qdd.copy_from_slice(qdd);
+        self.base_lambda.copy_from_slice(lambda);
+        let slipping = self.terms[..self.frictions]
+            .iter()
+            .any(|term| matches!(term.mode, Mode::Slip(_)));
+        self.predict(t);
+        let found = slipping && self.slipping(t, qd, qdd, lambda)?;
+        if !found {
+            // Newton's method on every element: each slipping one's response too.
+            for k in 0..self.frictions {
+                if matches!(self.terms[k].mode, Mode::Slip(_)) {
+                    self.response_from_base(k, (t, q, qd), baumgarte)?;
+                }
+            }
+            qdd.copy_from_slice(&self.base_qdd);
+            lambda.copy_from_slice(&self.base_lambda);
+            solve_friction(
+                self.inner.system(),
+                t,
+                qd,
+                (qdd, lambda),
+                &mut self.terms,
+                &mut self.work,
+            )?;
+        }
         for (f, k) in self.forces.iter_mut().zip(&self.terms) {
             *f = k.force;
         }
+        self.record(t);
         Ok(())
     }
 
@@ -436,6 +633,7 @@ impl Formulation for Frictional {
                 raw
             };
             self.coordinates[k] = s;
+            self.times = (f64::NAN, f64::NAN);
             let sign = limit.nearer_bound(s);
             let at_bound = limit.free_event(s) <= 2.0 * LIMIT_SLACK;
             // Not moving away (to round-off: a cam's surface slides along the follower).
@@ -494,6 +692,16 @@ impl Formulation for Frictional {
         }
     }
 
+    /// False for a stuck friction element that its friction could not hold at the last
+    /// evaluation ((F3), which is (F1) in the direction it slips): the law does not change where
+    /// its rate leaves the stick speed.
+    fn event_needs_location(&self, i: usize) -> bool {
+        match self.terms.get(i) {
+            Some(term) if i < self.frictions => !(term.mode == Mode::Stick && !term.sticks && term.direction != 0.0),
+            _ => true,
+        }
+    }
+
     /// The modes whose events changed sign over the step (`crossed`, the first functions are the
     /// friction elements'): a stuck joint whose rate left its stick speed slips in the rate's
     /// direction; a slip whose rate reached zero (to the location's round-off) has it set to
@@ -502,6 +710,8 @@ impl Formulation for Frictional {
     /// then sticks if its friction can hold it and otherwise reverses (`docs/friction.md`,
     /// "Events").
     fn at_event(&mut self, t: f64, q: &[f64], v: &mut [f64], crossed: &[bool]) -> Result<bool, DynamicsError> {
+        // The forces jump at an event: no line through them.
+        self.times = (f64::NAN, f64::NAN);
         let mut changed = false;
         for k in 0..self.terms.len().min(crossed.len()) {
             if !crossed[k] {
@@ -531,7 +741,9 @@ impl Formulation for Frictional {
             };
             let mut qdd = std::mem::take(&mut self.event_qdd);
             let mut lambda = std::mem::take(&mut self.event_lambda);
-            let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
+            let result = self
+                .accelerations(t, q, v, None, &mut qdd, &mut lambda)
+                .and_then(|()| self.response_from_base(k, (t, q, v), None));
             let sticks = result.and_then(|()| {
                 let term = &mut self.terms[k];
                 let impulse = -term.row.dot(v) / term.row.dot(&term.dv);

@@ -173,7 +173,7 @@ impl Events {
         let (q, v) = y.split_at(n_q);
         f.events(t + h, q, v, &mut self.g);
         let first = (self.g0.iter().zip(&self.g).enumerate())
-            .filter(|&(_, (&a, &b))| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0))
+            .filter(|&(i, (&a, &b))| ((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)) && f.event_needs_location(i))
             .map(|(i, (&a, &b))| (i, a / (a - b)))
             .min_by(|x, y| x.1.total_cmp(&y.1));
         if let Some((i, _)) = first {
@@ -267,7 +267,7 @@ impl Events {
         f.events(t + eps, q, v, &mut self.ahead);
         let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
         let first = (self.g0.iter().zip(&self.g).zip(&self.ahead).enumerate())
-            .filter(|(_, ((&a, &b), _))| changed(a, b))
+            .filter(|&(i, ((&a, &b), _))| changed(a, b) && f.event_needs_location(i))
             .map(|(i, ((&a, _), &c))| (i, -a * eps / ((c - a) * h)))
             .filter(|(_, th)| *th > 0.0 && *th <= 1.0)
             .min_by(|x, y| x.1.total_cmp(&y.1));
@@ -303,6 +303,31 @@ impl Events {
         let changed = self.settle(f, t, y, n_q)?;
         self.accepted(f, t, y, n_q);
         Ok(changed)
+    }
+
+    /// After a fixed step ending at `y` at `t` that [`Events::chord`] did not shorten: the
+    /// functions that changed sign over it without asking for a location
+    /// ([`Formulation::event_needs_location`]) are settled at its end ([`Formulation::at_event`]).
+    /// True when that changed `y` or the law.
+    pub fn settle_unlocated(
+        &mut self,
+        f: &mut dyn Formulation,
+        t: f64,
+        y: &mut [f64],
+        n_q: usize,
+    ) -> Result<bool, DynamicsError> {
+        if self.is_empty() {
+            return Ok(false);
+        }
+        let (q, v) = y.split_at_mut(n_q);
+        f.events(t, q, v, &mut self.g);
+        for (c, (&a, &b)) in self.crossed.iter_mut().zip(self.g0.iter().zip(&self.g)) {
+            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+        }
+        if !self.crossed.iter().any(|&c| c) {
+            return Ok(false);
+        }
+        f.at_event(t, q, v, &self.crossed)
     }
 
     /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.

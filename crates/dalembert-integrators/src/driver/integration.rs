@@ -682,6 +682,12 @@ impl Integration {
             if located {
                 events.defer();
             } else {
+                // A switch that does not change the law (a stuck joint already slipping by
+                // (F3)) is made at the step's end, without taking the step again.
+                if events.settle_unlocated(f, t_after, y, mon.n)? {
+                    stepper.state_changed();
+                    mon.stats.events += 1;
+                }
                 events.accepted(f, t_after, y, mon.n);
             }
             *t = t_after;
