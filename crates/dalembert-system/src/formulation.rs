@@ -362,6 +362,12 @@ pub trait Formulation: Send {
         true
     }
 
+    /// How near zero event function `i` must be where a fixed-step method ends a step at its
+    /// event (in the function's units). Default: 10⁻¹⁴.
+    fn event_tolerance(&self, _i: usize) -> f64 {
+        1e-14
+    }
+
     /// At the end of a step shortened to end at an event, where `crossed[i]` says which event
     /// functions ([`MultibodySystem::events`]) changed sign over it: whatever the event asks of
     /// the state and the law (a joint whose slip stopped there made to stick, one whose stick

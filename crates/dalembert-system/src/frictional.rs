@@ -4,7 +4,7 @@
 //! [`crate::friction`] and the impact law of [`crate::limit`] on top. One code for every
 //! formulation.
 
-use crate::friction::{slip_force, solve_friction, FrictionTerms, FrictionWork, Mode};
+use crate::friction::{slip_force, solve_friction, FrictionTerms, FrictionWork, Mode, SLIP_END};
 use crate::friction::{solve_dense, RELEASE_SHARE};
 use crate::limit::{impact_impulse, impact_loss, unwrap_angle, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
@@ -699,6 +699,18 @@ impl Formulation for Frictional {
         match self.terms.get(i) {
             Some(term) if i < self.frictions => !(term.mode == Mode::Stick && !term.sticks && term.direction != 0.0),
             _ => true,
+        }
+    }
+
+    /// A slipping friction element's: a hundredth of the margin its rate passes zero by
+    /// ([`Mode::event`]: `10⁻³ w_s`), so that a step ended at its event has the rate past zero by
+    /// 0.99 to 1.01 thousandths of the stick speed, which the impulse at the event takes back
+    /// (the impulse stands for the slip's friction over the time the location leaves, to first
+    /// order). Every other function's is the default.
+    fn event_tolerance(&self, i: usize) -> f64 {
+        match (self.inner.system().frictions().get(i), self.terms.get(i)) {
+            (Some(spec), Some(term)) if matches!(term.mode, Mode::Slip(_)) => 1e-2 * SLIP_END * spec.stick_speed,
+            _ => 1e-14,
         }
     }
 

@@ -47,6 +47,9 @@ pub(super) struct Events {
     bracket: ((f64, f64), (f64, f64)),
     /// Which end of the bracket the last refinement moved (true: the far one).
     last_side: Option<bool>,
+    /// The fraction tried before the last one and the aimed function's value there (the step's
+    /// start at first): the secant through it and the last ([`Events::refine`]).
+    previous: (f64, f64),
 }
 
 impl Events {
@@ -73,6 +76,7 @@ impl Events {
             pending: false,
             bracket: ((0.0, 0.0), (1.0, 0.0)),
             last_side: None,
+            previous: (0.0, 0.0),
         }
     }
 
@@ -180,21 +184,27 @@ impl Events {
             self.aimed = Some(i);
             self.bracket = ((0.0, self.g0[i]), (1.0, self.g[i]));
             self.last_side = None;
+            self.previous = (0.0, self.g0[i]);
         }
         first.map(|(_, theta)| theta)
     }
 
     /// After a fixed step shortened to the fraction `theta` of the step `chord` located (from its
-    /// start `t`, ending at `y`): the next fraction to try for the aimed function's zero, by
-    /// regula falsi with the Illinois rule on the bracket of fractions tried so far (the chord's
-    /// fixed end stalls on a curved function: a body falling onto a stop), or `None` when the
-    /// step ends at the zero (within 10⁻¹⁴ or a bracket of 10⁻¹² of the step).
+    /// start `t`, ending at `y`): the next fraction to try for the aimed function's zero, or
+    /// `None` when the step ends at the zero (within the function's
+    /// [`Formulation::event_tolerance`] or a bracket of 10⁻¹² of the step).
+    /// The secant through the last two fractions tried (the first through the step's start),
+    /// where it falls inside the bracket of fractions tried so far: both are steps taken with
+    /// the law before the event, where the full step's end is not (its stages past the event
+    /// followed the law after it, a friction that reversed). Otherwise regula falsi with the
+    /// Illinois rule on the bracket (the chord's fixed end stalls on a curved function: a body
+    /// falling onto a stop).
     pub fn refine(&mut self, f: &mut dyn Formulation, t: f64, theta: f64, y: &[f64], n_q: usize) -> Option<f64> {
         let i = self.aimed?;
         let (q, v) = y.split_at(n_q);
         f.events(t, q, v, &mut self.g);
         let (a, g) = (self.g0[i], self.g[i]);
-        if g.abs() <= 1e-14 || !g.is_finite() {
+        if g.abs() <= f.event_tolerance(i) || !g.is_finite() {
             return None;
         }
         let ((lo, glo), (hi, ghi)) = (&mut self.bracket.0, &mut self.bracket.1);
@@ -215,6 +225,11 @@ impl Events {
         }
         if *hi - *lo <= 1e-12 {
             return None;
+        }
+        let (before, g_before) = std::mem::replace(&mut self.previous, (theta, g));
+        let secant = theta - g * (theta - before) / (g - g_before);
+        if secant > *lo && secant < *hi {
+            return Some(secant);
         }
         Some(*lo + (*hi - *lo) * *glo / (*glo - *ghi))
     }
