@@ -18,7 +18,11 @@ fn chain(formulation: &str, friction: bool) -> Scene {
         );
     }
     for k in 0..n {
-        let first = if k == 0 { "ground".into() } else { format!("link{}", k - 1) };
+        let first = if k == 0 {
+            "ground".into()
+        } else {
+            format!("link{}", k - 1)
+        };
         text += &format!(
             "[[joints]]\nname = \"J{k}\"\ntype = \"revolute\"\nbodies = [\"{first}\", \"link{k}\"]\nat = [{k}.0, 0.0]\n"
         );
@@ -43,8 +47,16 @@ fn main() {
             group.bench_function(BenchmarkId::new(name, formulation), |b| {
                 b.iter(|| {
                     let mut f = sim.formulation().expect("formulation");
-                    integrate(f.as_mut(), sim.start, sim.end, &sim.q, &sim.qd, &sim.integrator, &mut |_| {})
-                        .expect("run")
+                    integrate(
+                        f.as_mut(),
+                        sim.start,
+                        sim.end,
+                        &sim.q,
+                        &sim.qd,
+                        &sim.integrator,
+                        &mut |_| {},
+                    )
+                    .expect("run")
                 })
             });
         }
