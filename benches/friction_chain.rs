@@ -6,30 +6,11 @@
 use criterion::{BenchmarkId, Criterion};
 use dalembert::integrators::integrate;
 use dalembert::Scene;
+use dalembert_testkit::chain_scene::planar_chain_toml;
 
 /// The chain's scene for `formulation`, with pin friction in every joint or none.
 fn chain(formulation: &str, friction: bool) -> Scene {
-    let n = 16;
-    let mut text = String::from("[scene]\ngravity = [0.0, -9.81]\n");
-    for k in 0..n {
-        text += &format!(
-            "[[bodies]]\nname = \"link{k}\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [{}, 0.0]\n",
-            k as f64 + 0.5
-        );
-    }
-    for k in 0..n {
-        let first = if k == 0 {
-            "ground".into()
-        } else {
-            format!("link{}", k - 1)
-        };
-        text += &format!(
-            "[[joints]]\nname = \"J{k}\"\ntype = \"revolute\"\nbodies = [\"{first}\", \"link{k}\"]\nat = [{k}.0, 0.0]\n"
-        );
-        if friction {
-            text += "friction = { coefficient = 0.1, radius = 0.02 }\n";
-        }
-    }
+    let mut text = planar_chain_toml(16, friction.then_some((0.1, 0.02)));
     text += &format!(
         "[simulation]\nend = 2.0\nformulation = \"{formulation}\"\nintegrator = \"rk4\"\nstep = 1e-3\n\
          output_every = 0.01\nstabilization = \"projection\"\n"

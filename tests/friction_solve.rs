@@ -7,6 +7,7 @@
 
 use dalembert::system::SlipRow;
 use dalembert::Scene;
+use dalembert_testkit::chain_scene::planar_chain_toml;
 
 const FORMULATIONS: [&str; 3] = ["augmented", "embedding", "amalgamated"];
 
@@ -14,26 +15,7 @@ const FORMULATIONS: [&str; 3] = ["augmented", "embedding", "amalgamated"];
 /// turning at `omegas[k]` (the joints' rates are their differences), with pin friction `mu`,
 /// `r` on every joint, or none.
 fn chain(formulation: &str, friction: Option<(f64, f64)>, omegas: &[f64]) -> Scene {
-    let mut text = String::from("[scene]\ngravity = [0.0, -9.81]\n");
-    for k in 0..omegas.len() {
-        text += &format!(
-            "[[bodies]]\nname = \"link{k}\"\nmass = 1.0\nshape = {{ rod = 1.0 }}\nposition = [{}, 0.0]\n",
-            k as f64 + 0.5
-        );
-    }
-    for k in 0..omegas.len() {
-        let first = if k == 0 {
-            "ground".into()
-        } else {
-            format!("link{}", k - 1)
-        };
-        text += &format!(
-            "[[joints]]\nname = \"J{k}\"\ntype = \"revolute\"\nbodies = [\"{first}\", \"link{k}\"]\nat = [{k}.0, 0.0]\n"
-        );
-        if let Some((mu, r)) = friction {
-            text += &format!("friction = {{ coefficient = {mu}, radius = {r} }}\n");
-        }
-    }
+    let mut text = planar_chain_toml(omegas.len(), friction);
     text += &format!("[simulation]\nformulation = \"{formulation}\"\n[initial.velocities]\n");
     for (k, w) in omegas.iter().enumerate() {
         text += &format!("\"link{k}.omega\" = {w}\n");

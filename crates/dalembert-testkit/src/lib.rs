@@ -4,6 +4,7 @@
 //! Every builder returns a [`Mechanism`]: the model and a consistent initial state.
 
 pub mod anchors;
+pub mod chain_scene;
 pub mod closed_form;
 pub mod fuzz;
 pub mod generator;

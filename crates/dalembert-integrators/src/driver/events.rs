@@ -331,18 +331,9 @@ impl Events {
         y: &mut [f64],
         n_q: usize,
     ) -> Result<bool, DynamicsError> {
-        if self.is_empty() {
-            return Ok(false);
-        }
-        let (q, v) = y.split_at_mut(n_q);
-        f.events(t, q, v, &mut self.g);
-        for (c, (&a, &b)) in self.crossed.iter_mut().zip(self.g0.iter().zip(&self.g)) {
-            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
-        }
-        if !self.crossed.iter().any(|&c| c) {
-            return Ok(false);
-        }
-        f.at_event(t, q, v, &self.crossed)
+        // No function was aimed at: only the sign changes count.
+        self.aimed = None;
+        self.settle(f, t, y, n_q)
     }
 
     /// The run accepted its step, ending at `y` at `t`: the functions there start the next step.
