@@ -52,9 +52,6 @@ pub struct Frictional {
     /// The response to the slipping elements' forces together ([`Frictional::slipping`]).
     slip_dv: Vec<f64>,
     slip_dlambda: Vec<f64>,
-    /// How the slipping elements' forces were found, over the run: by their iteration, and by
-    /// Newton's method on every element after it gave up ([`Frictional::slipping`]).
-    iterations: (usize, usize),
     /// The forces of the last two evaluations at different times, and those times (NaN where
     /// there is none): the forces at the next time are extrapolated from them
     /// ([`Frictional::predict`]).
@@ -118,7 +115,6 @@ impl Frictional {
             base_lambda: vec![0.0; m],
             slip_dv: vec![0.0; n],
             slip_dlambda: vec![0.0; m],
-            iterations: (0, 0),
             past: vec![0.0; count],
             latest: vec![0.0; count],
             times: (f64::NAN, f64::NAN),
@@ -261,13 +257,7 @@ impl Frictional {
         for term in &mut self.terms[..self.frictions] {
             term.given = false;
         }
-        let found = found?;
-        if found {
-            self.iterations.0 += 1;
-        } else {
-            self.iterations.1 += 1;
-        }
-        Ok(found)
+        found
     }
 
     /// The iteration of [`Frictional::slipping`], the slipping elements marked given.
