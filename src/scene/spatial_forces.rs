@@ -1,7 +1,7 @@
 //! The `[[forces]]` of a spatial scene (`docs/scenes.md`, "Spatial scenes"): point forces and
 //! torques (constant or functions of time, global or body axes), torques about a joint's axis,
 //! spring–damper–actuators and rotational spring–dampers, and compliant sphere–plane and
-//! sphere–sphere contact (`docs/contact.md`).
+//! sphere–sphere and capsule–capsule contact (`docs/contact.md`).
 
 use super::error::SceneError;
 use super::format::FunctionDef;
@@ -46,6 +46,9 @@ pub(crate) struct ForceDef {
     pub range: Option<[f64; 2]>,
     pub radius: Option<f64>,
     pub radii: Option<[f64; 2]>,
+    /// A `capsule-capsule` element's two segments, each by its two ends (global).
+    #[serde(default, deserialize_with = "strict::two_segments_opt")]
+    pub segments: Option<strict::TwoSegments>,
     /// A `box-plane` element's edge lengths along its body's axes.
     pub size: Option<[f64; 3]>,
     pub plane: Option<PlaneDef>,
@@ -412,6 +415,29 @@ pub(crate) fn force(
                 law: law()?,
             }
         }
+        "capsule-capsule" => {
+            check(d.only(&[
+                "bodies",
+                "segments",
+                "radii",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ]))?;
+            let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
+            let bodies = [names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?];
+            Force::CapsuleCapsule {
+                name,
+                bodies,
+                segments: d.segments.ok_or_else(|| {
+                    err("needs 'segments = [[[x1, y1, z1], [x2, y2, z2]], [[x3, y3, z3], [x4, y4, z4]]]' (each capsule's segment's ends, global)")
+                })?,
+                radii: d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)"))?,
+                law: law()?,
+            }
+        }
         "code" => {
             check(
                 d.only(&["body"])
@@ -425,7 +451,7 @@ pub(crate) fn force(
         }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, servo, sphere-plane, box-plane, capsule-plane, sphere-sphere, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, servo, sphere-plane, box-plane, capsule-plane, sphere-sphere, capsule-capsule, code)"
             )))
         }
     })
@@ -477,9 +503,14 @@ pub(crate) fn rigid_sphere_plane(
             d.kind
         )));
     }
+    if d.kind == "capsule-capsule" {
+        return Err(err(
+            "a rigid capsule-capsule contact is not built (two capsules lying along each other touch along a line, and simultaneous impacts are not resolved): use the compliant law",
+        ));
+    }
     if d.kind != "sphere-plane" {
         return Err(err(&format!(
-            "'rigid' is for sphere-plane contacts, this element is '{}'",
+            "'rigid' is for sphere-plane and sphere-sphere contacts, this element is '{}'",
             d.kind
         )));
     }

@@ -213,6 +213,28 @@ pub(crate) fn two_axes_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f
         .map_err(D::Error::custom)
 }
 
+/// Two segments, each by its two ends.
+pub(crate) type TwoSegments = [[[f64; 3]; 2]; 2];
+
+/// Deserializes an optional pair of segments `[[[x, y, z], [x, y, z]], [[x, y, z], [x, y, z]]]`
+/// (each by its two ends).
+pub(crate) fn two_segments_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<TwoSegments>, D::Error> {
+    const WHAT: &str =
+        "two segments [[[x1, y1, z1], [x2, y2, z2]], [[x3, y3, z3], [x4, y4, z4]]] (each by its two ends)";
+    let segments = match Value::deserialize(d)? {
+        Value::Array(a)
+            if a.len() == 2
+                && a.iter()
+                    .all(|p| matches!(p, Value::Array(e) if e.first().is_some_and(|x| !x.is_array()))) =>
+        {
+            Err(format!("expected {WHAT}, got one segment (two points)"))
+        }
+        Value::Array(a) if a.len() == 2 => two_xyz(&a[0], WHAT).and_then(|s| Ok([s, two_xyz(&a[1], WHAT)?])),
+        other => Err(format!("expected {WHAT}, got {}", describe(&other))),
+    };
+    segments.map(Some).map_err(D::Error::custom)
+}
+
 fn two_xyz(v: &Value, what: &str) -> Result<[[f64; 3]; 2], String> {
     match v {
         Value::Array(a) if a.len() == 2 => {

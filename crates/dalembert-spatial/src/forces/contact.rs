@@ -1,5 +1,5 @@
 //! Compliant contact of a sphere on a body with a plane fixed to the ground, and of two spheres
-//! on two bodies (`docs/contact.md`).
+//! or capsules on two bodies (`docs/contact.md`).
 //!
 //! With the sphere's centre `c`, radius `R`, the plane's point `p₀` and unit normal `n` (out of
 //! the solid), the penetration is `δ = R − n·(c − p₀)` and its rate `δ̇ = −n·ċ`. Where `δ > 0` the
@@ -24,34 +24,47 @@
 //!
 //! Two spheres (centres `cᵢ`, `cⱼ`, radii `Rᵢ`, `Rⱼ`) overlap by `δ = Rᵢ + Rⱼ − |cⱼ − cᵢ|` along
 //! `n = (cⱼ − cᵢ) / |cⱼ − cᵢ|`, `δ̇ = −n·(ċⱼ − ċᵢ)`; the same (K1) pushes `j` along `n` and `i`
-//! against it at the middle of the overlap, and (K2) acts on the relative sliding there.
+//! against it at the middle of the overlap, and (K2) acts on the relative sliding there. Two
+//! capsules are the same with `cᵢ`, `cⱼ` the closest points of their axes ([`super::segments`]):
+//! `δ` is then `Rᵢ + Rⱼ` less the distance of the segments, whose change is `n` at those points
+//! (they are nearest, so moving them along the axes changes the distance by nothing to first
+//! order), so the force is still the gradient of `k δⁿ⁺¹ / (n + 1)` and the rate still
+//! `−n·(ċⱼ − ċᵢ)` with `ċ` the velocities of the axes' material points there. A sphere is a
+//! capsule whose two ends are one point.
 
+use super::segments::closest_parameters;
 use super::{add_point_force, V3};
 use crate::frame::Frame;
 use dalembert_system::{ContactLaw, ContactResultant};
 
-/// Two spheres on two bodies (either may be the ground).
+/// Two spheres swept along segments (capsules; a sphere's segment has zero length) on two
+/// bodies (either may be the ground).
 #[derive(Debug, Clone)]
-pub(crate) struct SphereSphere {
-    /// The bodies (`None`: the ground) and their spheres' centres in their frames.
-    pub ends: [(Option<usize>, V3); 2],
+pub(crate) struct SweptPair {
+    /// The bodies (`None`: the ground) and their segments' ends in their frames.
+    pub ends: [(Option<usize>, [V3; 2]); 2],
     /// Radii `Rᵢ`, `Rⱼ` (m).
     pub radii: [f64; 2],
     /// The law.
     pub law: ContactLaw,
 }
 
-impl SphereSphere {
-    /// Centres (global), their arms from the body origins, and the overlap `δ`.
+impl SweptPair {
+    /// The frames, the closest points of the segments (global) and their arms from the body
+    /// origins, and the overlap `δ`.
     fn geometry(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> ([Frame; 2], [V3; 2], [V3; 2], f64) {
         let frames = [frame(self.ends[0].0), frame(self.ends[1].0)];
-        let arms = [frames[0].global(&self.ends[0].1), frames[1].global(&self.ends[1].1)];
-        let centres = [frames[0].r + arms[0], frames[1].r + arms[1]];
+        // The ends' arms from the body origins, and the ends.
+        let ends = [0, 1].map(|k| self.ends[k].1.map(|e| frames[k].global(&e)));
+        let points = [0, 1].map(|k| ends[k].map(|arm| frames[k].r + arm));
+        let (s, t) = closest_parameters(points[0], points[1]);
+        let arms = [(0, s), (1, t)].map(|(k, x)| ends[k][0] + x * (ends[k][1] - ends[k][0]));
+        let centres = [0, 1].map(|k| frames[k].r + arms[k]);
         let depth = self.radii[0] + self.radii[1] - (centres[1] - centres[0]).norm();
         (frames, arms, centres, depth)
     }
 
-    /// The contact force on the second sphere's body (on the first: its opposite), where it acts
+    /// The contact force on the second body (on the first: its opposite), where it acts
     /// (global) and the two bodies' frames, or `None` apart (or concentric: no direction to push
     /// along).
     fn load(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<(V3, V3, [Frame; 2])> {

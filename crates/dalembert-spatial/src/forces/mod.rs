@@ -10,13 +10,14 @@
 //! | joint torque, rotational spring–damper | `τ = −k (θ − θ₀) − c θ̇ + f(t)` about a revolute or cylindrical joint's axis | [`about_axis`] |
 //! | joint servo | `τ = clamp(−k (θ − θ*(t)) − c θ̇ + f(t), τ_lo, τ_hi)` about the same axis | [`about_axis`] |
 //! | sphere–plane contact | Hunt–Crossley normal force and regularized Coulomb friction between a sphere on a body and a plane of the ground | `contact.rs` |
-//! | sphere–sphere contact | the same law between spheres on two bodies | `contact.rs` |
+//! | sphere–sphere, capsule–capsule contact | the same law between spheres or capsules on two bodies | `contact.rs`, `segments.rs` |
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
 mod along_axis;
 mod contact;
 mod jacobians;
+mod segments;
 pub mod user;
 
 use crate::frame::{Frame, NV};
@@ -24,7 +25,7 @@ use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
 use along_axis::SlideForce;
-use contact::{SpherePlane, SphereSphere};
+use contact::{SpherePlane, SweptPair};
 use dalembert_system::{AxisLaw, ContactLaw};
 use dalembert_system::{ModelError, TimeFunction};
 use nalgebra::Vector3;
@@ -210,6 +211,21 @@ pub enum Force {
         /// The contact law (checked when the model is built).
         law: ContactLaw,
     },
+    /// Compliant contact of two capsules (segments swept by spheres) on two bodies (either may be
+    /// the ground), with the law of [`Force::SpherePlane`] at the closest points of their axes
+    /// (`docs/contact.md`, "Capsules"); a segment whose ends are one point is a sphere.
+    CapsuleCapsule {
+        /// Name.
+        name: String,
+        /// The two bodies.
+        bodies: [BodyRef; 2],
+        /// Each capsule's segment's two ends in the initial configuration (global).
+        segments: [[[f64; 3]; 2]; 2],
+        /// Radii (m).
+        radii: [f64; 2],
+        /// The contact law (checked when the model is built).
+        law: ContactLaw,
+    },
     /// A force the user writes ([`UserForce`]).
     User(Arc<dyn UserForce>),
 }
@@ -226,6 +242,7 @@ impl Force {
             | Force::BoxPlane { name, .. }
             | Force::CapsulePlane { name, .. }
             | Force::SphereSphere { name, .. }
+            | Force::CapsuleCapsule { name, .. }
             | Force::RotationalSpringDamper { name, .. }
             | Force::JointServo { name, .. } => name,
             Force::User(u) => u.name(),
@@ -279,7 +296,7 @@ pub(crate) enum ForceData {
     /// A law along a prismatic joint's axis (a servo on a slide).
     AlongAxis(SlideForce),
     SpherePlane(SpherePlane),
-    SphereSphere(SphereSphere),
+    SweptPair(SweptPair),
     User(Arc<dyn UserForce>),
 }
 
@@ -354,6 +371,23 @@ impl ForceData {
             f.a.transpose() * (V3::from(*p) - f.r)
         };
         let finite = |xs: &[f64]| xs.iter().all(|x| x.is_finite());
+        // Two spheres or capsules: their bodies, segments (global), radii and law.
+        let swept = |bodies: &[BodyRef; 2], segments: [[[f64; 3]; 2]; 2], radii: &[f64; 2], law: &ContactLaw| {
+            positive(radii[0], "radius")
+                .and_then(|()| positive(radii[1], "radius"))
+                .and_then(|()| law.check())
+                .map_err(|m| bad(&m))?;
+            let (bi, bj) = (index(bodies[0])?, index(bodies[1])?);
+            if bi == bj {
+                return Err(bad("must be between two different bodies"));
+            }
+            let ends = |b: Option<usize>, s: &[[f64; 3]; 2]| [local(b, &s[0]), local(b, &s[1])];
+            Ok(ForceData::SweptPair(SweptPair {
+                ends: [(bi, ends(bi, &segments[0])), (bj, ends(bj, &segments[1]))],
+                radii: *radii,
+                law: *law,
+            }))
+        };
         let functions =
             |fs: &[TimeFunction]| -> Result<(), ModelError> { fs.iter().try_for_each(|f| f.validate(&element)) };
         let non_negative = |pairs: &[(f64, &str)]| -> Result<(), ModelError> {
@@ -592,19 +626,19 @@ impl ForceData {
                 if !finite(&centres[0]) || !finite(&centres[1]) {
                     return Err(bad("centres must be finite"));
                 }
-                positive(radii[0], "radius")
-                    .and_then(|()| positive(radii[1], "radius"))
-                    .map_err(|m| bad(&m))?;
-                law.check().map_err(|m| bad(&m))?;
-                let (bi, bj) = (index(bodies[0])?, index(bodies[1])?);
-                if bi == bj {
-                    return Err(bad("must be between two different bodies"));
+                swept(bodies, [[centres[0]; 2], [centres[1]; 2]], radii, law)?
+            }
+            Force::CapsuleCapsule {
+                bodies,
+                segments,
+                radii,
+                law,
+                ..
+            } => {
+                if !segments.iter().flatten().all(|p| finite(p)) {
+                    return Err(bad("the segments' ends must be finite"));
                 }
-                ForceData::SphereSphere(SphereSphere {
-                    ends: [(bi, local(bi, &centres[0])), (bj, local(bj, &centres[1]))],
-                    radii: *radii,
-                    law: *law,
-                })
+                swept(bodies, *segments, radii, law)?
             }
             Force::User(u) => ForceData::User(u.clone()),
         })
@@ -616,7 +650,7 @@ impl ForceData {
         match self {
             ForceData::PointForce { body, .. } | ForceData::Torque { body, .. } => vec![*body],
             ForceData::SpherePlane(c) => vec![c.body],
-            ForceData::SphereSphere(c) => c.ends.iter().filter_map(|e| e.0).collect(),
+            ForceData::SweptPair(c) => c.ends.iter().filter_map(|e| e.0).collect(),
             ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
             ForceData::AboutAxis(a) => a.bodies(),
             ForceData::AlongAxis(a) => a.bodies(),
@@ -694,7 +728,7 @@ impl ForceData {
             ForceData::AboutAxis(a) => a.add(t, frame, out),
             ForceData::AlongAxis(a) => a.add(t, frame, out),
             ForceData::SpherePlane(c) => c.add(frame, out),
-            ForceData::SphereSphere(c) => c.add(frame, out),
+            ForceData::SweptPair(c) => c.add(frame, out),
             ForceData::User(u) => u.add(t, &Frames::new(frame), &mut Loads::new(frame, out)),
         }
     }
@@ -715,7 +749,7 @@ impl ForceData {
             ForceData::AboutAxis(a) => a.potential(t, frame),
             ForceData::AlongAxis(a) => a.potential(t, frame),
             ForceData::SpherePlane(c) => c.potential(frame),
-            ForceData::SphereSphere(c) => c.potential(frame),
+            ForceData::SweptPair(c) => c.potential(frame),
             ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => 0.0,
         }
@@ -727,14 +761,14 @@ impl ForceData {
     pub fn resultant(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<dalembert_system::ContactResultant<3>> {
         match self {
             ForceData::SpherePlane(c) => Some(c.resultant(frame)),
-            ForceData::SphereSphere(c) => Some(c.resultant(frame)),
+            ForceData::SweptPair(c) => Some(c.resultant(frame)),
             _ => None,
         }
     }
 
     /// True for a contact element (it has a gap: [`ForceData::gap`]).
     pub fn is_contact(&self) -> bool {
-        matches!(self, ForceData::SpherePlane(_) | ForceData::SphereSphere(_))
+        matches!(self, ForceData::SpherePlane(_) | ForceData::SweptPair(_))
     }
 
     /// A contact's gap at the state behind `frame` (positive apart, negative in contact), the
@@ -743,7 +777,7 @@ impl ForceData {
     pub fn gap(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> Option<f64> {
         match self {
             ForceData::SpherePlane(c) => Some(-c.penetration(frame)),
-            ForceData::SphereSphere(c) => Some(-c.overlap(frame)),
+            ForceData::SweptPair(c) => Some(-c.overlap(frame)),
             _ => None,
         }
     }
@@ -755,7 +789,7 @@ impl ForceData {
             ForceData::AboutAxis(a) => a.is_conservative(),
             ForceData::AlongAxis(a) => a.is_conservative(),
             ForceData::SpherePlane(c) => c.is_conservative(),
-            ForceData::SphereSphere(c) => c.is_conservative(),
+            ForceData::SweptPair(c) => c.is_conservative(),
             ForceData::User(u) => u.is_conservative(),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => false,
         }
