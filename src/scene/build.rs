@@ -19,7 +19,7 @@ use dalembert_constraints::{
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
     Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, PointForce,
-    RotationalSpringDamper, ShapeLine, SpringDamper, Torque, Vec2,
+    RotationalSpringDamper, SegmentSegment, ShapeLine, SpringDamper, Torque, Vec2,
 };
 use dalembert_system::{TimeFunction, REST_SPEED};
 use std::cell::RefCell;
@@ -458,6 +458,11 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed"],
         "circle-profile" => &["body", "at", "radius", "profile", "rigid", "restitution", "rest_speed"],
         "line-profile" => &["body", "line", "profile", "rigid", "restitution", "rest_speed"],
+        "segment-segment" => {
+            return Err(err(
+                "a rigid segment-segment contact is not built (two segments lying along each other touch along a line, and simultaneous impacts are not resolved): use the compliant law".into(),
+            ))
+        }
         "polygon-line" | "segment-line" => {
             return Err(err(format!(
                 "a rigid {} contact is not built (its vertices or ends strike at once, and simultaneous impacts are not resolved): use the compliant law",
@@ -875,18 +880,20 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
-    const CONTACTS: [&str; 6] = [
+    const CONTACTS: [&str; 7] = [
         "circle-line",
         "circle-circle",
+        "segment-segment",
         "circle-profile",
         "line-profile",
         "polygon-line",
         "segment-line",
     ];
     if !CONTACTS.contains(&d.kind.as_str()) {
-        const CONTACT: [&str; 9] = [
+        const CONTACT: [&str; 10] = [
             "radius",
             "radii",
+            "segments",
             "line",
             "profile",
             "vertices",
@@ -1082,6 +1089,34 @@ fn force(
                 law: contact_law(d).map_err(err)?,
             })
         }
+        "segment-segment" => {
+            const KEYS: [&str; 8] = [
+                "bodies",
+                "segments",
+                "radii",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ];
+            if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
+                return Err(err(format!("'{key}' does not belong to a segment-segment element")));
+            }
+            let pr = pair()?;
+            let [s0, s1] = d.segments.ok_or_else(|| {
+                err("needs 'segments = [[[x1, y1], [x2, y2]], [[x3, y3], [x4, y4]]]' (each segment's ends, global)".into())
+            })?;
+            let local = |k: usize, s: [[f64; 2]; 2]| s.map(|p| local_point_of(pr[k], &b.q, v2(p)));
+            let [r0, r1] = d.radii.ok_or_else(|| err("needs 'radii = [r1, r2]' (m)".into()))?;
+            Box::new(SegmentSegment {
+                name: d.name.clone(),
+                bodies: (pr[0], pr[1]),
+                segments: (local(0, s0), local(1, s1)),
+                radii: (r0, r1),
+                law: contact_law(d).map_err(err)?,
+            })
+        }
         "circle-profile" | "line-profile" => {
             return Err(err(format!(
                 "a compliant {} contact is not built yet: give rigid = true (a rigid contact)",
@@ -1103,7 +1138,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, circle-profile, line-profile, polygon-line, segment-line, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, segment-segment, circle-profile, line-profile, polygon-line, segment-line, code)"
             )))
         }
     };

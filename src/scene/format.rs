@@ -168,6 +168,9 @@ pub(crate) struct ForceDef {
     pub bodies: Option<[String; 2]>,
     pub joint: Option<String>,
     pub at: Option<Points>,
+    /// A `segment-segment` element's two segments, each by its two ends (global).
+    #[serde(default, deserialize_with = "strict::two_segments2_opt")]
+    pub segments: Option<strict::TwoSegments<2>>,
     #[serde(default, deserialize_with = "strict::xy_opt")]
     pub point: Option<[f64; 2]>,
     pub value: Option<ValueDef>,
@@ -205,6 +208,7 @@ impl ForceDef {
             ("bodies", self.bodies.is_some()),
             ("joint", self.joint.is_some()),
             ("at", self.at.is_some()),
+            ("segments", self.segments.is_some()),
             ("point", self.point.is_some()),
             ("value", self.value.is_some()),
             ("fx", self.fx.is_some()),

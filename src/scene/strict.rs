@@ -213,26 +213,55 @@ pub(crate) fn two_axes_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[[f
         .map_err(D::Error::custom)
 }
 
-/// Two segments, each by its two ends.
-pub(crate) type TwoSegments = [[[f64; 3]; 2]; 2];
+/// Two segments in `N` dimensions, each by its two ends.
+pub(crate) type TwoSegments<const N: usize = 3> = [[[f64; N]; 2]; 2];
 
-/// Deserializes an optional pair of segments `[[[x, y, z], [x, y, z]], [[x, y, z], [x, y, z]]]`
-/// (each by its two ends).
+/// Deserializes an optional pair of spatial segments
+/// `[[[x, y, z], [x, y, z]], [[x, y, z], [x, y, z]]]` (each by its two ends).
 pub(crate) fn two_segments_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<TwoSegments>, D::Error> {
-    const WHAT: &str =
-        "two segments [[[x1, y1, z1], [x2, y2, z2]], [[x3, y3, z3], [x4, y4, z4]]] (each by its two ends)";
-    let segments = match Value::deserialize(d)? {
-        Value::Array(a)
-            if a.len() == 2
-                && a.iter()
-                    .all(|p| matches!(p, Value::Array(e) if e.first().is_some_and(|x| !x.is_array()))) =>
-        {
-            Err(format!("expected {WHAT}, got one segment (two points)"))
-        }
-        Value::Array(a) if a.len() == 2 => two_xyz(&a[0], WHAT).and_then(|s| Ok([s, two_xyz(&a[1], WHAT)?])),
-        other => Err(format!("expected {WHAT}, got {}", describe(&other))),
+    two_segments(
+        &Value::deserialize(d)?,
+        "two segments [[[x1, y1, z1], [x2, y2, z2]], [[x3, y3, z3], [x4, y4, z4]]] (each by its two ends)",
+        "[x, y, z] (three numbers)",
+    )
+    .map(Some)
+    .map_err(D::Error::custom)
+}
+
+/// Deserializes an optional pair of planar segments `[[[x, y], [x, y]], [[x, y], [x, y]]]`.
+pub(crate) fn two_segments2_opt<'de, D: Deserializer<'de>>(d: D) -> Result<Option<TwoSegments<2>>, D::Error> {
+    two_segments(
+        &Value::deserialize(d)?,
+        "two segments [[[x1, y1], [x2, y2]], [[x3, y3], [x4, y4]]] (each by its two ends)",
+        "[x, y] (two numbers)",
+    )
+    .map(Some)
+    .map_err(D::Error::custom)
+}
+
+fn two_segments<const N: usize>(v: &Value, what: &str, point: &str) -> Result<TwoSegments<N>, String> {
+    let Value::Array(a) = v else {
+        return Err(format!("expected {what}, got {}", describe(v)));
     };
-    segments.map(Some).map_err(D::Error::custom)
+    let is_point = |p: &Value| matches!(p, Value::Array(e) if e.first().is_some_and(|x| !x.is_array()));
+    if a.len() == 2 && a.iter().all(is_point) {
+        return Err(format!("expected {what}, got one segment (two points)"));
+    }
+    if a.len() != 2 {
+        return Err(format!("expected {what}, got an array of {}", a.len()));
+    }
+    let segment = |s: &Value| -> Result<[[f64; N]; 2], String> {
+        match s {
+            Value::Array(e) if e.len() == 2 => {
+                let p = |k: usize| {
+                    numbers::<N>(&e[k], &format!("each point as {point}")).map_err(|m| format!("{what}: {m}"))
+                };
+                Ok([p(0)?, p(1)?])
+            }
+            other => Err(format!("expected {what}, got {} for a segment", describe(other))),
+        }
+    };
+    Ok([segment(&a[0])?, segment(&a[1])?])
 }
 
 fn two_xyz(v: &Value, what: &str) -> Result<[[f64; 3]; 2], String> {

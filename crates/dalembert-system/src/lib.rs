@@ -40,6 +40,7 @@ pub mod model_error;
 pub mod number;
 pub mod partition;
 pub mod residual_tangent;
+pub mod segment_distance;
 pub mod sparse_pattern;
 pub mod structure;
 pub mod system;

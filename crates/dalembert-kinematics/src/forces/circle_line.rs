@@ -29,39 +29,21 @@ pub struct CircleLine {
     pub law: ContactLaw,
 }
 
-/// Compliant contact of two circles on two bodies (either may be the ground), with the law of
-/// [`CircleLine`]: they overlap by `δ = Rᵢ + Rⱼ − |cⱼ − cᵢ|` along `n = (cⱼ − cᵢ) / |cⱼ − cᵢ|`,
-/// `δ̇ = −n·(ċⱼ − ċᵢ)`; the normal force pushes `j` along `n` and `i` against it at the middle of
-/// the overlap, and friction acts on the bodies' relative sliding there.
-#[derive(Debug, Clone)]
-pub struct CircleCircle {
-    /// Element name.
-    pub name: String,
-    /// The two bodies.
-    pub bodies: (BodyRef, BodyRef),
-    /// The circles' centres in their bodies' coordinates.
-    pub centres: (Vec2, Vec2),
-    /// Radii `Rᵢ`, `Rⱼ` (m).
-    pub radii: (f64, f64),
-    /// The contact law.
-    pub law: ContactLaw,
-}
-
 /// The body point at global `x` of the body in state `s`.
-fn point_at(s: &BodyState, x: Vec2) -> PointState {
+pub(super) fn point_at(s: &BodyState, x: Vec2) -> PointState {
     let d = x - s.position;
     PointState::new(s, Vec2::new(s.cos * d.x + s.sin * d.y, -s.sin * d.x + s.cos * d.y))
 }
 
 /// The contact force at a point where the normal force is `normal_force` along `n` and the
 /// bodies slide at `slip` (the second's point relative to the first's).
-fn contact_force(law: &ContactLaw, normal_force: f64, n: Vec2, slip: Vec2) -> Vec2 {
+pub(super) fn contact_force(law: &ContactLaw, normal_force: f64, n: Vec2, slip: Vec2) -> Vec2 {
     let sliding = slip - n.dot(&slip) * n;
     normal_force * n - law.friction_factor(normal_force, sliding.norm()) * sliding
 }
 
 /// `Err` naming the element when a radius or the law is out of range.
-fn check(name: &str, radii: &[f64], law: &ContactLaw) -> Result<(), ModelError> {
+pub(super) fn check(name: &str, radii: &[f64], law: &ContactLaw) -> Result<(), ModelError> {
     let bad = |what: String| ModelError::InvalidParameter {
         element: format!("force '{name}'"),
         what,
@@ -188,89 +170,5 @@ impl ForceElement for CircleLine {
             return bad("acts on the ground: give it a moving body".into());
         }
         check(&self.name, &[self.radius], &self.law)
-    }
-}
-
-impl CircleCircle {
-    /// The centres' states and the overlap `δ` at `(q, q̇)`.
-    fn geometry(&self, q: &[f64], qd: &[f64]) -> (PointState, PointState, f64) {
-        let ci = PointState::new(&BodyState::of(self.bodies.0, q, qd), self.centres.0);
-        let cj = PointState::new(&BodyState::of(self.bodies.1, q, qd), self.centres.1);
-        let depth = self.radii.0 + self.radii.1 - (cj.position - ci.position).norm();
-        (ci, cj, depth)
-    }
-}
-
-impl CircleCircle {
-    /// The contact force on the second body (on the first: its opposite), the normal force and
-    /// the middle of the overlap as each body's point, or `None` apart (or concentric: no
-    /// direction to push along).
-    fn load(&self, q: &[f64], qd: &[f64]) -> Option<(Vec2, f64, [PointState; 2])> {
-        let (ci, cj, depth) = self.geometry(q, qd);
-        let d = cj.position - ci.position;
-        let length = d.norm();
-        if depth <= 0.0 || length == 0.0 {
-            return None;
-        }
-        let n = d / length;
-        let normal_force = self.law.normal_force(depth, -n.dot(&(cj.velocity - ci.velocity)));
-        let x = ci.position + (self.radii.0 - 0.5 * depth) * n;
-        let (si, sj) = (BodyState::of(self.bodies.0, q, qd), BodyState::of(self.bodies.1, q, qd));
-        let (xi, xj) = (point_at(&si, x), point_at(&sj, x));
-        let force = contact_force(&self.law, normal_force, n, xj.velocity - xi.velocity);
-        Some((force, normal_force, [xi, xj]))
-    }
-}
-
-impl ForceElement for CircleCircle {
-    fn bodies(&self) -> Option<Vec<BodyRef>> {
-        Some(vec![self.bodies.0, self.bodies.1])
-    }
-
-    fn name(&self) -> &str {
-        &self.name
-    }
-
-    fn add_generalized_force(&self, _t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
-        if let Some((force, _, [xi, xj])) = self.load(q, qd) {
-            add_point_force(self.bodies.1, &xj, force, q_e);
-            add_point_force(self.bodies.0, &xi, -force, q_e);
-        }
-    }
-
-    fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
-        let (ci, cj, depth) = self.geometry(q, qd);
-        let d = cj.position - ci.position;
-        let n = if d.norm() > 0.0 { d / d.norm() } else { Vec2::zeros() };
-        let mut out = ContactResultant::new(-depth);
-        if let Some((force, normal_force, [_, xj])) = self.load(q, qd) {
-            out.add(force.into(), normal_force, xj.position.into());
-        }
-        Some(out.finish((ci.position + (self.radii.0 - 0.5 * depth) * n).into()))
-    }
-
-    /// The elastic part's potential where the circles overlap.
-    fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
-        Some(self.law.potential(self.geometry(q, &[]).2))
-    }
-
-    fn contact_gap(&self, _bodies: &[Body], q: &[f64]) -> Option<f64> {
-        Some(-self.geometry(q, &[]).2)
-    }
-
-    fn is_conservative(&self) -> bool {
-        self.law.is_conservative()
-    }
-
-    fn validate(&self, count: usize) -> Result<(), ModelError> {
-        check_body(&self.name, self.bodies.0, count)?;
-        check_body(&self.name, self.bodies.1, count)?;
-        if self.bodies.0 == self.bodies.1 {
-            return Err(ModelError::InvalidParameter {
-                element: format!("force '{}'", self.name),
-                what: "must be between two different bodies".into(),
-            });
-        }
-        check(&self.name, &[self.radii.0, self.radii.1], &self.law)
     }
 }

@@ -12,14 +12,16 @@ mod point_force;
 mod rotational_spring_damper;
 mod shape_line;
 mod spring_damper;
+mod swept_pair;
 mod torque;
 
-pub use circle_line::{CircleCircle, CircleLine};
+pub use circle_line::CircleLine;
 pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use rotational_spring_damper::RotationalSpringDamper;
 pub use shape_line::ShapeLine;
 pub use spring_damper::SpringDamper;
+pub use swept_pair::{CircleCircle, SegmentSegment};
 pub use torque::Torque;
 
 use crate::{Body, BodyRef, PointState, Vec2};

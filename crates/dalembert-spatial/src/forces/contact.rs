@@ -25,16 +25,16 @@
 //! Two spheres (centres `cᵢ`, `cⱼ`, radii `Rᵢ`, `Rⱼ`) overlap by `δ = Rᵢ + Rⱼ − |cⱼ − cᵢ|` along
 //! `n = (cⱼ − cᵢ) / |cⱼ − cᵢ|`, `δ̇ = −n·(ċⱼ − ċᵢ)`; the same (K1) pushes `j` along `n` and `i`
 //! against it at the middle of the overlap, and (K2) acts on the relative sliding there. Two
-//! capsules are the same with `cᵢ`, `cⱼ` the closest points of their axes ([`super::segments`]):
+//! capsules are the same with `cᵢ`, `cⱼ` the closest points of their axes ([`dalembert_system::segment_distance`]):
 //! `δ` is then `Rᵢ + Rⱼ` less the distance of the segments, whose change is `n` at those points
 //! (they are nearest, so moving them along the axes changes the distance by nothing to first
 //! order), so the force is still the gradient of `k δⁿ⁺¹ / (n + 1)` and the rate still
 //! `−n·(ċⱼ − ċᵢ)` with `ċ` the velocities of the axes' material points there. A sphere is a
 //! capsule whose two ends are one point.
 
-use super::segments::closest_parameters;
 use super::{add_point_force, V3};
 use crate::frame::Frame;
+use dalembert_system::segment_distance::closest_parameters;
 use dalembert_system::{ContactLaw, ContactResultant};
 
 /// Two spheres swept along segments (capsules; a sphere's segment has zero length) on two

@@ -10,14 +10,13 @@
 //! | joint torque, rotational spring–damper | `τ = −k (θ − θ₀) − c θ̇ + f(t)` about a revolute or cylindrical joint's axis | [`about_axis`] |
 //! | joint servo | `τ = clamp(−k (θ − θ*(t)) − c θ̇ + f(t), τ_lo, τ_hi)` about the same axis | [`about_axis`] |
 //! | sphere–plane contact | Hunt–Crossley normal force and regularized Coulomb friction between a sphere on a body and a plane of the ground | `contact.rs` |
-//! | sphere–sphere, capsule–capsule contact | the same law between spheres or capsules on two bodies | `contact.rs`, `segments.rs` |
+//! | sphere–sphere, capsule–capsule contact | the same law between spheres or capsules on two bodies | `contact.rs` |
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
 mod along_axis;
 mod contact;
 mod jacobians;
-mod segments;
 pub mod user;
 
 use crate::frame::{Frame, NV};
