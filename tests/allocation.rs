@@ -636,6 +636,67 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// Runs through two capsules (spatial), two rounded segments (planar) and a roller on a turning
+/// cam profile (the closest points of two segments, of a point and a spline, found at every
+/// evaluation) allocate nothing per step, every method: a rod bouncing on a log without
+/// dissipation, and the cam turning, for twice as long cost no more allocations.
+#[test]
+fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    COUNTED.with(|c| c.set(true));
+    let profile: Vec<String> = (0..=32)
+        .map(|k| {
+            let a = std::f64::consts::TAU * (k % 32) as f64 / 32.0;
+            format!("[{:?}, {:?}]", 0.05 * a.sin(), 0.01 + 0.05 * a.cos())
+        })
+        .collect();
+    let texts = [
+        "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+         [[bodies]]\nname = \"rod\"\nmass = 2.0\ninertia = [0.0009, 0.0277, 0.0277]\nposition = [0.0, 0.0, 0.3]\n\
+         [[forces]]\nname = \"touch\"\ntype = \"capsule-capsule\"\nbodies = [\"ground\", \"rod\"]\n\
+         segments = [[[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]], [[-0.2, 0.0, 0.3], [0.2, 0.0, 0.3]]]\n\
+         radii = [0.1, 0.03]\nstiffness = 1e6\n"
+            .to_string(),
+        "[scene]\ngravity = [0.0, -9.81]\n\
+         [[bodies]]\nname = \"rod\"\nmass = 2.0\ninertia = 0.03\nposition = [0.0, 0.3]\n\
+         [[forces]]\nname = \"touch\"\ntype = \"segment-segment\"\nbodies = [\"ground\", \"rod\"]\n\
+         segments = [[[0.0, 0.0], [0.0, 0.0]], [[-0.2, 0.3], [0.2, 0.3]]]\n\
+         radii = [0.1, 0.03]\nstiffness = 1e6\n"
+            .to_string(),
+        format!(
+            "[scene]\ngravity = [0.0, -9.81]\n\
+             [[bodies]]\nname = \"cam\"\nmass = 1.0\ninertia = 0.05\nposition = [0.0, 0.0]\nangular_velocity = 20.0\n\
+             [[bodies]]\nname = \"follower\"\nmass = 0.5\ninertia = 1e-4\nposition = [0.0, 0.08]\n\
+             [[joints]]\nname = \"shaft\"\ntype = \"revolute\"\nbodies = [\"ground\", \"cam\"]\nat = [0.0, 0.0]\n\
+             [[joints]]\nname = \"guide\"\ntype = \"prismatic\"\nbodies = [\"ground\", \"follower\"]\nat = [0.0, 0.08]\naxis = [0.0, 1.0]\n\
+             [[forces]]\nname = \"touch\"\ntype = \"circle-profile\"\nbody = \"follower\"\nradius = 0.02\nstiffness = 1e7\n\
+             profile = {{ body = \"cam\", points = [{}] }}\n",
+            profile.join(", ")
+        ),
+    ];
+    let mut failures = Vec::new();
+    for text in &texts {
+        let base = dalembert::Scene::from_toml(text, "contacts").unwrap();
+        for entry in METHODS {
+            let mut scene = base.clone();
+            scene.settings.method = Method::of(entry);
+            scene.settings.step = 1e-4;
+            let count = |end: f64| {
+                let mut sim = scene.simulation();
+                sim.end = end;
+                let before = allocations_so_far();
+                sim.run(&mut |_| {}).unwrap();
+                allocations_so_far() - before
+            };
+            let (short, long) = (count(0.5), count(1.0));
+            if long > short {
+                failures.push(format!("{}: {short} allocations for 0.5 s, {long} for 1 s", entry.name));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
+
 /// A run with joint friction (a pendulum with pin friction: the stick–slip law solved at every
 /// evaluation, its responses from the formulation's factorization, its swings reversing at
 /// events) allocates nothing per step, every formulation × every method that takes friction: a

@@ -13,8 +13,8 @@ use crate::simulation::{assemble, Coordinates, FormulationKind};
 use dalembert_constraints::joints::{local_direction_of, local_point_of};
 use dalembert_constraints::{
     Against, BodyCoordinate, Constraint, Coordinate, Distance, DistanceDriver, Friction, FrictionJoint, Gear,
-    JointAngle, JointDisplacement, Limit, Model, PointOnLine, Prismatic, Profile, RackPinion, Revolute, Rigid,
-    RigidContact, STICK_SPEED,
+    JointAngle, JointDisplacement, Limit, Model, PointOnLine, Prismatic, Profile, ProfileContact, RackPinion, Revolute,
+    Rigid, RigidContact, STICK_SPEED,
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
@@ -1118,10 +1118,48 @@ fn force(
             })
         }
         "circle-profile" | "line-profile" => {
-            return Err(err(format!(
-                "a compliant {} contact is not built yet: give rigid = true (a rigid contact)",
-                d.kind
-            )))
+            let roller = d.kind == "circle-profile";
+            let shape: &[&str] = if roller { &["body", "at", "radius", "profile"] } else { &["body", "line", "profile"] };
+            const LAW: [&str; 5] = ["stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"];
+            if let Some(key) = d.keys_given().find(|k| !shape.contains(k) && !LAW.contains(k)) {
+                return Err(err(format!("'{key}' does not belong to a {} element", d.kind)));
+            }
+            let (body, centre, radius, against) = if roller {
+                circle_on_profile(b, d, span, &owner)?
+            } else {
+                face_on_profile(b, d, span, &owner)?
+            };
+            // The viewer draws the profile and the roller or face as for a rigid contact; the
+            // arrow is the resultant's, as for every compliant contact.
+            let drawn = RigidContact {
+                name: d.name.clone(),
+                body,
+                centre,
+                radius,
+                against: against.clone(),
+                restitution: 0.0,
+                rest_speed: REST_SPEED,
+            };
+            if let Mark::Contact { force, .. } = &mut mark.insert(contact_mark(&drawn, &d.kind)) {
+                *force = false;
+            }
+            let (profile_body, profile, face) = match against {
+                Against::Profile { body, profile } => (body, profile, None),
+                Against::ProfileFace { body, profile, normal } => (body, profile, Some(normal)),
+                Against::Line { .. } | Against::Circle { .. } => {
+                    return Err(err("a profile contact is between a roller or a face and a profile".into()))
+                }
+            };
+            Box::new(ProfileContact {
+                name: d.name.clone(),
+                body,
+                centre,
+                radius,
+                face,
+                profile_body,
+                profile,
+                law: contact_law(d).map_err(err)?,
+            })
         }
         "code" => {
             if let Some(key) = d.keys_given().find(|k| *k != "body") {

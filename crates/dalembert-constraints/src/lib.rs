@@ -25,6 +25,7 @@ pub mod limit;
 pub mod model;
 pub mod primitives;
 pub mod profile;
+pub mod profile_contact;
 pub mod reactions;
 pub mod rigid_contact;
 pub mod system;
@@ -36,6 +37,7 @@ pub use joints::{Distance, Gear, PointOnLine, Prismatic, RackPinion, Revolute, R
 pub use limit::Limit;
 pub use model::Model;
 pub use profile::Profile;
+pub use profile_contact::ProfileContact;
 pub use reactions::Reaction;
 pub use rigid_contact::{Against, RigidContact};
 pub use system::ConstraintSystem;

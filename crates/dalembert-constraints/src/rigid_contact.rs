@@ -120,54 +120,7 @@ impl RigidContact {
             element: format!("force '{}'", self.name),
             what,
         };
-        let other = self.other_body();
-        if self.body == BodyRef::Ground && other == BodyRef::Ground {
-            return Err(bad("one of the two shapes must be on a moving body".into()));
-        }
-        if self.body == other {
-            return Err(bad(match self.against {
-                Against::Line { .. } => "the circle and the line are on the same body".into(),
-                Against::Circle { .. } => "the two circles are on the same body".into(),
-                Against::Profile { .. } => "the circle and the profile are on the same body".into(),
-                Against::ProfileFace { .. } => "the face and the profile are on the same body".into(),
-            }));
-        }
-        if let Against::Circle { radius, .. } = self.against {
-            if !(radius.is_finite() && radius >= 0.0) {
-                return Err(bad(format!("radii must be finite and ≥ 0, got {radius}")));
-            }
-        }
-        if !(self.radius.is_finite() && self.radius >= 0.0) {
-            return Err(bad(format!("radius must be finite and ≥ 0, got {}", self.radius)));
-        }
-        if let Against::Line { normal, .. } = self.against {
-            let off_unit = (normal.norm() - 1.0).abs();
-            if off_unit.is_nan() || off_unit >= 1e-12 {
-                return Err(bad("the line's normal must be a unit vector".into()));
-            }
-        }
-        if let Against::ProfileFace { profile, normal, .. } = &self.against {
-            let off_unit = (normal.norm() - 1.0).abs();
-            if off_unit.is_nan() || off_unit >= 1e-12 {
-                return Err(bad("the face's normal must be a unit vector".into()));
-            }
-            if let Some((rho, p)) = profile.tightest_concave_radius() {
-                return Err(bad(format!(
-                    "a flat face needs a convex profile: it is concave (radius {rho:.4e} m) near its point ({}, {})",
-                    p.x, p.y
-                )));
-            }
-        }
-        if let Against::Profile { profile, .. } = &self.against {
-            if let Some((rho, p)) = profile.tightest_concave_radius() {
-                if rho <= self.radius {
-                    return Err(bad(format!(
-                        "the roller (radius {} m) is larger than the profile's concave radius {rho:.4e} m near its point ({}, {}): it would touch the profile at two points",
-                        self.radius, p.x, p.y
-                    )));
-                }
-            }
-        }
+        check_shapes(&self.name, self.body, self.radius, &self.against)?;
         self.spec().check().map_err(bad)?;
         let gap = self.gap(q0);
         if gap < -1e-12 {
@@ -260,6 +213,71 @@ impl RigidContact {
         out.bias = -row.gamma + envelope;
         row.c - reach
     }
+}
+
+/// Checks the shapes of a contact of `body`'s circle (or face) of radius `radius` with
+/// `against`, naming the contact `name` (rigid or compliant): two different bodies, one of them
+/// moving; radii finite and not negative; unit normals; a profile a roller touches at one point
+/// (its concave parts rounder than the roller) and a face touches convex.
+pub fn check_shapes(name: &str, body: BodyRef, radius: f64, against: &Against) -> Result<(), ModelError> {
+    let bad = |what: String| ModelError::InvalidParameter {
+        element: format!("force '{name}'"),
+        what,
+    };
+    let other = match *against {
+        Against::Line { body, .. }
+        | Against::Circle { body, .. }
+        | Against::Profile { body, .. }
+        | Against::ProfileFace { body, .. } => body,
+    };
+    if body == BodyRef::Ground && other == BodyRef::Ground {
+        return Err(bad("one of the two shapes must be on a moving body".into()));
+    }
+    if body == other {
+        return Err(bad(match against {
+            Against::Line { .. } => "the circle and the line are on the same body".into(),
+            Against::Circle { .. } => "the two circles are on the same body".into(),
+            Against::Profile { .. } => "the circle and the profile are on the same body".into(),
+            Against::ProfileFace { .. } => "the face and the profile are on the same body".into(),
+        }));
+    }
+    if let Against::Circle { radius, .. } = *against {
+        if !(radius.is_finite() && radius >= 0.0) {
+            return Err(bad(format!("radii must be finite and ≥ 0, got {radius}")));
+        }
+    }
+    if !(radius.is_finite() && radius >= 0.0) {
+        return Err(bad(format!("radius must be finite and ≥ 0, got {radius}")));
+    }
+    if let Against::Line { normal, .. } = *against {
+        let off_unit = (normal.norm() - 1.0).abs();
+        if off_unit.is_nan() || off_unit >= 1e-12 {
+            return Err(bad("the line's normal must be a unit vector".into()));
+        }
+    }
+    if let Against::ProfileFace { profile, normal, .. } = against {
+        let off_unit = (normal.norm() - 1.0).abs();
+        if off_unit.is_nan() || off_unit >= 1e-12 {
+            return Err(bad("the face's normal must be a unit vector".into()));
+        }
+        if let Some((rho, p)) = profile.tightest_concave_radius() {
+            return Err(bad(format!(
+                "a flat face needs a convex profile: it is concave (radius {rho:.4e} m) near its point ({}, {})",
+                p.x, p.y
+            )));
+        }
+    }
+    if let Against::Profile { profile, .. } = against {
+        if let Some((rho, p)) = profile.tightest_concave_radius() {
+            if rho <= radius {
+                return Err(bad(format!(
+                    "the roller (radius {radius} m) is larger than the profile's concave radius {rho:.4e} m near its point ({}, {}): it would touch the profile at two points",
+                    p.x, p.y
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
