@@ -636,10 +636,11 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
-/// Runs through two capsules (spatial), two rounded segments (planar) and a roller on a turning
-/// cam profile (the closest points of two segments, of a point and a spline, found at every
-/// evaluation) allocate nothing per step, every method: a rod bouncing on a log without
-/// dissipation, and the cam turning, for twice as long cost no more allocations.
+/// Runs through two capsules (spatial, as a pair and as a group with its broad phase), two
+/// rounded segments (planar) and a roller on a turning cam profile (the closest points of two
+/// segments, of a point and a spline, found at every evaluation) allocate nothing per step, every
+/// method: a rod bouncing on a log without dissipation, and the cam turning, for twice as long
+/// cost no more allocations.
 #[test]
 fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -656,6 +657,13 @@ fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
          [[forces]]\nname = \"touch\"\ntype = \"capsule-capsule\"\nbodies = [\"ground\", \"rod\"]\n\
          segments = [[[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]], [[-0.2, 0.0, 0.3], [0.2, 0.0, 0.3]]]\n\
          radii = [0.1, 0.03]\nstiffness = 1e6\n"
+            .to_string(),
+        "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+         [[bodies]]\nname = \"rod\"\nmass = 2.0\ninertia = [0.0009, 0.0277, 0.0277]\nposition = [0.0, 0.0, 0.3]\n\
+         [[forces]]\nname = \"touch\"\ntype = \"capsule-group\"\nmembers = [\
+         { body = \"ground\", at = [[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]], radius = 0.1 }, \
+         { body = \"rod\", at = [[-0.2, 0.0, 0.3], [0.2, 0.0, 0.3]], radius = 0.03 }]\n\
+         stiffness = 1e6\n"
             .to_string(),
         "[scene]\ngravity = [0.0, -9.81]\n\
          [[bodies]]\nname = \"rod\"\nmass = 2.0\ninertia = 0.03\nposition = [0.0, 0.3]\n\

@@ -46,6 +46,8 @@ pub(crate) struct ForceDef {
     pub range: Option<[f64; 2]>,
     pub radius: Option<f64>,
     pub radii: Option<[f64; 2]>,
+    /// A `capsule-group` element's members.
+    pub members: Option<Vec<MemberDef>>,
     /// A `capsule-capsule` element's two segments, each by its two ends (global).
     #[serde(default, deserialize_with = "strict::two_segments_opt")]
     pub segments: Option<strict::TwoSegments>,
@@ -60,6 +62,16 @@ pub(crate) struct ForceDef {
     pub rigid: Option<bool>,
     pub restitution: Option<f64>,
     pub rest_speed: Option<f64>,
+}
+
+/// A member of a `capsule-group`: a capsule (`at`, its segment's two ends) or a sphere (`at`, its
+/// centre; default the body's position) of `radius` on `body`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MemberDef {
+    pub body: String,
+    pub at: Option<Points3>,
+    pub radius: f64,
 }
 
 /// A plane of the ground: a point and the normal out of the solid.
@@ -195,6 +207,8 @@ impl ForceDef {
             ("range", self.range.is_some()),
             ("radius", self.radius.is_some()),
             ("radii", self.radii.is_some()),
+            ("segments", self.segments.is_some()),
+            ("members", self.members.is_some()),
             ("size", self.size.is_some()),
             ("plane", self.plane.is_some()),
             ("exponent", self.exponent.is_some()),
@@ -438,6 +452,34 @@ pub(crate) fn force(
                 law: law()?,
             }
         }
+        "capsule-group" => {
+            check(d.only(&[
+                "members",
+                "stiffness",
+                "exponent",
+                "dissipation",
+                "friction",
+                "smoothing_velocity",
+            ]))?;
+            let defs = d.members.as_ref().ok_or_else(|| {
+                err("needs 'members = [{ body = \"..\", at = [[x1, y1, z1], [x2, y2, z2]], radius = r }, …]' (capsules; a sphere takes one point or none)")
+            })?;
+            let mut members = Vec::with_capacity(defs.len());
+            for (k, m) in defs.iter().enumerate() {
+                let body = names.body(ctx, &m.body, span, &format!("{owner}, member {}", k + 1))?;
+                let ends = match m.at {
+                    Some(Points3::Two(ends)) => ends,
+                    Some(Points3::One(p)) => [p; 2],
+                    None => [body_position(body, positions); 2],
+                };
+                members.push((body, ends, m.radius));
+            }
+            Force::CapsuleGroup {
+                name,
+                members,
+                law: law()?,
+            }
+        }
         "code" => {
             check(
                 d.only(&["body"])
@@ -451,7 +493,7 @@ pub(crate) fn force(
         }
         other => {
             return Err(err(&format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, servo, sphere-plane, box-plane, capsule-plane, sphere-sphere, capsule-capsule, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, servo, sphere-plane, box-plane, capsule-plane, sphere-sphere, capsule-capsule, capsule-group, code)"
             )))
         }
     })

@@ -122,7 +122,9 @@ impl ForceData {
             ForceData::AboutAxis(a) => Some(a.wrench_derivative(t, frame)),
             ForceData::AlongAxis(a) => Some(a.wrench_derivative(t, frame)),
             // Not differentiated analytically: the tangent takes central differences.
-            ForceData::SpherePlane(_) | ForceData::SweptPair(_) | ForceData::User(_) => None,
+            ForceData::SpherePlane(_) | ForceData::SweptPair(_) | ForceData::CapsuleGroup(_) | ForceData::User(_) => {
+                None
+            }
         }
     }
 }

@@ -11,10 +11,12 @@
 //! | joint servo | `τ = clamp(−k (θ − θ*(t)) − c θ̇ + f(t), τ_lo, τ_hi)` about the same axis | [`about_axis`] |
 //! | sphere–plane contact | Hunt–Crossley normal force and regularized Coulomb friction between a sphere on a body and a plane of the ground | `contact.rs` |
 //! | sphere–sphere, capsule–capsule contact | the same law between spheres or capsules on two bodies | `contact.rs` |
+//! | capsule group | the same law between every two capsules of a group not on one body or joined, a broad phase finding the pairs | `capsule_group.rs` |
 //! | user force | whatever [`UserForce::add`] writes | [`user`] |
 
 pub mod about_axis;
 mod along_axis;
+mod capsule_group;
 mod contact;
 mod jacobians;
 pub mod user;
@@ -24,6 +26,7 @@ use crate::joints::{JointData, JointKind};
 use crate::BodyRef;
 use about_axis::AxisForce;
 use along_axis::SlideForce;
+use capsule_group::{CapsuleGroup, Member};
 use contact::{SpherePlane, SweptPair};
 use dalembert_system::{AxisLaw, ContactLaw};
 use dalembert_system::{ModelError, TimeFunction};
@@ -225,6 +228,18 @@ pub enum Force {
         /// The contact law (checked when the model is built).
         law: ContactLaw,
     },
+    /// Compliant contact among a group of capsules (`docs/contact.md`, "Groups and the broad
+    /// phase"): the law of [`Force::CapsuleCapsule`] between every two members on different bodies
+    /// that no joint joins, the pairs found by a broad phase.
+    CapsuleGroup {
+        /// Name.
+        name: String,
+        /// The members: each a body, its segment's two ends in the initial configuration (global)
+        /// and its radius (m).
+        members: Vec<(BodyRef, [[f64; 3]; 2], f64)>,
+        /// The contact law (checked when the model is built).
+        law: ContactLaw,
+    },
     /// A force the user writes ([`UserForce`]).
     User(Arc<dyn UserForce>),
 }
@@ -242,6 +257,7 @@ impl Force {
             | Force::CapsulePlane { name, .. }
             | Force::SphereSphere { name, .. }
             | Force::CapsuleCapsule { name, .. }
+            | Force::CapsuleGroup { name, .. }
             | Force::RotationalSpringDamper { name, .. }
             | Force::JointServo { name, .. } => name,
             Force::User(u) => u.name(),
@@ -296,6 +312,7 @@ pub(crate) enum ForceData {
     AlongAxis(SlideForce),
     SpherePlane(SpherePlane),
     SweptPair(SweptPair),
+    CapsuleGroup(CapsuleGroup),
     User(Arc<dyn UserForce>),
 }
 
@@ -639,6 +656,29 @@ impl ForceData {
                 }
                 swept(bodies, *segments, radii, law)?
             }
+            Force::CapsuleGroup { members, law, .. } => {
+                if members.len() < 2 {
+                    return Err(bad("needs at least two members"));
+                }
+                law.check().map_err(|m| bad(&m))?;
+                let mut built = Vec::with_capacity(members.len());
+                for (k, (body, ends, radius)) in members.iter().enumerate() {
+                    let member = |m: &str| bad(&format!("member {}: {m}", k + 1));
+                    if !ends.iter().all(|p| finite(p)) {
+                        return Err(member("its segment's ends must be finite"));
+                    }
+                    positive(*radius, "radius").map_err(|m| member(&m))?;
+                    let b = index(*body)?;
+                    built.push(Member {
+                        body: b,
+                        ends: [local(b, &ends[0]), local(b, &ends[1])],
+                        radius: *radius,
+                    });
+                }
+                let key = |b: Option<usize>| b.unwrap_or(usize::MAX);
+                let joined = joints.iter().map(|j| (key(j.body_i), key(j.body_j))).collect();
+                ForceData::CapsuleGroup(CapsuleGroup::new(built, joined, *law))
+            }
             Force::User(u) => ForceData::User(u.clone()),
         })
     }
@@ -650,6 +690,7 @@ impl ForceData {
             ForceData::PointForce { body, .. } | ForceData::Torque { body, .. } => vec![*body],
             ForceData::SpherePlane(c) => vec![c.body],
             ForceData::SweptPair(c) => c.ends.iter().filter_map(|e| e.0).collect(),
+            ForceData::CapsuleGroup(c) => c.members.iter().filter_map(|m| m.body).collect(),
             ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
             ForceData::AboutAxis(a) => a.bodies(),
             ForceData::AlongAxis(a) => a.bodies(),
@@ -728,6 +769,7 @@ impl ForceData {
             ForceData::AlongAxis(a) => a.add(t, frame, out),
             ForceData::SpherePlane(c) => c.add(frame, out),
             ForceData::SweptPair(c) => c.add(frame, out),
+            ForceData::CapsuleGroup(c) => c.add(frame, out),
             ForceData::User(u) => u.add(t, &Frames::new(frame), &mut Loads::new(frame, out)),
         }
     }
@@ -749,6 +791,7 @@ impl ForceData {
             ForceData::AlongAxis(a) => a.potential(t, frame),
             ForceData::SpherePlane(c) => c.potential(frame),
             ForceData::SweptPair(c) => c.potential(frame),
+            ForceData::CapsuleGroup(c) => c.potential(frame),
             ForceData::User(u) => u.potential(t, &Frames::new(frame)).unwrap_or(0.0),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => 0.0,
         }
@@ -761,13 +804,17 @@ impl ForceData {
         match self {
             ForceData::SpherePlane(c) => Some(c.resultant(frame)),
             ForceData::SweptPair(c) => Some(c.resultant(frame)),
+            ForceData::CapsuleGroup(c) => Some(c.resultant(frame)),
             _ => None,
         }
     }
 
     /// True for a contact element (it has a gap: [`ForceData::gap`]).
     pub fn is_contact(&self) -> bool {
-        matches!(self, ForceData::SpherePlane(_) | ForceData::SweptPair(_))
+        matches!(
+            self,
+            ForceData::SpherePlane(_) | ForceData::SweptPair(_) | ForceData::CapsuleGroup(_)
+        )
     }
 
     /// A contact's gap at the state behind `frame` (positive apart, negative in contact), the
@@ -777,6 +824,7 @@ impl ForceData {
         match self {
             ForceData::SpherePlane(c) => Some(-c.penetration(frame)),
             ForceData::SweptPair(c) => Some(-c.overlap(frame)),
+            ForceData::CapsuleGroup(c) => Some(c.gap(frame)),
             _ => None,
         }
     }
@@ -789,6 +837,7 @@ impl ForceData {
             ForceData::AlongAxis(a) => a.is_conservative(),
             ForceData::SpherePlane(c) => c.is_conservative(),
             ForceData::SweptPair(c) => c.is_conservative(),
+            ForceData::CapsuleGroup(c) => c.is_conservative(),
             ForceData::User(u) => u.is_conservative(),
             ForceData::PointForce { .. } | ForceData::Torque { .. } => false,
         }
