@@ -241,20 +241,16 @@ pub(crate) fn force(
         names.body(ctx, n, span, owner)
     };
     let check = |r: Result<(), String>| r.map_err(|m| err(&m));
-    // The keys of a shape on a plane (its own, `radius` or `size`) and of every contact's law.
-    let on_plane = |shape: &'static str| {
+    // A contact's keys: its shapes' and its law's; a shape on a plane's (its own, `radius` or
+    // `size`).
+    let with_law = |shapes: &[&'static str]| {
         [
-            "body",
-            "at",
-            shape,
-            "plane",
-            "stiffness",
-            "exponent",
-            "dissipation",
-            "friction",
-            "smoothing_velocity",
+            shapes,
+            &["stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"],
         ]
+        .concat()
     };
+    let on_plane = |shape: &'static str| with_law(&["body", "at", shape, "plane"]);
     let law =
         || contact_law(d.stiffness, d.exponent, d.dissipation, d.friction, d.smoothing_velocity).map_err(|m| err(&m));
     let name = d.name.clone();
@@ -410,16 +406,7 @@ pub(crate) fn force(
             }
         }
         "sphere-sphere" => {
-            check(d.only(&[
-                "bodies",
-                "at",
-                "radii",
-                "stiffness",
-                "exponent",
-                "dissipation",
-                "friction",
-                "smoothing_velocity",
-            ]))?;
+            check(d.only(&with_law(&["bodies", "at", "radii"])))?;
             let (bodies, centres, radii) = two_spheres(d, names, ctx, span, owner, positions)?;
             Force::SphereSphere {
                 name,
@@ -430,16 +417,7 @@ pub(crate) fn force(
             }
         }
         "capsule-capsule" => {
-            check(d.only(&[
-                "bodies",
-                "segments",
-                "radii",
-                "stiffness",
-                "exponent",
-                "dissipation",
-                "friction",
-                "smoothing_velocity",
-            ]))?;
+            check(d.only(&with_law(&["bodies", "segments", "radii"])))?;
             let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'"))?;
             let bodies = [names.body(ctx, n0, span, owner)?, names.body(ctx, n1, span, owner)?];
             Force::CapsuleCapsule {
@@ -453,14 +431,7 @@ pub(crate) fn force(
             }
         }
         "capsule-group" => {
-            check(d.only(&[
-                "members",
-                "stiffness",
-                "exponent",
-                "dissipation",
-                "friction",
-                "smoothing_velocity",
-            ]))?;
+            check(d.only(&with_law(&["members"])))?;
             let defs = d.members.as_ref().ok_or_else(|| {
                 err("needs 'members = [{ body = \"..\", at = [[x1, y1, z1], [x2, y2, z2]], radius = r }, …]' (capsules; a sphere takes one point or none)")
             })?;

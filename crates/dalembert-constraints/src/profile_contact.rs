@@ -66,14 +66,15 @@ fn outward(t: Vec2, ccw: bool) -> Vec2 {
 }
 
 impl ProfileContact {
-    /// The contact's geometry at `(q, v)` (`v` empty: no rate).
-    fn press(&self, q: &[f64], v: &[f64]) -> Press {
+    /// The contact's geometry at `(q, v)` (`v` empty: no rate), and the states of the contact's
+    /// body and the profile's.
+    fn press(&self, q: &[f64], v: &[f64]) -> (Press, [BodyState; 2]) {
         let profile = &self.profile;
         let own = BodyState::of(self.body, q, v);
         let other = BodyState::of(self.profile_body, q, v);
         let ccw = profile.twice_area() > 0.0;
         let to_local = |x: Vec2| other.rotation().transpose() * (x - other.position);
-        match self.face {
+        let press = match self.face {
             Some(normal) => {
                 let n = own.rotation() * normal;
                 let [point, _, _] = profile.at(profile.support(other.rotation().transpose() * n));
@@ -111,19 +112,19 @@ impl ProfileContact {
                     rate,
                 }
             }
-        }
+        };
+        (press, [own, other])
     }
 
     /// The force on the contact's body (on the profile's: its opposite), the normal force and
-    /// the point where they act as each body's point, or `None` apart.
-    fn load(&self, q: &[f64], v: &[f64]) -> Option<(Vec2, f64, [PointState; 2])> {
-        let press = self.press(q, v);
+    /// the point where they act as each body's point, or `None` apart, where `press` found the
+    /// geometry with the bodies in `states`.
+    fn load(&self, press: &Press, [own, other]: &[BodyState; 2]) -> Option<(Vec2, f64, [PointState; 2])> {
         if press.depth <= 0.0 {
             return None;
         }
-        let (own, other) = (BodyState::of(self.body, q, v), BodyState::of(self.profile_body, q, v));
-        let x_own = PointState::new(&own, own_local(&own, press.point));
-        let x_other = PointState::new(&other, own_local(&other, press.point));
+        let x_own = PointState::new(own, own_local(own, press.point));
+        let x_other = PointState::new(other, own_local(other, press.point));
         // The direction the profile pushes the contact's body: out of it for a roller, back
         // from it for a face.
         let n = if self.face.is_some() {
@@ -154,16 +155,17 @@ impl ForceElement for ProfileContact {
     }
 
     fn add_generalized_force(&self, _t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
-        if let Some((force, _, [x_own, x_other])) = self.load(q, qd) {
+        let (press, states) = self.press(q, qd);
+        if let Some((force, _, [x_own, x_other])) = self.load(&press, &states) {
             add_point_force(self.body, &x_own, force, q_e);
             add_point_force(self.profile_body, &x_other, -force, q_e);
         }
     }
 
     fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
-        let press = self.press(q, qd);
+        let (press, states) = self.press(q, qd);
         let mut out = ContactResultant::new(-press.depth);
-        if let Some((force, normal_force, [x_own, _])) = self.load(q, qd) {
+        if let Some((force, normal_force, [x_own, _])) = self.load(&press, &states) {
             out.add(force.into(), normal_force, x_own.position.into());
         }
         Some(out.finish(press.point.into()))
@@ -171,11 +173,11 @@ impl ForceElement for ProfileContact {
 
     /// The elastic part's potential where the two overlap.
     fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
-        Some(self.law.potential(self.press(q, &[]).depth))
+        Some(self.law.potential(self.press(q, &[]).0.depth))
     }
 
     fn contact_gap(&self, _bodies: &[Body], q: &[f64]) -> Option<f64> {
-        Some(-self.press(q, &[]).depth)
+        Some(-self.press(q, &[]).0.depth)
     }
 
     fn is_conservative(&self) -> bool {

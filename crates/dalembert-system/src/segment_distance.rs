@@ -97,6 +97,31 @@ mod tests {
         best.sqrt()
     }
 
+    /// Pseudo-random numbers in [−1, 1) (xorshift from `seed`).
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// Two segments, each by its ends.
+    type Pair<const D: usize> = ([SVector<f64, D>; 2], [SVector<f64, D>; 2]);
+
+    /// Each pair's closest points are as near as the search finds, within 1e-9 m.
+    fn as_near_as_searched<const D: usize>(cases: Vec<Pair<D>>) {
+        for (k, (p, q)) in cases.into_iter().enumerate() {
+            let (a, b) = closest_points(p, q);
+            let (found, best) = ((a - b).norm(), searched(p, q));
+            assert!(
+                (found - best).abs() < 1e-9,
+                "case {k}: found {found}, the search {best}"
+            );
+        }
+    }
+
     #[test]
     fn the_closest_points_are_as_near_as_a_search_finds() {
         // Crossing, skew with either end clamped, parallel and overlapping, parallel apart, one
@@ -134,38 +159,19 @@ mod tests {
                 [v(0.0, 0.0, 1.0), v(0.0, 0.0, 1.0)],
             ),
         ];
-        let mut seed = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = uniform(0x2545_f491_4f6c_dd1d);
         for _ in 0..40 {
             let mut point = || v(next(), next(), next());
             cases.push(([point(), point()], [point(), point()]));
         }
-        for (k, (p, q)) in cases.into_iter().enumerate() {
-            let (a, b) = closest_points(p, q);
-            let (found, best) = ((a - b).norm(), searched(p, q));
-            assert!(
-                (found - best).abs() < 1e-9,
-                "case {k}: found {found}, the search {best}"
-            );
-        }
+        as_near_as_searched(cases);
     }
 
     #[test]
     fn in_the_plane_the_closest_points_are_as_near_as_a_search_finds() {
         // The same in two dimensions, where segments cross (distance 0) as often as not: 40
         // pseudo-random pairs and a parallel one, within 1e-9 m of the search.
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut next = uniform(0x9e37_79b9_7f4a_7c15);
         let mut cases = vec![(
             [Vector2::new(0.0, 0.0), Vector2::new(1.0, 0.0)],
             [Vector2::new(0.5, 0.2), Vector2::new(1.5, 0.2)],
@@ -174,14 +180,7 @@ mod tests {
             let mut point = || Vector2::new(next(), next());
             cases.push(([point(), point()], [point(), point()]));
         }
-        for (k, (p, q)) in cases.into_iter().enumerate() {
-            let (a, b) = closest_points(p, q);
-            let (found, best) = ((a - b).norm(), searched(p, q));
-            assert!(
-                (found - best).abs() < 1e-9,
-                "case {k}: found {found}, the search {best}"
-            );
-        }
+        as_near_as_searched(cases);
     }
 
     #[test]

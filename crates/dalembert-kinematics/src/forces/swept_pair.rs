@@ -54,9 +54,9 @@ struct Pair<'a> {
 }
 
 impl Pair<'_> {
-    /// The closest points of the segments as points of their bodies and the overlap `δ` at
-    /// `(q, q̇)`.
-    fn geometry(&self, q: &[f64], qd: &[f64]) -> (PointState, PointState, f64) {
+    /// The closest points of the segments as points of their bodies, the overlap `δ` and the
+    /// bodies' states at `(q, q̇)`.
+    fn geometry(&self, q: &[f64], qd: &[f64]) -> (PointState, PointState, f64, [BodyState; 2]) {
         let states = self.bodies.map(|b| BodyState::of(b, q, qd));
         let ends = [0, 1].map(|k| self.segments[k].map(|e| PointState::new(&states[k], e).position));
         let (s, t) = closest_parameters(ends[0], ends[1]);
@@ -66,14 +66,14 @@ impl Pair<'_> {
         };
         let (ci, cj) = (point(0, s), point(1, t));
         let depth = self.radii[0] + self.radii[1] - (cj.position - ci.position).norm();
-        (ci, cj, depth)
+        (ci, cj, depth, states)
     }
 
     /// The contact force on the second body (on the first: its opposite), the normal force and
     /// the middle of the overlap as each body's point, or `None` apart (or the segments meeting:
     /// no direction to push along).
     fn load(&self, q: &[f64], qd: &[f64]) -> Option<(Vec2, f64, [PointState; 2])> {
-        let (ci, cj, depth) = self.geometry(q, qd);
+        let (ci, cj, depth, states) = self.geometry(q, qd);
         let d = cj.position - ci.position;
         let length = d.norm();
         if depth <= 0.0 || length == 0.0 {
@@ -82,7 +82,6 @@ impl Pair<'_> {
         let n = d / length;
         let normal_force = self.law.normal_force(depth, -n.dot(&(cj.velocity - ci.velocity)));
         let x = ci.position + (self.radii[0] - 0.5 * depth) * n;
-        let states = self.bodies.map(|b| BodyState::of(b, q, qd));
         let (xi, xj) = (point_at(&states[0], x), point_at(&states[1], x));
         let force = contact_force(self.law, normal_force, n, xj.velocity - xi.velocity);
         Some((force, normal_force, [xi, xj]))
@@ -98,7 +97,7 @@ impl Pair<'_> {
     /// The resultant: the force on the second body at the middle of the overlap (apart: the
     /// middle of the gap).
     fn resultant(&self, q: &[f64], qd: &[f64]) -> ContactResultant<2> {
-        let (ci, cj, depth) = self.geometry(q, qd);
+        let (ci, cj, depth, _) = self.geometry(q, qd);
         let d = cj.position - ci.position;
         let n = if d.norm() > 0.0 { d / d.norm() } else { Vec2::zeros() };
         let mut out = ContactResultant::new(-depth);
