@@ -607,6 +607,15 @@ fn a_run_with_sensitivities_allocates_nothing_per_step() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The allocations of a run of `scene` to `end`, and the events it crossed.
+fn run_counted(scene: &dalembert::Scene, end: f64) -> (usize, u64) {
+    let mut sim = scene.simulation();
+    sim.end = end;
+    let before = allocations_so_far();
+    let stats = sim.run(&mut |_| {}).unwrap();
+    (allocations_so_far() - before, stats.events)
+}
+
 /// A run whose steps end at contact events (the bouncing ball: touchdowns and lift-offs located
 /// on the chord or the dense output) allocates nothing per step either, every method: a run
 /// through twice the bounces costs no more allocations.
@@ -620,14 +629,7 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
         let mut scene = base.clone();
         scene.settings.method = Method::of(entry);
         scene.settings.step = 1e-4;
-        let count = |end: f64| {
-            let mut sim = scene.simulation();
-            sim.end = end;
-            let before = allocations_so_far();
-            let stats = sim.run(&mut |_| {}).unwrap();
-            (allocations_so_far() - before, stats.events)
-        };
-        let ((short, events_short), (long, events_long)) = (count(1.0), count(2.0));
+        let ((short, events_short), (long, events_long)) = (run_counted(&scene, 1.0), run_counted(&scene, 2.0));
         assert!(events_long > events_short, "{}: no contact event", entry.name);
         if long > short {
             failures.push(format!("{}: {short} allocations for 1 s, {long} for 2 s", entry.name));
@@ -689,14 +691,7 @@ fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
             let mut scene = base.clone();
             scene.settings.method = Method::of(entry);
             scene.settings.step = 1e-4;
-            let count = |end: f64| {
-                let mut sim = scene.simulation();
-                sim.end = end;
-                let before = allocations_so_far();
-                sim.run(&mut |_| {}).unwrap();
-                allocations_so_far() - before
-            };
-            let (short, long) = (count(0.5), count(1.0));
+            let ((short, _), (long, _)) = (run_counted(&scene, 0.5), run_counted(&scene, 1.0));
             if long > short {
                 failures.push(format!("{}: {short} allocations for 0.5 s, {long} for 1 s", entry.name));
             }
@@ -734,14 +729,7 @@ fn switching_runs_growing(texts: &[&str], what: &str) -> Vec<String> {
                 let mut scene = base.clone();
                 scene.settings.method = Method::of(entry);
                 scene.settings.formulation = dalembert::FormulationKind::parse(formulation).unwrap();
-                let count = |end: f64| {
-                    let mut sim = scene.simulation();
-                    sim.end = end;
-                    let before = allocations_so_far();
-                    let stats = sim.run(&mut |_| {}).unwrap();
-                    (allocations_so_far() - before, stats.events)
-                };
-                let ((short, events_short), (long, events_long)) = (count(1.5), count(3.0));
+                let ((short, events_short), (long, events_long)) = (run_counted(&scene, 1.5), run_counted(&scene, 3.0));
                 assert!(events_long > events_short, "{formulation}, {}: no {what}", entry.name);
                 if long > short {
                     failures.push(format!(

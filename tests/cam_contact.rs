@@ -5,19 +5,11 @@
 //! contact's potential counted); with a stiff contact the roller follows the rigid contact's lift
 //! less Hertz's quasi-static sink.
 
+mod common;
+
+use common::{column, run};
 use dalembert::Scene;
 use std::f64::consts::PI;
-use std::sync::atomic::AtomicBool;
-
-fn run(scene: &Scene) -> dalembert::output::Table {
-    let rec = scene.record(&AtomicBool::new(false));
-    rec.outcome.unwrap();
-    rec.table
-}
-
-fn column(table: &dalembert::output::Table, name: &str) -> Vec<f64> {
-    table.column(name).unwrap()
-}
 
 /// The profile key: a circle of radius `r` about `(cx, cy)`, 64 points from its top, clockwise
 /// or not, the last repeating the first, on `body`.

@@ -6,22 +6,14 @@
 //! their energy without them (the force is the gradient of the potential `k δⁿ⁺¹ / (n + 1)`);
 //! rounded segments in the plane (`segment-segment`) strike as capsules in space.
 
+mod common;
+
+use common::{column, run};
 use dalembert::Scene;
 use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
-use std::sync::atomic::AtomicBool;
 
 const G: f64 = 9.81;
 const K: f64 = 1e6;
-
-fn run(scene: &Scene) -> dalembert::output::Table {
-    let rec = scene.record(&AtomicBool::new(false));
-    rec.outcome.unwrap();
-    rec.table
-}
-
-fn column(table: &dalembert::output::Table, name: &str) -> Vec<f64> {
-    table.column(name).unwrap()
-}
 
 fn fmt(v: &Vector3<f64>) -> String {
     format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)

@@ -4,8 +4,10 @@
 //! where many pairs touch, whichever order the members are listed in; a pile of capsules dropped
 //! on a floor without dissipation keeps its energy, the pair joined by a joint never pushing.
 
+mod common;
+
+use common::{column, run};
 use dalembert::Scene;
-use std::sync::atomic::AtomicBool;
 
 /// Eight capsules of radius 0.04 and half-length 0.15 (centre and axis): a stack 0.1 m apart,
 /// each crossing the one below 2 cm above it, and `c1` beside `c0`, its end on `c0`'s (where
@@ -135,12 +137,8 @@ fn a_pile_dropped_without_dissipation_keeps_its_energy() {
     // 15.6 J over 0.6 s (dopri5 at 1e-11; measured 5.1e-8 J, the group's normal force peaking at
     // 410 N). The joined pair overlaps at its joint from the
     // start; the group skips it, so its normal force starts at zero.
-    let table = {
-        let rec = scene(true, &[0, 1, 2, 3, 4, 5, 6, 7], 0.0, 0.6).record(&AtomicBool::new(false));
-        rec.outcome.unwrap();
-        rec.table
-    };
-    let (energy, normal) = (table.column("energy").unwrap(), table.column("pile.normal").unwrap());
+    let table = run(&scene(true, &[0, 1, 2, 3, 4, 5, 6, 7], 0.0, 0.6));
+    let (energy, normal) = (column(&table, "energy"), column(&table, "pile.normal"));
     assert_eq!(normal[0], 0.0, "the joined pair pushes");
     assert!(normal.iter().any(|&n| n > 1.0), "the capsules never touched each other");
     let drift = energy.iter().map(|e| (e - energy[0]).abs()).fold(0.0, f64::max);

@@ -5,6 +5,9 @@
 //! rolling at `5/7` of its speed (angular momentum about the contact line is conserved whatever
 //! the friction law); a ball at rest presses into the floor by Hertz's `(m g / k)^(1/n)`.
 
+mod common;
+
+use common::{column, run};
 use dalembert::Scene;
 use std::sync::atomic::AtomicBool;
 
@@ -28,12 +31,6 @@ fn ball(z: f64, v: [f64; 3], w: [f64; 3], dissipation: f64, friction: f64, end: 
         v[0], v[1], v[2], w[0], w[1], w[2]
     );
     Scene::from_toml(&text, "ball").unwrap()
-}
-
-fn run(scene: &Scene) -> dalembert::output::Table {
-    let rec = scene.record(&AtomicBool::new(false));
-    rec.outcome.unwrap();
-    rec.table
 }
 
 #[test]
@@ -484,10 +481,6 @@ fn a_tumbling_box_and_capsule_without_dissipation_keep_their_energy() {
         let drift = energy.iter().map(|e| (e - energy[0]).abs()).fold(0.0, f64::max);
         assert!(drift < 1e-6, "{what}: the energy moved {drift:e} J from {}", energy[0]);
     }
-}
-
-fn column(table: &dalembert::output::Table, name: &str) -> Vec<f64> {
-    table.column(name).unwrap()
 }
 
 /// A planar body of 2 kg (`shape`) at `position` and `angle`, moving at `v` and `omega`, touching

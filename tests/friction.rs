@@ -4,6 +4,9 @@
 //! its equation of motion integrated independently here (the pin force from Newton's law for
 //! the centre of mass); the energy balance closes; every formulation agrees.
 
+mod common;
+
+use common::run;
 use dalembert::Scene;
 use std::sync::atomic::AtomicBool;
 
@@ -29,12 +32,6 @@ fn incline(alpha: f64, mu: f64, v0: f64, formulation: &str, integrator: &str) ->
         -s
     );
     Scene::from_toml(&text, "incline").unwrap()
-}
-
-fn run(scene: &Scene) -> dalembert::output::Table {
-    let rec = scene.record(&AtomicBool::new(false));
-    rec.outcome.unwrap();
-    rec.table
 }
 
 /// The block's displacement down the slope from its start.

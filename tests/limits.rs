@@ -7,22 +7,15 @@
 //! `e = 1`, closes its energy balance, keeps every joint's velocity constraint through the
 //! impulse, and every formulation agrees.
 
+mod common;
+
+use common::{column, run};
 use dalembert::Scene;
 use std::sync::atomic::AtomicBool;
 
 const G: f64 = 9.81;
 const FORMULATIONS: [&str; 3] = ["augmented", "embedding", "amalgamated"];
 const METHODS: [&str; 2] = ["rk4", "dopri5"];
-
-fn run(scene: &Scene) -> dalembert::output::Table {
-    let rec = scene.record(&AtomicBool::new(false));
-    rec.outcome.unwrap();
-    rec.table
-}
-
-fn column(table: &dalembert::output::Table, name: &str) -> Vec<f64> {
-    table.column(name).unwrap()
-}
 
 /// A slider of 2 kg on a vertical guide, its stop `d` below its start, dropped from rest under
 /// gravity (or, without gravity, pushed by `force`), in `formulation` with `integrator`.
