@@ -4,18 +4,19 @@
 //! its integration (and quadrature) error: the number that shows a non-conservative run is right.
 
 use dalembert_integrators::Sample;
-use dalembert_system::{ConstraintValues, MultibodySystem, SlipRow};
+use dalembert_system::{MultibodySystem, PowerProbe};
 
 /// `E(t) − W(t)` along a run, from its output samples: `W = ∫ P dt` with `P` the power of the
 /// non-conservative applied forces ([`MultibodySystem::nonconservative_power`]) and of the
 /// constraint forces `−λᵀ C_q v` (drivers; the joints' is zero on the constraints), less the
-/// kinetic energy impacts at joint limits took (`docs/limits.md`). The integral
-/// is taken over each interval on the parabola through the last three samples (third order in
-/// the sample interval; `docs/energy.md`, eq. E4).
+/// kinetic energy impacts at joint limits took (`docs/limits.md`). Where the run carries `W`
+/// integrated along its steps ([`Sample::work`]: a model whose forces switch, such as contacts
+/// and friction), that is taken; otherwise the integral is taken over each interval between
+/// samples on the parabola through the last three samples (third order in the sample interval;
+/// `docs/energy.md`, eq. E4).
 #[derive(Debug, Clone)]
 pub struct EnergyBalance {
-    values: ConstraintValues,
-    c_q_v: Vec<f64>,
+    probe: PowerProbe,
     /// The last three `(t, P)`, oldest first.
     points: Vec<(f64, f64)>,
     /// Samples added.
@@ -28,44 +29,39 @@ pub struct EnergyBalance {
     first: Option<f64>,
     /// The largest `|E − W − (E₀ − W₀)|` so far.
     largest_drift: f64,
+    /// True once a sample carried the work along the run's steps.
+    along_steps: bool,
 }
 
 impl EnergyBalance {
     /// An empty balance for runs of `system`.
     pub fn new(system: &dyn MultibodySystem) -> Self {
-        let sys = system.constraints();
         EnergyBalance {
-            values: sys.values(),
-            c_q_v: vec![0.0; sys.num_equations()],
+            probe: PowerProbe::new(system),
             points: Vec::with_capacity(3),
             samples: 0,
             work: 0.0,
             impacts: 0.0,
             first: None,
             largest_drift: 0.0,
+            along_steps: false,
         }
     }
 
     /// The power `P` of the non-conservative forces and drivers at sample `s`.
     pub fn power(&mut self, system: &dyn MultibodySystem, s: &Sample<'_>) -> f64 {
-        let sys = system.constraints();
-        let mut p = system.nonconservative_power(s.t, s.q, s.qd);
-        // Joint friction: F_k w_k (`docs/friction.md`).
-        let mut row = SlipRow::default();
-        for (k, f) in s.friction.iter().enumerate() {
-            system.slip_row(k, s.t, s.q, s.qd, &mut row);
-            p += f * row.dot(s.qd);
-        }
-        if !self.c_q_v.is_empty() && s.lambda.len() == self.c_q_v.len() {
-            sys.evaluate(s.t, s.q, s.qd, &mut self.values);
-            sys.jacobian_mul(&self.values, s.qd, &mut self.c_q_v);
-            p -= s.lambda.iter().zip(&self.c_q_v).map(|(l, c)| l * c).sum::<f64>();
-        }
-        p
+        self.probe.power(system, (s.t, s.q, s.qd), s.lambda, s.friction)
     }
 
     /// Adds sample `s` (samples in increasing time) and returns `E − W` there.
     pub fn push(&mut self, system: &dyn MultibodySystem, s: &Sample<'_>) -> f64 {
+        if s.work.is_finite() {
+            // Integrated along the run's steps.
+            self.samples += 1;
+            self.work = s.work;
+            self.along_steps = true;
+            return self.balance(s);
+        }
         let p = self.power(system, s);
         if self.points.len() == 3 {
             self.points.remove(0);
@@ -85,11 +81,22 @@ impl EnergyBalance {
             }
             _ => {}
         }
+        self.balance(s)
+    }
+
+    /// `E − W` at sample `s`, its work counted; the largest drift updated.
+    fn balance(&mut self, s: &Sample<'_>) -> f64 {
         self.impacts = s.impact_loss;
         let balance = s.energy - self.work();
         let first = *self.first.get_or_insert(balance);
         self.largest_drift = self.largest_drift.max((balance - first).abs());
         balance
+    }
+
+    /// True when the work came integrated along the run's steps ([`Sample::work`]), false when
+    /// it was integrated over the samples.
+    pub fn along_steps(&self) -> bool {
+        self.along_steps
     }
 
     /// `W`: the work of the non-conservative forces and drivers up to the last sample, less the

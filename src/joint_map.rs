@@ -130,6 +130,7 @@ impl JointMap {
             friction: &[],
             limit: s.limit,
             impact_loss: s.impact_loss,
+            work: s.work,
             constraint_violation: max(&self.c),
             velocity_violation: max(&self.cdot),
             energy: s.energy,

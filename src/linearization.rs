@@ -605,6 +605,7 @@ impl<'a> Reduced<'a> {
                 friction: &[],
                 limit: &[],
                 impact_loss: 0.0,
+                work: f64::NAN,
                 constraint_violation: largest(&self.c),
                 velocity_violation: largest(&self.cdot),
                 energy,

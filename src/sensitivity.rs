@@ -333,6 +333,7 @@ impl Scene {
                             friction: &friction,
                             limit: &[],
                             impact_loss: 0.0,
+                            work: f64::NAN,
                             constraint_violation: last[1],
                             velocity_violation: last[2],
                             energy: last[3],

@@ -398,7 +398,10 @@ impl Simulation {
         )?)?))
     }
 
-    /// Runs from the current initial state, handing every output sample to `observer`.
+    /// Runs from the current initial state, handing every output sample to `observer`. Where
+    /// the model's forces switch (contacts, friction, limits), each sample carries the work
+    /// integrated along the run's steps ([`dalembert_integrators::Sample::work`]), so that
+    /// [`crate::energy::EnergyBalance`] does not depend on the output interval.
     pub fn run(&self, observer: &mut dyn FnMut(&Sample<'_>)) -> Result<Statistics, SimulationError> {
         self.run_cancellable(observer, &AtomicBool::new(false))
     }
@@ -420,7 +423,7 @@ impl Simulation {
             self.end,
             &self.q,
             &self.qd,
-            &self.integrator,
+            &self.integrator.with_work_along_steps(true),
             observer,
             cancel,
         )?)
@@ -450,7 +453,7 @@ impl Simulation {
             self.end,
             &q0,
             &qd0,
-            &self.integrator,
+            &self.integrator.with_work_along_steps(true),
             &mut |s| {
                 if stop.load(Ordering::Relaxed) {
                     return;

@@ -509,6 +509,7 @@ impl Scene {
                 friction: &[],
                 limit,
                 impact_loss: 0.0,
+                work: f64::NAN,
                 constraint_violation: 0.0,
                 velocity_violation: 0.0,
                 energy: 0.0,

@@ -6,7 +6,7 @@ use crate::{Constraint, ConstraintSystem, Friction, Limit, RigidContact};
 use dalembert_kinematics::{Body, BodyState, ForceElement, MassMatrix};
 use dalembert_system::{BlockDiagonal, DynamicsError, Layout, MultibodySystem};
 use dalembert_system::{ConstraintError, ConstraintSet};
-use dalembert_system::{JointFriction, JointLimit, SlipRow};
+use dalembert_system::{JointFriction, JointLimit, PowerScratch, SlipRow};
 
 /// Bodies, applied force elements and the assembled constraint system of one mechanism.
 #[derive(Debug)]
@@ -360,16 +360,16 @@ impl MultibodySystem for Model {
     /// `Σ vᵀ Q_f + dV/dt` over the force elements: the default of the seam without the
     /// quadratic-velocity force of offset centres of mass, an inertial term that does work in
     /// these coordinates.
-    fn nonconservative_power(&self, t: f64, q: &[f64], qd: &[f64]) -> f64 {
+    fn nonconservative_power(&self, t: f64, q: &[f64], qd: &[f64], scratch: &mut PowerScratch) -> f64 {
         if self.forces.iter().all(|f| f.is_conservative()) {
             return 0.0;
         }
-        let mut q_e = vec![0.0; qd.len()];
+        scratch.forces.iter_mut().for_each(|x| *x = 0.0);
         for f in &self.forces {
-            f.add_generalized_force(t, &self.bodies, q, qd, &mut q_e);
+            f.add_generalized_force(t, &self.bodies, q, qd, &mut scratch.forces);
         }
-        let applied: f64 = qd.iter().zip(&q_e).map(|(a, b)| a * b).sum();
-        applied + dalembert_system::system::potential_rate(self, t, q, qd)
+        let applied: f64 = qd.iter().zip(&scratch.forces).map(|(a, b)| a * b).sum();
+        applied + dalembert_system::system::potential_rate(self, t, q, qd, scratch)
     }
 
     /// Every force element is conservative, no joint has friction or limits (an impact takes
@@ -383,6 +383,13 @@ impl MultibodySystem for Model {
                 .constraints()
                 .iter()
                 .all(|c| c.role() != crate::ConstraintRole::Driver)
+    }
+
+    fn is_driven(&self) -> bool {
+        self.constraints
+            .constraints()
+            .iter()
+            .any(|c| c.role() == crate::ConstraintRole::Driver)
     }
 
     fn bodies_without_inertia(&self) -> Vec<String> {

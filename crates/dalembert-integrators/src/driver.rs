@@ -14,6 +14,7 @@ mod guard;
 mod integration;
 mod monitors;
 mod tangents;
+mod work;
 
 pub use integration::Integration;
 pub use tangents::Perturbed;
@@ -39,6 +40,11 @@ pub struct Sample<'a> {
     pub limit: &'a [f64],
     /// The kinetic energy impacts at joint limits took from the motion since the run began (J).
     pub impact_loss: f64,
+    /// The work `W` of the non-conservative forces, drivers and joint friction since the run
+    /// began (J), integrated along the run's steps, for a model whose forces switch (contacts,
+    /// friction, limits: `docs/energy.md`, "Along the steps"); NaN where the run does not carry
+    /// it (the energy balance then integrates the samples' power).
+    pub work: f64,
     /// `‖C‖∞` at this state.
     pub constraint_violation: f64,
     /// `‖Ċ‖∞` at this state.

@@ -22,6 +22,13 @@ pub struct IntegratorOptions {
     /// Integration stops with an error when the state grows past this many times its initial
     /// scale (blow-up of an unstable step), before non-finite numbers appear.
     pub divergence_factor: f64,
+    /// True to integrate the work `W` of the non-conservative forces, drivers and friction
+    /// along the run's steps, into each sample's [`crate::Sample::work`], for a model whose
+    /// forces switch (contacts, friction, limits): the energy balance of such a run then does not
+    /// depend on its output interval (`docs/energy.md`, "Along the steps"). It costs the power at
+    /// every step's end (with friction or drivers, an evaluation). Off by default;
+    /// `dalembert::Simulation`'s runs turn it on.
+    pub work_along_steps: bool,
 }
 
 impl IntegratorOptions {
@@ -36,7 +43,15 @@ impl IntegratorOptions {
             min_step: 1e-12,
             max_step: every,
             divergence_factor: 1e8,
+            work_along_steps: false,
         }
+    }
+
+    /// The same options with the work integrated along the steps, or not
+    /// ([`IntegratorOptions::work_along_steps`]).
+    pub fn with_work_along_steps(mut self, on: bool) -> Self {
+        self.work_along_steps = on;
+        self
     }
 
     /// The same options with another stabilization.

@@ -723,6 +723,10 @@ impl MultibodySystem for Model {
             && self.frictions.is_empty()
     }
 
+    fn is_driven(&self) -> bool {
+        !self.drivers.is_empty()
+    }
+
     fn bodies_without_inertia(&self) -> Vec<String> {
         self.bodies
             .iter()

@@ -193,20 +193,27 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
     /// True when `T + V` is a first integral of the exact motion.
     fn is_conservative(&self) -> bool;
 
+    /// True when some constraint equation is a driver (a prescribed motion, whose force does
+    /// work: `docs/energy.md`, eq. E3). The default, true for any model with equations, is safe:
+    /// it only makes the work along a run's steps evaluate the multipliers.
+    fn is_driven(&self) -> bool {
+        self.num_equations() > 0
+    }
+
     /// The power of the applied forces that [`MultibodySystem::potential_energy`] does not
     /// count (dampers, actuators, applied forces and torques) at `(t, q, v)`: the rate at which
-    /// they change `T + V` (`docs/energy.md`, eq. E2). Zero for a conservative model. For the
-    /// energy balance of a run, at output samples: it may allocate.
+    /// they change `T + V` (`docs/energy.md`, eq. E2). Zero for a conservative model. Its work
+    /// buffers are `scratch` ([`crate::power::PowerScratch::new`] for this model): it allocates
+    /// nothing.
     ///
     /// The default is `vᵀ Q_e + dV/dt` along the motion (`dV/dt` by a central difference through
     /// [`MultibodySystem::integrate_positions`] over ±1e-6 s), which holds where
     /// [`MultibodySystem::applied_forces`] carries no inertial terms that do work (the spatial
     /// gyroscopic moment `−ω × J ω` does none); a model whose `Q_e` holds such terms overrides it.
-    fn nonconservative_power(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
-        let mut q_e = vec![0.0; v.len()];
-        self.applied_forces(t, q, v, &mut q_e);
-        let applied: f64 = v.iter().zip(&q_e).map(|(a, b)| a * b).sum();
-        applied + potential_rate(self, t, q, v)
+    fn nonconservative_power(&self, t: f64, q: &[f64], v: &[f64], scratch: &mut crate::power::PowerScratch) -> f64 {
+        self.applied_forces(t, q, v, &mut scratch.forces);
+        let applied: f64 = v.iter().zip(&scratch.forces).map(|(a, b)| a * b).sum();
+        applied + potential_rate(self, t, q, v, scratch)
     }
 
     /// Names of the bodies without mass or inertia (to explain a singular system).
@@ -286,11 +293,19 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
 
 /// `dV/dt` along the motion through `(t, q, v)`: a central difference over ±`H` s, positions
 /// moved by [`MultibodySystem::integrate_positions`] (so that they stay on their manifold), with
-/// error `O(H²)` and round-off `ε V / H`.
-pub fn potential_rate<S: MultibodySystem + ?Sized>(system: &S, t: f64, q: &[f64], v: &[f64]) -> f64 {
+/// error `O(H²)` and round-off `ε V / H`. The moved positions are `scratch`'s.
+pub fn potential_rate<S: MultibodySystem + ?Sized>(
+    system: &S,
+    t: f64,
+    q: &[f64],
+    v: &[f64],
+    scratch: &mut crate::power::PowerScratch,
+) -> f64 {
     const H: f64 = 1e-6;
-    let (mut ahead, mut behind) = (q.to_vec(), q.to_vec());
-    system.integrate_positions(&mut ahead, v, H);
-    system.integrate_positions(&mut behind, v, -H);
-    (system.potential_energy(t + H, &ahead) - system.potential_energy(t - H, &behind)) / (2.0 * H)
+    let (ahead, behind) = (&mut scratch.ahead, &mut scratch.behind);
+    ahead.copy_from_slice(q);
+    behind.copy_from_slice(q);
+    system.integrate_positions(ahead, v, H);
+    system.integrate_positions(behind, v, -H);
+    (system.potential_energy(t + H, ahead) - system.potential_energy(t - H, behind)) / (2.0 * H)
 }

@@ -16,6 +16,7 @@ use super::events::Events;
 use super::guard::SingularPassGuard;
 use super::monitors::Monitors;
 use super::tangents::{Perturbed, Tangents};
+use super::work::WorkAlongSteps;
 use super::{check_options, inf_norm, normalize, project, singular_or, split, Sample, Schedule};
 use crate::branch::BranchMonitor;
 use crate::methods::first_order::derivative;
@@ -98,6 +99,8 @@ pub struct Integration {
     tangents: Tangents,
     /// The system's events (contacts beginning or ending), where a step is shortened to end.
     events: Events,
+    /// The work integrated along the steps, for a model whose forces switch (`None` otherwise).
+    work: Option<WorkAlongSteps>,
 }
 
 /// `q̈`, `λ`, the residuals and the energy of `f` at `(t, y = [q; q̇])`, as an output sample in
@@ -105,8 +108,8 @@ pub struct Integration {
 fn evaluated<'a>(
     f: &mut dyn Formulation,
     mon: &'a mut Monitors,
-    t: f64,
-    y: &'a [f64],
+    (t, y): (f64, &'a [f64]),
+    work: f64,
 ) -> Result<Sample<'a>, IntegrationError> {
     let (q, qd) = y.split_at(mon.n);
     f.accelerations(t, q, qd, mon.baumgarte, &mut mon.qdd, &mut mon.lambda)?;
@@ -129,6 +132,7 @@ fn evaluated<'a>(
         friction: &mon.friction,
         limit: &mon.limit,
         impact_loss: f.impact_loss(),
+        work,
         constraint_violation: inf_norm(&mon.c),
         velocity_violation: inf_norm(&mon.cdot),
         energy,
@@ -234,6 +238,10 @@ impl Integration {
         };
         let len = y.len();
         let events = Events::new(f, t0, &y, n);
+        let work = match opts.work_along_steps {
+            true => WorkAlongSteps::new(f, (t0, &y, n), mon.baumgarte)?,
+            false => None,
+        };
         Ok(Integration {
             mon,
             stepper,
@@ -254,6 +262,7 @@ impl Integration {
             busy: wall.elapsed(),
             tangents: Tangents::default(),
             events,
+            work,
         })
     }
 
@@ -295,7 +304,7 @@ impl Integration {
     pub fn perturbed_sample(&mut self, j: usize, plus: bool) -> Result<(Sample<'_>, f64), IntegrationError> {
         let started = Instant::now();
         let (f, y, delta) = self.tangents.side(j, plus);
-        let sample = evaluated(f, &mut self.mon, self.shown_t, y)?;
+        let sample = evaluated(f, &mut self.mon, (self.shown_t, y), f64::NAN)?;
         self.busy += started.elapsed();
         Ok((sample, delta))
     }
@@ -368,10 +377,7 @@ impl Integration {
         let tol = tolerance(t);
         while self.t < t - tol {
             // An event the last step ended at, settled as the run goes on from it.
-            let n_q = self.mon.n;
-            if self.events.settle_pending(f, self.t, &mut self.y, n_q)? {
-                self.stepper.state_changed();
-            }
+            self.settle(f)?;
             let across = match &self.control {
                 Control::Fixed(_) => self.next_end() > t + tol,
                 Control::Adaptive(_) => false,
@@ -511,6 +517,9 @@ impl Integration {
     /// The method goes on from the run's state `y` at `t`: told so, with the grid spanning the
     /// rest of its output interval from `t`.
     fn restart_at(&mut self, t: f64) {
+        if let Some(w) = self.work.as_mut() {
+            w.move_to(t);
+        }
         self.t = t;
         self.shown_t = t;
         self.shown_is_run = true;
@@ -538,7 +547,8 @@ impl Integration {
         let started = Instant::now();
         let t = self.shown_t;
         let y = if self.shown_is_run { &self.y } else { &self.shown };
-        let sample = evaluated(f, &mut self.mon, t, y)?;
+        let work = self.work.as_ref().map_or(f64::NAN, |w| w.at(t));
+        let sample = evaluated(f, &mut self.mon, (t, y), work)?;
         self.busy += started.elapsed();
         Ok(sample)
     }
@@ -551,16 +561,34 @@ impl Integration {
         s
     }
 
-    /// One step of the run (a fixed step, an accepted adaptive step, or half of a bridge).
-    fn unit(&mut self, f: &mut dyn Formulation, cancel: &AtomicBool) -> Result<(), IntegrationError> {
+    /// Settles an event the last step ended at (an impulse may change the state: the work's
+    /// quadrature starts again there, as it does where the run was moved).
+    fn settle(&mut self, f: &mut dyn Formulation) -> Result<(), IntegrationError> {
         let n_q = self.mon.n;
-        if self.events.settle_pending(f, self.t, &mut self.y, n_q)? {
+        let settled = self.events.settle_pending(f, self.t, &mut self.y, n_q)?;
+        if settled {
             self.stepper.state_changed();
         }
+        if let Some(w) = self.work.as_mut().filter(|w| settled || w.moved()) {
+            w.restart(f, (self.t, &self.y, n_q), self.mon.baumgarte)?;
+        }
+        Ok(())
+    }
+
+    /// One step of the run (a fixed step, an accepted adaptive step, or half of a bridge).
+    fn unit(&mut self, f: &mut dyn Formulation, cancel: &AtomicBool) -> Result<(), IntegrationError> {
+        self.settle(f)?;
+        let events = self.mon.stats.events;
         let result = match self.control {
             Control::Fixed(_) => self.fixed_unit(f, cancel),
             Control::Adaptive(_) => self.adaptive_unit(f, cancel),
         };
+        if result.is_ok() {
+            if let Some(w) = self.work.as_mut() {
+                let at_event = self.mon.stats.events > events;
+                w.step(f, (self.t, &self.y, self.mon.n), self.mon.baumgarte, at_event)?;
+            }
+        }
         // The method says what a divergence likely means for it.
         result.map_err(|e| match e {
             IntegrationError::Diverged { time, what, step, .. } => IntegrationError::Diverged {

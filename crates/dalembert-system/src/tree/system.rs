@@ -265,7 +265,7 @@ impl MultibodySystem for JointSpace {
 
     /// The joint dampers' `−c q̇²` (a joint's stiffness and constant effort are in its
     /// potential), and the power of the axis laws that their potential does not count.
-    fn nonconservative_power(&self, t: f64, q: &[f64], v: &[f64]) -> f64 {
+    fn nonconservative_power(&self, t: f64, q: &[f64], v: &[f64], _scratch: &mut crate::PowerScratch) -> f64 {
         let laws: f64 = self
             .laws
             .iter()
