@@ -639,10 +639,11 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
 }
 
 /// Runs through two capsules (spatial, as a pair and as a group with its broad phase), two
-/// rounded segments (planar) and a roller on a turning cam profile (the closest points of two
-/// segments, of a point and a spline, found at every evaluation) allocate nothing per step, every
-/// method: a rod bouncing on a log without dissipation, and the cam turning, for twice as long
-/// cost no more allocations.
+/// rounded segments (planar), a roller on a turning cam profile (the closest points of two
+/// segments, of a point and a spline, found at every evaluation), a box on a sliding plate and a
+/// rectangle on a sliding platform allocate nothing per step, every method: a rod bouncing on a
+/// log without dissipation, the cam turning, and the blocks falling onto their plates, for twice
+/// as long cost no more allocations.
 #[test]
 fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -683,6 +684,25 @@ fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
              profile = {{ body = \"cam\", points = [{}] }}\n",
             profile.join(", ")
         ),
+        // A box on a plate's plane and a rectangle on a platform's line, the plate and the
+        // platform free (docs/contact.md, "A line or plane on a moving body").
+        "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+         [[bodies]]\nname = \"plate\"\nmass = 3.0\ninertia = [0.03, 0.04, 0.06]\nposition = [0.0, 0.0, 0.0]\n\
+         [[bodies]]\nname = \"box\"\nmass = 1.0\ninertia = [0.004, 0.005, 0.006]\nposition = [0.0, 0.0, 0.2]\nangular_velocity = [1.0, 2.0, 0.0]\n\
+         [[joints]]\nname = \"slide\"\ntype = \"prismatic\"\nbodies = [\"ground\", \"plate\"]\nat = [0.0, 0.0, 0.0]\naxis = [0.0, 0.0, 1.0]\n\
+         [[forces]]\nname = \"touch\"\ntype = \"box-plane\"\nbody = \"box\"\nsize = [0.2, 0.15, 0.1]\n\
+         plane = { body = \"plate\", point = [0.0, 0.0, 0.05], normal = [0.0, 0.0, 1.0] }\nstiffness = 1e6\n\
+         dissipation = 0.5\nfriction = 0.3\n"
+            .to_string(),
+        "[scene]\ngravity = [0.0, -9.81]\n\
+         [[bodies]]\nname = \"platform\"\nmass = 2.0\nshape = { rectangle = [0.6, 0.1] }\nposition = [0.0, -0.05]\n\
+         [[bodies]]\nname = \"block\"\nmass = 1.0\nshape = { rectangle = [0.2, 0.1] }\nposition = [0.0, 0.3]\nangular_velocity = 3.0\n\
+         [[joints]]\nname = \"guide\"\ntype = \"prismatic\"\nbodies = [\"ground\", \"platform\"]\nat = [0.0, -0.05]\naxis = [0.0, 1.0]\n\
+         [[forces]]\nname = \"touch\"\ntype = \"polygon-line\"\nbody = \"block\"\n\
+         vertices = [[-0.1, 0.25], [0.1, 0.25], [0.1, 0.35], [-0.1, 0.35]]\n\
+         line = { body = \"platform\", point = [0.0, 0.0], normal = [0.0, 1.0] }\nstiffness = 1e6\n\
+         dissipation = 0.5\nfriction = 0.3\n"
+            .to_string(),
     ];
     let mut failures = Vec::new();
     for text in &texts {

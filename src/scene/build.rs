@@ -18,7 +18,7 @@ use dalembert_constraints::{
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
-    Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, PointForce,
+    Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, Line, PointForce,
     RotationalSpringDamper, SegmentSegment, ShapeLine, SpringDamper, Torque, Vec2,
 };
 use dalembert_system::{TimeFunction, REST_SPEED};
@@ -1012,18 +1012,36 @@ fn force(
                 return Err(err("'radii' belongs to a circle-circle element: give 'radius'".into()));
             }
             let c = circle_on_line(b, d, span, &owner)?;
-            if c.line_body != BodyRef::Ground {
-                return Err(err(
-                    "a compliant circle-line's line is of the ground (a line on a body needs rigid = true)".into(),
-                ));
+            let line = Line {
+                body: c.line_body,
+                point: c.point,
+                normal: c.normal,
+            };
+            if line.body != BodyRef::Ground {
+                // The viewer draws the line with its body (the ground's is drawn as the floor).
+                let drawn = RigidContact {
+                    name: d.name.clone(),
+                    body: c.body,
+                    centre: c.centre,
+                    radius: c.radius,
+                    against: Against::Line {
+                        body: line.body,
+                        point: line.point,
+                        normal: line.normal,
+                    },
+                    restitution: 0.0,
+                    rest_speed: REST_SPEED,
+                };
+                if let Mark::Contact { force, .. } = &mut mark.insert(contact_mark(&drawn, &d.kind)) {
+                    *force = false;
+                }
             }
             Box::new(CircleLine {
                 name: d.name.clone(),
                 body: c.body,
                 centre: c.centre,
                 radius: c.radius,
-                point: c.point,
-                normal: c.normal,
+                line,
                 law: contact_law(d).map_err(err)?,
             })
         }
@@ -1070,22 +1088,26 @@ fn force(
                 (ends.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(), radius)
             };
             let line = d.line.as_ref().ok_or_else(|| {
-                err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)".into())
+                err("needs 'line = { point = [x, y], normal = [nx, ny] }' (global; of the ground unless it names a 'body', the normal out of it)".into())
             })?;
-            if line.body.is_some() {
-                return Err(err(format!("a {}'s line is of the ground", d.kind)));
-            }
             let normal = v2(line.normal);
             if normal.norm().is_nan() || normal.norm() == 0.0 {
                 return Err(err("the line's normal must not be zero".into()));
             }
+            let line_body = match &line.body {
+                Some(name) => b.body(name, span, &owner)?,
+                None => BodyRef::Ground,
+            };
             Box::new(ShapeLine {
                 name: d.name.clone(),
                 body,
                 centres,
                 radius,
-                point: v2(line.point),
-                normal: normal / normal.norm(),
+                line: Line {
+                    body: line_body,
+                    point: local_point_of(line_body, &b.q, v2(line.point)),
+                    normal: local_direction_of(line_body, &b.q, normal / normal.norm()),
+                },
                 law: contact_law(d).map_err(err)?,
             })
         }

@@ -598,9 +598,25 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             continue;
         }
         let f = spatial_forces::force(d, &names, &ctx, &span, &owner, &positions)?;
-        if let dalembert_spatial::Force::SpherePlane { point, normal, .. }
-        | dalembert_spatial::Force::BoxPlane { point, normal, .. }
-        | dalembert_spatial::Force::CapsulePlane { point, normal, .. } = &f
+        // A plane of the ground is drawn as a floor; one on a body is its body's face.
+        if let dalembert_spatial::Force::SpherePlane {
+            point,
+            normal,
+            plane_body: BodyRef::Ground,
+            ..
+        }
+        | dalembert_spatial::Force::BoxPlane {
+            point,
+            normal,
+            plane_body: BodyRef::Ground,
+            ..
+        }
+        | dalembert_spatial::Force::CapsulePlane {
+            point,
+            normal,
+            plane_body: BodyRef::Ground,
+            ..
+        } = &f
         {
             floors.push(spatial_forces::floor_visual(point, normal, &owner));
         }

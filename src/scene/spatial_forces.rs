@@ -78,7 +78,7 @@ pub(crate) struct MemberDef {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct PlaneDef {
-    /// The body the plane is fixed in (default the ground; a rigid contact only).
+    /// The body the plane is fixed in (default the ground).
     pub body: Option<String>,
     pub point: [f64; 3],
     pub normal: [f64; 3],
@@ -356,16 +356,12 @@ pub(crate) fn force(
         "sphere-plane" => {
             check(d.only(&on_plane("radius")))?;
             let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
-            if plane.body.is_some() {
-                return Err(err(
-                    "a compliant sphere-plane's plane is of the ground (a plane on a body needs rigid = true)",
-                ));
-            }
             Force::SpherePlane {
                 name,
                 body,
                 centre,
                 radius,
+                plane_body: plane_body(plane, names, ctx, span, owner)?,
                 point: plane.point,
                 normal: plane.normal,
                 law: law()?,
@@ -384,6 +380,7 @@ pub(crate) fn force(
                 body,
                 centre,
                 size: d.size.ok_or_else(|| err("needs 'size = [a, b, c]' (m: its edges along the body's axes)"))?,
+                plane_body: plane_body(plane, names, ctx, span, owner)?,
                 point: plane.point,
                 normal: plane.normal,
                 law: law()?,
@@ -400,6 +397,7 @@ pub(crate) fn force(
                 body,
                 ends,
                 radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
+                plane_body: plane_body(plane, names, ctx, span, owner)?,
                 point: plane.point,
                 normal: plane.normal,
                 law: law()?,
@@ -481,13 +479,26 @@ fn shape_on_plane<'a>(
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
     let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
     let body = names.body(ctx, name, span, owner)?;
-    let plane = d.plane.as_ref().ok_or_else(|| {
-        err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
-    })?;
-    if plane.body.is_some() {
-        return Err(err(&format!("a {}'s plane is of the ground", d.kind)));
-    }
+    let plane = d.plane.as_ref().ok_or_else(|| err(NEEDS_PLANE))?;
     Ok((body, d.at, plane))
+}
+
+/// What a contact on a plane needs.
+const NEEDS_PLANE: &str =
+    "needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (global; of the ground unless it names a 'body', the normal out of it)";
+
+/// The body a compliant contact's plane is fixed in (the ground unless it names one).
+fn plane_body(
+    plane: &PlaneDef,
+    names: &Names<BodyRef>,
+    ctx: &Ctx<'_>,
+    span: &Range<usize>,
+    owner: &str,
+) -> Result<BodyRef, SceneError> {
+    match &plane.body {
+        Some(name) => names.body(ctx, name, span, owner),
+        None => Ok(BodyRef::Ground),
+    }
 }
 
 /// A body's position in the file (the ground's origin for the ground).
@@ -572,9 +583,7 @@ fn sphere_on_plane<'a>(
         (None, BodyRef::Ground) => [0.0; 3],
         (Some(Points3::Two(_)), _) => return Err(err("'at' is the sphere's centre, one point [x, y, z] (global)")),
     };
-    let plane = d.plane.as_ref().ok_or_else(|| {
-        err("needs 'plane = { point = [x, y, z], normal = [nx, ny, nz] }' (of the ground, the normal out of it)")
-    })?;
+    let plane = d.plane.as_ref().ok_or_else(|| err(NEEDS_PLANE))?;
     Ok((body, centre, d.radius.ok_or_else(|| err("needs 'radius' (m)"))?, plane))
 }
 

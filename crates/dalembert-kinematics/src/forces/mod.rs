@@ -15,7 +15,7 @@ mod spring_damper;
 mod swept_pair;
 mod torque;
 
-pub use circle_line::CircleLine;
+pub use circle_line::{CircleLine, Line};
 pub use gravity::Gravity;
 pub use point_force::PointForce;
 pub use rotational_spring_damper::RotationalSpringDamper;

@@ -1,6 +1,6 @@
-//! Compliant contact of a segment or a polygon on a body with a line of the ground
-//! (`docs/contact.md`): the law of [`super::CircleLine`] at several circles of one radius fixed
-//! in the body.
+//! Compliant contact of a segment or a polygon on a body with a line of the ground or of another
+//! body (`docs/contact.md`): the law of [`super::CircleLine`] at several circles of one radius
+//! fixed in the body.
 //!
 //! - A polygon's vertices (radius 0): a polygon's points nearest a line are always among its
 //!   vertices, and an edge lying on the line rests on its two ends.
@@ -10,13 +10,13 @@
 //! Each circle that penetrates adds its own normal force and friction; the element's gap is the
 //! least of theirs, and its potential the sum of theirs.
 
-use super::circle_line::press;
+use super::circle_line::{press, Line};
 use super::{check_body, ForceElement};
 use crate::{Body, BodyRef, BodyState, Vec2};
 use dalembert_system::{ContactLaw, ContactResultant, ModelError};
 
 /// Circles of one radius on a body (a polygon's vertices with radius 0, a segment's ends with its
-/// radius) against a line of the ground.
+/// radius) against a line of the ground or of another body.
 #[derive(Debug, Clone)]
 pub struct ShapeLine {
     /// Element name.
@@ -27,37 +27,42 @@ pub struct ShapeLine {
     pub centres: Vec<Vec2>,
     /// Their radius (m; 0 for a polygon's vertices).
     pub radius: f64,
-    /// A point of the line (global).
-    pub point: Vec2,
-    /// The line's unit normal, out of the ground (global).
-    pub normal: Vec2,
+    /// The line: its body, a point and its unit normal in that body's coordinates.
+    pub line: Line,
     /// The contact law.
     pub law: ContactLaw,
 }
 
 impl ShapeLine {
+    /// The states of the shape's body and the line's.
+    fn states(&self, q: &[f64], qd: &[f64]) -> (BodyState, BodyState) {
+        (BodyState::of(self.body, q, qd), BodyState::of(self.line.body, q, qd))
+    }
+
+    /// Each circle's penetration at `q` (negative: the gap).
+    fn depths<'a>(&'a self, q: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
+        let (s, l) = self.states(q, &[]);
+        self.centres.iter().map(move |&c| {
+            press(
+                (self.body, &s),
+                (c, self.radius),
+                (&self.line, &l),
+                &self.law,
+                None,
+                None,
+            )
+        })
+    }
+
     /// The deepest circle's penetration `δ` at `q` (negative: the gap).
     pub fn penetration(&self, q: &[f64]) -> f64 {
-        let s = BodyState::of(self.body, q, &[]);
-        self.centres
-            .iter()
-            .map(|&c| {
-                press(
-                    (self.body, &s),
-                    (c, self.radius),
-                    (self.point, self.normal),
-                    &self.law,
-                    None,
-                    None,
-                )
-            })
-            .fold(f64::NEG_INFINITY, f64::max)
+        self.depths(q).fold(f64::NEG_INFINITY, f64::max)
     }
 }
 
 impl ForceElement for ShapeLine {
     fn bodies(&self) -> Option<Vec<BodyRef>> {
-        Some(vec![self.body])
+        Some(vec![self.body, self.line.body])
     }
 
     fn name(&self) -> &str {
@@ -65,12 +70,12 @@ impl ForceElement for ShapeLine {
     }
 
     fn add_generalized_force(&self, _t: f64, _b: &[Body], q: &[f64], qd: &[f64], q_e: &mut [f64]) {
-        let s = BodyState::of(self.body, q, qd);
+        let (s, l) = self.states(q, qd);
         for &c in &self.centres {
             press(
                 (self.body, &s),
                 (c, self.radius),
-                (self.point, self.normal),
+                (&self.line, &l),
                 &self.law,
                 Some(&mut *q_e),
                 None,
@@ -79,22 +84,22 @@ impl ForceElement for ShapeLine {
     }
 
     fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
-        let s = BodyState::of(self.body, q, qd);
+        let (s, l) = self.states(q, qd);
         let mut out = ContactResultant::new(-self.penetration(q));
+        let normal = l.rotation() * self.line.normal;
         let mut deepest = (f64::NEG_INFINITY, Vec2::zeros());
         for &c in &self.centres {
-            let place = (self.point, self.normal);
             let depth = press(
                 (self.body, &s),
                 (c, self.radius),
-                place,
+                (&self.line, &l),
                 &self.law,
                 None,
                 Some(&mut out),
             );
             if depth > deepest.0 {
                 let centre = crate::PointState::new(&s, c).position;
-                deepest = (depth, centre - self.radius * self.normal);
+                deepest = (depth, centre - self.radius * normal);
             }
         }
         Some(out.finish(deepest.1.into()))
@@ -102,17 +107,7 @@ impl ForceElement for ShapeLine {
 
     /// The elastic part's potential of every circle that penetrates.
     fn potential_energy(&self, _t: f64, _b: &[Body], q: &[f64]) -> Option<f64> {
-        let s = BodyState::of(self.body, q, &[]);
-        let line = (self.point, self.normal);
-        Some(
-            self.centres
-                .iter()
-                .map(|&c| {
-                    self.law
-                        .potential(press((self.body, &s), (c, self.radius), line, &self.law, None, None))
-                })
-                .sum(),
-        )
+        Some(self.depths(q).map(|d| self.law.potential(d)).sum())
     }
 
     fn contact_gap(&self, _bodies: &[Body], q: &[f64]) -> Option<f64> {
@@ -131,26 +126,16 @@ impl ForceElement for ShapeLine {
                 what,
             })
         };
-        if self.body == BodyRef::Ground {
-            return bad("acts on the ground: give it a moving body".into());
-        }
         if self.centres.is_empty() {
             return bad("needs at least one point".into());
         }
-        let coordinates = self.centres.iter().flat_map(|c| [c.x, c.y]);
-        let line = [self.point.x, self.point.y, self.normal.x, self.normal.y];
-        if coordinates.chain(line).any(|x| !x.is_finite()) {
-            return bad("points, the line's point and normal must be finite".into());
-        }
-        if (self.normal.norm() - 1.0).abs() > 1e-12 {
-            return bad(format!(
-                "the line's normal must be a unit vector, got length {}",
-                self.normal.norm()
-            ));
+        if self.centres.iter().flat_map(|c| [c.x, c.y]).any(|x| !x.is_finite()) {
+            return bad("points must be finite".into());
         }
         if !(self.radius.is_finite() && self.radius >= 0.0) {
             return bad(format!("radius must be finite and ≥ 0, got {}", self.radius));
         }
+        self.line.check(&self.name, self.body, count)?;
         self.law.check().map_err(|what| ModelError::InvalidParameter {
             element: format!("force '{}'", self.name),
             what,

@@ -1,16 +1,19 @@
-//! Compliant contact of a sphere on a body with a plane fixed to the ground, and of two spheres
-//! or capsules on two bodies (`docs/contact.md`).
+//! Compliant contact of a sphere on a body with a plane fixed to the ground or to another body,
+//! and of two spheres or capsules on two bodies (`docs/contact.md`).
 //!
 //! With the sphere's centre `c`, radius `R`, the plane's point `p₀` and unit normal `n` (out of
-//! the solid), the penetration is `δ = R − n·(c − p₀)` and its rate `δ̇ = −n·ċ`. Where `δ > 0` the
-//! plane pushes at the sphere's lowest point `x = c − R n` with
+//! the solid), the penetration is `δ = R − n·(c − p₀)` and its rate `δ̇ = −n·(ċ − v)`, `v` the
+//! velocity of the plane's body's point at `c` (zero for the ground's). Where `δ > 0` the plane
+//! pushes at the sphere's lowest point `x = c − R n` with
 //!
 //! ```text
 //! F_n = k δⁿ (1 + d δ̇)   (Hunt–Crossley; clamped at 0: the plane never pulls)        (K1)
 //! F_t = −μ F_n v_t / max(|v_t|, v_s)                                                  (K2)
 //! ```
 //!
-//! `v_t` is the velocity of the body's point at `x` along the plane. Above the smoothing velocity
+//! `v_t` is the velocity of the body's point at `x` along the plane, relative to the plane's body's
+//! point there; the plane's body feels the opposite force at `x` (the gradient of the potential
+//! below on both bodies: `docs/contact.md`, "A line or plane on a moving body"). Above the smoothing velocity
 //! `v_s` (m/s) the friction is Coulomb's `μ F_n` against the sliding; below it grows linearly with
 //! `v_t`, so that a body at rest on a slope creeps at a speed below `v_s` instead of sticking.
 //! With `d = 0` and `μ = 0` the element is conservative with the potential `k δⁿ⁺¹ / (n + 1)`.
@@ -128,8 +131,8 @@ impl SweptPair {
     }
 }
 
-/// Spheres of one radius on a body against a plane of the ground (one sphere, a capsule's two
-/// end caps, a box's eight corners with radius 0).
+/// Spheres of one radius on a body against a plane of the ground or of another body (one sphere,
+/// a capsule's two end caps, a box's eight corners with radius 0).
 #[derive(Debug, Clone)]
 pub(crate) struct SpherePlane {
     /// The body.
@@ -138,51 +141,83 @@ pub(crate) struct SpherePlane {
     pub centres: Vec<V3>,
     /// Radius `R` (m; 0 for a box's corners).
     pub radius: f64,
-    /// A point of the plane (global).
+    /// The plane's body (`None`: the ground).
+    pub plane_body: Option<usize>,
+    /// A point of the plane, in its body's frame.
     pub point: V3,
-    /// The plane's unit normal, out of the solid (global).
+    /// The plane's unit normal, out of the solid, in its body's frame.
     pub normal: V3,
     /// The law.
     pub law: ContactLaw,
 }
 
+/// The plane placed with its body's frame: its global point and unit normal.
+struct Placed {
+    frame: Frame,
+    point: V3,
+    normal: V3,
+}
+
+impl Placed {
+    /// The penetration `δ` of a sphere of radius `radius` centred at `centre` (global).
+    fn depth(&self, radius: f64, centre: &V3) -> f64 {
+        radius - self.normal.dot(&(centre - self.point))
+    }
+}
+
 impl SpherePlane {
-    /// The penetration `δ` of a sphere centred at `centre` (global).
-    fn depth(&self, centre: &V3) -> f64 {
-        self.radius - self.normal.dot(&(centre - self.point))
+    /// The body's frame and the plane placed at the state behind `frame`.
+    fn frames(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> (Frame, Placed) {
+        let plane = frame(self.plane_body);
+        let placed = Placed {
+            point: plane.point(&self.point),
+            normal: plane.global(&self.normal),
+            frame: plane,
+        };
+        (frame(Some(self.body)), placed)
     }
 
     /// The deepest sphere's penetration `δ` at the state behind `frame` (negative: the gap).
     pub fn penetration(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        let f = frame(Some(self.body));
+        let (f, plane) = self.frames(frame);
         self.centres
             .iter()
-            .map(|c| self.depth(&f.point(c)))
+            .map(|c| plane.depth(self.radius, &f.point(c)))
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
-    /// Calls `visit(arm, force, normal force)` for each penetrating sphere's contact force (K1,
-    /// K2): its global force on the body at the global arm from the body's origin.
-    fn each(&self, f: &Frame, visit: &mut dyn FnMut(&V3, &V3, f64)) {
+    /// Calls `visit(x, force, normal force)` for each penetrating sphere's contact force (K1,
+    /// K2): its global force on the body at the global point `x` (the plane's body feels its
+    /// opposite there).
+    fn each(&self, f: &Frame, plane: &Placed, visit: &mut dyn FnMut(&V3, &V3, f64)) {
+        let n = plane.normal;
+        let p = &plane.frame;
         for c in &self.centres {
             let s_centre = f.global(c);
-            let depth = self.depth(&(f.r + s_centre));
+            let centre = f.r + s_centre;
+            let depth = plane.depth(self.radius, &centre);
             if depth <= 0.0 {
                 continue;
             }
-            let rate = -self.normal.dot(&f.point_velocity(&s_centre));
+            let rate = -n.dot(&(f.point_velocity(&s_centre) - p.point_velocity(&(centre - p.r))));
             let normal_force = self.law.normal_force(depth, rate);
-            let arm = s_centre - self.radius * self.normal;
-            let (sliding, speed) = sliding_speed(&f.point_velocity(&arm), &self.normal);
-            let force = normal_force * self.normal - self.law.friction_factor(normal_force, speed) * sliding;
-            visit(&arm, &force, normal_force);
+            let x = centre - self.radius * n;
+            let slip = f.point_velocity(&(x - f.r)) - p.point_velocity(&(x - p.r));
+            let (sliding, speed) = sliding_speed(&slip, &n);
+            let force = normal_force * n - self.law.friction_factor(normal_force, speed) * sliding;
+            visit(&x, &force, normal_force);
         }
     }
 
-    /// Adds each penetrating sphere's contact force's generalized force (K1, K2).
+    /// Adds each penetrating sphere's contact force's generalized forces on both bodies (K1, K2).
     pub fn add(&self, frame: &dyn Fn(Option<usize>) -> Frame, out: &mut [f64]) {
-        let f = frame(Some(self.body));
-        self.each(&f, &mut |arm, force, _| add_point_force(out, self.body, &f, arm, force));
+        let (f, plane) = self.frames(frame);
+        self.each(&f, &plane, &mut |x, force, _| {
+            add_point_force(out, self.body, &f, &(x - f.r), force);
+            if let Some(b) = self.plane_body {
+                add_point_force(out, b, &plane.frame, &(x - plane.frame.r), &(-force));
+            }
+        });
     }
 
     /// The contact's resultant at the state behind `frame` (`docs/contact.md`, "Output"): the
@@ -190,24 +225,24 @@ impl SpherePlane {
     /// pressure (the contact points weighted by their normal forces; out of contact, or where
     /// the normal forces vanish, the deepest sphere's lowest point).
     pub fn resultant(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> ContactResultant<3> {
-        let f = frame(Some(self.body));
+        let (f, plane) = self.frames(frame);
         let mut out = ContactResultant::new(-self.penetration(frame));
-        self.each(&f, &mut |arm, load, n| out.add((*load).into(), n, (f.r + arm).into()));
+        self.each(&f, &plane, &mut |x, load, n| out.add((*load).into(), n, (*x).into()));
         let deepest = self
             .centres
             .iter()
             .map(|c| f.point(c))
-            .max_by(|a, b| self.depth(a).total_cmp(&self.depth(b)))
+            .max_by(|a, b| plane.depth(self.radius, a).total_cmp(&plane.depth(self.radius, b)))
             .unwrap_or(f.r);
-        out.finish((deepest - self.radius * self.normal).into())
+        out.finish((deepest - self.radius * plane.normal).into())
     }
 
     /// `Σ k δⁿ⁺¹ / (n + 1)` over the spheres that penetrate.
     pub fn potential(&self, frame: &dyn Fn(Option<usize>) -> Frame) -> f64 {
-        let f = frame(Some(self.body));
+        let (f, plane) = self.frames(frame);
         self.centres
             .iter()
-            .map(|c| self.law.potential(self.depth(&f.point(c))))
+            .map(|c| self.law.potential(plane.depth(self.radius, &f.point(c))))
             .sum()
     }
 

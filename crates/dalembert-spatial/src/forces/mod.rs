@@ -144,7 +144,7 @@ pub enum Force {
         /// The torque is held within `[lo, hi]` (N·m; infinite bounds for none).
         range: [f64; 2],
     },
-    /// Compliant contact of a sphere on `body` with a plane of the ground
+    /// Compliant contact of a sphere on `body` with a plane of the ground or of `plane_body`
     /// (`docs/contact.md`): normal force `k δⁿ (1 + d δ̇)` with `δ` the penetration, Coulomb
     /// friction `μ F_n` regularized below `smoothing_velocity`.
     SpherePlane {
@@ -156,6 +156,8 @@ pub enum Force {
         centre: [f64; 3],
         /// Radius (m).
         radius: f64,
+        /// The plane's body ([`BodyRef::Ground`] for a floor).
+        plane_body: BodyRef,
         /// A point of the plane (global).
         point: [f64; 3],
         /// The plane's normal, out of the solid (any length but zero).
@@ -163,7 +165,7 @@ pub enum Force {
         /// The contact law (checked when the model is built).
         law: ContactLaw,
     },
-    /// Compliant contact of a box on `body` with a plane of the ground, the law of
+    /// Compliant contact of a box on `body` with a plane of the ground or of `plane_body`, the law of
     /// [`Force::SpherePlane`] at each of its eight corners that penetrates (`docs/contact.md`).
     BoxPlane {
         /// Name.
@@ -174,6 +176,8 @@ pub enum Force {
         centre: [f64; 3],
         /// Its edge lengths along the body's axes (m).
         size: [f64; 3],
+        /// The plane's body ([`BodyRef::Ground`] for a floor).
+        plane_body: BodyRef,
         /// A point of the plane (global).
         point: [f64; 3],
         /// The plane's normal, out of the solid (any length but zero).
@@ -182,7 +186,7 @@ pub enum Force {
         law: ContactLaw,
     },
     /// Compliant contact of a capsule on `body` (a segment swept by a sphere) with a plane of the
-    /// ground, the law of [`Force::SpherePlane`] at each of its two end caps that penetrates.
+    /// ground or of `plane_body`, the law of [`Force::SpherePlane`] at each of its two end caps that penetrates.
     CapsulePlane {
         /// Name.
         name: String,
@@ -192,6 +196,8 @@ pub enum Force {
         ends: [[f64; 3]; 2],
         /// Radius (m).
         radius: f64,
+        /// The plane's body ([`BodyRef::Ground`] for a floor).
+        plane_body: BodyRef,
         /// A point of the plane (global).
         point: [f64; 3],
         /// The plane's normal, out of the solid (any length but zero).
@@ -542,6 +548,7 @@ impl ForceData {
                 body,
                 centre,
                 radius,
+                plane_body,
                 point,
                 normal,
                 law,
@@ -557,12 +564,19 @@ impl ForceData {
                 positive(*radius, "radius").map_err(|m| bad(&m))?;
                 law.check().map_err(|m| bad(&m))?;
                 let b = moving(*body)?;
+                let plane = index(*plane_body)?;
+                if plane == Some(b) {
+                    return Err(bad(
+                        "the plane is on the body the shape is on: give it another body or the ground",
+                    ));
+                }
                 ForceData::SpherePlane(SpherePlane {
                     body: b,
                     centres: vec![local(Some(b), centre)],
                     radius: *radius,
-                    point: V3::from(*point),
-                    normal: n / n.norm(),
+                    plane_body: plane,
+                    point: local(plane, point),
+                    normal: frame(plane).a.transpose() * (n / n.norm()),
                     law: *law,
                 })
             }
@@ -570,6 +584,7 @@ impl ForceData {
                 body,
                 centre,
                 size,
+                plane_body,
                 point,
                 normal,
                 law,
@@ -587,6 +602,12 @@ impl ForceData {
                 }
                 law.check().map_err(|m| bad(&m))?;
                 let b = moving(*body)?;
+                let plane = index(*plane_body)?;
+                if plane == Some(b) {
+                    return Err(bad(
+                        "the plane is on the body the shape is on: give it another body or the ground",
+                    ));
+                }
                 let c = local(Some(b), centre);
                 let half = V3::from(*size) / 2.0;
                 let corners = (0..8)
@@ -599,8 +620,9 @@ impl ForceData {
                     body: b,
                     centres: corners,
                     radius: 0.0,
-                    point: V3::from(*point),
-                    normal: n / n.norm(),
+                    plane_body: plane,
+                    point: local(plane, point),
+                    normal: frame(plane).a.transpose() * (n / n.norm()),
                     law: *law,
                 })
             }
@@ -608,6 +630,7 @@ impl ForceData {
                 body,
                 ends,
                 radius,
+                plane_body,
                 point,
                 normal,
                 law,
@@ -623,12 +646,19 @@ impl ForceData {
                 positive(*radius, "radius").map_err(|m| bad(&m))?;
                 law.check().map_err(|m| bad(&m))?;
                 let b = moving(*body)?;
+                let plane = index(*plane_body)?;
+                if plane == Some(b) {
+                    return Err(bad(
+                        "the plane is on the body the shape is on: give it another body or the ground",
+                    ));
+                }
                 ForceData::SpherePlane(SpherePlane {
                     body: b,
                     centres: vec![local(Some(b), &ends[0]), local(Some(b), &ends[1])],
                     radius: *radius,
-                    point: V3::from(*point),
-                    normal: n / n.norm(),
+                    plane_body: plane,
+                    point: local(plane, point),
+                    normal: frame(plane).a.transpose() * (n / n.norm()),
                     law: *law,
                 })
             }
@@ -688,7 +718,7 @@ impl ForceData {
     pub fn bodies(&self) -> Vec<usize> {
         match self {
             ForceData::PointForce { body, .. } | ForceData::Torque { body, .. } => vec![*body],
-            ForceData::SpherePlane(c) => vec![c.body],
+            ForceData::SpherePlane(c) => [Some(c.body), c.plane_body].into_iter().flatten().collect(),
             ForceData::SweptPair(c) => c.ends.iter().filter_map(|e| e.0).collect(),
             ForceData::CapsuleGroup(c) => c.members.iter().filter_map(|m| m.body).collect(),
             ForceData::SpringDamper { ends, .. } => ends.iter().filter_map(|e| e.0).collect(),
