@@ -641,7 +641,7 @@ fn a_run_with_contact_events_allocates_nothing_per_step() {
 /// Runs through two capsules (spatial, as a pair and as a group with its broad phase), two
 /// rounded segments (planar), a roller on a turning cam profile (the closest points of two
 /// segments, of a point and a spline, found at every evaluation), a box on a sliding plate and a
-/// rectangle on a sliding platform allocate nothing per step, every method: a rod bouncing on a
+/// rectangle on a sliding platform (its line, and its polygon) allocate nothing per step, every method: a rod bouncing on a
 /// log without dissipation, the cam turning, and the blocks falling onto their plates, for twice
 /// as long cost no more allocations.
 #[test]
@@ -702,6 +702,16 @@ fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
          vertices = [[-0.1, 0.25], [0.1, 0.25], [0.1, 0.35], [-0.1, 0.35]]\n\
          line = { body = \"platform\", point = [0.0, 0.0], normal = [0.0, 1.0] }\nstiffness = 1e6\n\
          dissipation = 0.5\nfriction = 0.3\n"
+            .to_string(),
+        // The same rectangle on the platform as two polygons (docs/contact.md, "Polygons against
+        // polygons").
+        "[scene]\ngravity = [0.0, -9.81]\n\
+         [[bodies]]\nname = \"platform\"\nmass = 2.0\nshape = { rectangle = [0.6, 0.1] }\nposition = [0.0, -0.05]\n\
+         [[bodies]]\nname = \"block\"\nmass = 1.0\nshape = { rectangle = [0.2, 0.1] }\nposition = [0.0, 0.3]\nangular_velocity = 3.0\n\
+         [[joints]]\nname = \"guide\"\ntype = \"prismatic\"\nbodies = [\"ground\", \"platform\"]\nat = [0.0, -0.05]\naxis = [0.0, 1.0]\n\
+         [[forces]]\nname = \"touch\"\ntype = \"polygon-polygon\"\nbodies = [\"platform\", \"block\"]\n\
+         polygons = [[[-0.3, -0.1], [0.3, -0.1], [0.3, 0.0], [-0.3, 0.0]], [[-0.1, 0.25], [0.1, 0.25], [0.1, 0.35], [-0.1, 0.35]]]\n\
+         stiffness = 1e6\ndissipation = 0.5\nfriction = 0.3\n"
             .to_string(),
     ];
     let mut failures = Vec::new();

@@ -18,8 +18,8 @@ use dalembert_constraints::{
 };
 use dalembert_integrators::{method_names, Method, Stabilization};
 use dalembert_kinematics::{
-    Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ForceElement, Gravity, Line, PointForce,
-    RotationalSpringDamper, SegmentSegment, ShapeLine, SpringDamper, Torque, Vec2,
+    Body, BodyId, BodyRef, BodyState, CircleCircle, CircleLine, ConvexPolygon, ForceElement, Gravity, Line, PointForce,
+    PolygonPair, RotationalSpringDamper, SegmentSegment, ShapeLine, SpringDamper, Torque, Vec2,
 };
 use dalembert_system::{TimeFunction, REST_SPEED};
 use std::cell::RefCell;
@@ -463,7 +463,7 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
                 "a rigid segment-segment contact is not built (two segments lying along each other touch along a line, and simultaneous impacts are not resolved): use the compliant law".into(),
             ))
         }
-        "polygon-line" | "segment-line" => {
+        "polygon-line" | "segment-line" | "polygon-polygon" => {
             return Err(err(format!(
                 "a rigid {} contact is not built (its vertices or ends strike at once, and simultaneous impacts are not resolved): use the compliant law",
                 d.kind
@@ -880,7 +880,7 @@ fn force(
         let [n0, n1] = d.bodies.as_ref().ok_or_else(|| err("needs 'bodies'".into()))?;
         Ok([b.body(n0, span, &owner)?, b.body(n1, span, &owner)?])
     };
-    const CONTACTS: [&str; 7] = [
+    const CONTACTS: [&str; 8] = [
         "circle-line",
         "circle-circle",
         "segment-segment",
@@ -888,15 +888,17 @@ fn force(
         "line-profile",
         "polygon-line",
         "segment-line",
+        "polygon-polygon",
     ];
     if !CONTACTS.contains(&d.kind.as_str()) {
-        const CONTACT: [&str; 10] = [
+        const CONTACT: [&str; 11] = [
             "radius",
             "radii",
             "segments",
             "line",
             "profile",
             "vertices",
+            "polygons",
             "exponent",
             "dissipation",
             "friction",
@@ -1059,6 +1061,25 @@ fn force(
                 law: contact_law(d).map_err(err)?,
             })
         }
+        "polygon-polygon" => {
+            const KEYS: [&str; 7] = ["bodies", "polygons", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"];
+            if let Some(key) = d.keys_given().find(|k| !KEYS.contains(k)) {
+                return Err(err(format!("'{key}' does not belong to a polygon-polygon element")));
+            }
+            let bodies = pair()?;
+            let lists = d.polygons.as_ref().ok_or_else(|| {
+                err("needs 'polygons = [[[x, y], …], [[x, y], …]]' (the two convex polygons' vertices, global)".into())
+            })?;
+            let polygon = |k: usize| {
+                let local: Vec<Vec2> = lists[k].iter().map(|&p| local_point_of(bodies[k], &b.q, v2(p))).collect();
+                ConvexPolygon::new(bodies[k], &local).map_err(|m| err(format!("polygon {}: {m}", k + 1)))
+            };
+            Box::new(PolygonPair {
+                name: d.name.clone(),
+                polygons: [polygon(0)?, polygon(1)?],
+                law: contact_law(d).map_err(err)?,
+            })
+        }
         "polygon-line" | "segment-line" => {
             let polygon = d.kind == "polygon-line";
             let keys: &[&str] = if polygon {
@@ -1198,7 +1219,7 @@ fn force(
         }
         other => {
             return Err(err(format!(
-                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, segment-segment, circle-profile, line-profile, polygon-line, segment-line, code)"
+                "unknown type '{other}' (expected force, torque, spring-damper, rotational-spring-damper, circle-line, circle-circle, segment-segment, circle-profile, line-profile, polygon-line, segment-line, polygon-polygon, code)"
             )))
         }
     };

@@ -189,6 +189,8 @@ pub(crate) struct ForceDef {
     pub profile: Option<ProfileDef>,
     /// A `polygon-line` element's vertices (global, in the file's configuration).
     pub vertices: Option<Vec<[f64; 2]>>,
+    /// A `polygon-polygon` element's two polygons' vertices (global, in the file's configuration).
+    pub polygons: Option<[Vec<[f64; 2]>; 2]>,
     pub exponent: Option<f64>,
     pub dissipation: Option<f64>,
     pub friction: Option<f64>,
@@ -223,6 +225,7 @@ impl ForceDef {
             ("line", self.line.is_some()),
             ("profile", self.profile.is_some()),
             ("vertices", self.vertices.is_some()),
+            ("polygons", self.polygons.is_some()),
             ("exponent", self.exponent.is_some()),
             ("dissipation", self.dissipation.is_some()),
             ("friction", self.friction.is_some()),

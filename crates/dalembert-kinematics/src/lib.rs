@@ -25,8 +25,8 @@ pub mod second_derivatives;
 pub use body::{Body, BodyId, BodyRef};
 pub use coordinates::{BodyState, Coordinates};
 pub use forces::{
-    CircleCircle, CircleLine, ForceElement, Gravity, Line, PointForce, RotationalSpringDamper, SegmentSegment,
-    ShapeLine, SpringDamper, Torque,
+    CircleCircle, CircleLine, ConvexPolygon, ForceElement, Gravity, Line, PointForce, PolygonPair,
+    RotationalSpringDamper, SegmentSegment, ShapeLine, SpringDamper, Torque,
 };
 pub use mass::MassMatrix;
 pub use point::PointState;

@@ -9,6 +9,7 @@
 mod circle_line;
 mod gravity;
 mod point_force;
+mod polygon_pair;
 mod rotational_spring_damper;
 mod shape_line;
 mod spring_damper;
@@ -18,6 +19,7 @@ mod torque;
 pub use circle_line::{CircleLine, Line};
 pub use gravity::Gravity;
 pub use point_force::PointForce;
+pub use polygon_pair::{ConvexPolygon, PolygonPair};
 pub use rotational_spring_damper::RotationalSpringDamper;
 pub use shape_line::ShapeLine;
 pub use spring_damper::SpringDamper;
