@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{column, run};
+use common::{column, largest_change, largest_difference, planar_momenta, run};
 use dalembert::Scene;
 
 /// A disk (1 kg, radius 0.1 m) thrown with spin at a line at y = 0, on the ground or on a
@@ -44,13 +44,11 @@ fn a_line_on_a_welded_platform_is_the_grounds_line() {
     // times those differences).
     let (ground, platform) = (run(&disk_on(false)), run(&disk_on(true)));
     for name in ["disk.x", "disk.y", "disk.angle"] {
-        let (a, b) = (column(&ground, name), column(&platform, name));
-        let off = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let off = largest_difference(&ground, &platform, name);
         assert!(off < 1e-8, "{name}: {off:.3e} apart");
     }
     for name in ["touch.fx", "touch.fy", "touch.normal"] {
-        let (a, b) = (column(&ground, name), column(&platform, name));
-        let off = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let off = largest_difference(&ground, &platform, name);
         assert!(off < 1e-4, "{name}: {off:.3e} N apart");
     }
     // It did touch, slide and bounce: a normal force well above the weight at the first bounce.
@@ -84,28 +82,10 @@ fn strike(dissipation: f64, friction: f64, boost: [f64; 2]) -> Scene {
 /// Linear momentum `(px, py)` and angular momentum about the origin of the disk and the plate
 /// along `scene`'s run, and its energy.
 fn momenta(scene: &Scene) -> Vec<[f64; 4]> {
-    let t = run(scene);
-    let c = |n: &str| column(&t, n);
-    let bodies = [("disk", 1.0, 0.5 * 0.01), ("plate", 3.0, 3.0 * (0.36 + 0.01) / 12.0)];
-    let cols: Vec<_> = bodies
-        .iter()
-        .map(|(b, m, j)| {
-            let v = ["x", "y", "vx", "vy", "omega"].map(|k| c(&format!("{b}.{k}")));
-            (v, *m, *j)
-        })
-        .collect();
-    let energy = c("energy");
-    (0..energy.len())
-        .map(|k| {
-            let mut out = [0.0, 0.0, 0.0, energy[k]];
-            for ([x, y, vx, vy, w], m, j) in &cols {
-                out[0] += m * vx[k];
-                out[1] += m * vy[k];
-                out[2] += m * (x[k] * vy[k] - y[k] * vx[k]) + j * w[k];
-            }
-            out
-        })
-        .collect()
+    planar_momenta(
+        scene,
+        &[("disk", 1.0, 0.5 * 0.01), ("plate", 3.0, 3.0 * (0.36 + 0.01) / 12.0)],
+    )
 }
 
 #[test]
@@ -118,7 +98,7 @@ fn a_strike_on_a_free_plate_keeps_momentum_and_energy() {
     let run = momenta(&strike(0.5, 0.4, [0.0, 0.0]));
     let (first, last) = (run[0], run[run.len() - 1]);
     for (k, bar) in [(0, 1e-12), (1, 1e-12), (2, 1e-9)] {
-        let off = run.iter().map(|m| (m[k] - first[k]).abs()).fold(0.0, f64::max);
+        let off = largest_change(&run, k);
         assert!(off < bar, "momentum {k}: moved {off:.3e}");
     }
     let loss = first[3] - last[3];
@@ -135,8 +115,7 @@ fn a_strike_on_a_free_plate_keeps_momentum_and_energy() {
     // the point is the gradient of k δ^(5/2) / (5/2), the plate's turning included): T + V kept to
     // 1e-8 J of 2.6 J (measured 2.5e-10 J).
     let run = momenta(&strike(0.0, 0.0, [0.0, 0.0]));
-    let e0 = run[0][3];
-    let off = run.iter().map(|m| (m[3] - e0).abs()).fold(0.0, f64::max);
+    let off = largest_change(&run, 3);
     assert!(off < 1e-8, "T + V moved {off:.3e} J");
 }
 
@@ -218,8 +197,7 @@ fn a_plane_on_a_welded_plate_is_the_grounds_plane() {
         (&["touch.fx", "touch.fy", "touch.fz", "touch.normal"][..], 1e-4),
     ] {
         for name in names {
-            let (a, b) = (column(&ground, name), column(&plate, name));
-            let off = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            let off = largest_difference(&ground, &plate, name);
             assert!(off < bar, "{name}: {off:.3e} apart");
         }
     }
@@ -294,7 +272,7 @@ fn a_strike_on_a_free_turning_plate_keeps_momentum_and_energy_in_space() {
         let run = momenta3(&strike3(element, 0.5, 0.4, [0.0; 3]));
         let first = run[0];
         for k in 0..3 {
-            let off = run.iter().map(|m| (m[k] - first[k]).abs()).fold(0.0, f64::max);
+            let off = largest_change(&run, k);
             assert!(off < 1e-12, "{what}: momentum {k} moved {off:.3e}");
         }
         let loss = first[3] - run[run.len() - 1][3];
@@ -303,7 +281,7 @@ fn a_strike_on_a_free_turning_plate_keeps_momentum_and_energy_in_space() {
         let moved = boosted[0][3] - boosted[boosted.len() - 1][3];
         assert!((moved - loss).abs() < 1e-8, "{what}: took {moved} J against {loss} J");
         let run = momenta3(&strike3(element, 0.0, 0.0, [0.0; 3]));
-        let off = run.iter().map(|m| (m[3] - run[0][3]).abs()).fold(0.0, f64::max);
+        let off = largest_change(&run, 3);
         assert!(off < 1e-8, "{what}: T + V moved {off:.3e} J");
     }
 }

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{column, run};
+use common::{column, largest_change, largest_difference, planar_momenta, run};
 use dalembert::Scene;
 
 const K: f64 = 1e6;
@@ -47,8 +47,7 @@ fn a_block_on_a_polygons_edge_is_a_block_on_its_line() {
         (&["touch.fx", "touch.fy", "touch.normal"][..], 1e-4),
     ] {
         for name in names {
-            let (a, b) = (column(&square, name), column(&line, name));
-            let off = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+            let off = largest_difference(&square, &line, name);
             assert!(off < bar, "{name}: {off:.3e} apart");
         }
     }
@@ -126,28 +125,13 @@ fn strike(dissipation: f64, friction: f64, boost: [f64; 2]) -> Scene {
 
 /// Momentum `(px, py)`, angular momentum about the origin and energy along `scene`'s run.
 fn momenta(scene: &Scene) -> Vec<[f64; 4]> {
-    let t = run(scene);
-    let c = |n: &str| column(&t, n);
-    let bodies = [
-        ("a", 1.0, (0.04 + 0.01) / 12.0),
-        ("b", 2.0, 2.0 * (0.09 + 0.0225) / 12.0),
-    ];
-    let cols: Vec<_> = bodies
-        .iter()
-        .map(|(b, m, j)| (["x", "y", "vx", "vy", "omega"].map(|k| c(&format!("{b}.{k}"))), *m, *j))
-        .collect();
-    let energy = c("energy");
-    (0..energy.len())
-        .map(|k| {
-            let mut out = [0.0, 0.0, 0.0, energy[k]];
-            for ([x, y, vx, vy, w], m, j) in &cols {
-                out[0] += m * vx[k];
-                out[1] += m * vy[k];
-                out[2] += m * (x[k] * vy[k] - y[k] * vx[k]) + j * w[k];
-            }
-            out
-        })
-        .collect()
+    planar_momenta(
+        scene,
+        &[
+            ("a", 1.0, (0.04 + 0.01) / 12.0),
+            ("b", 2.0, 2.0 * (0.09 + 0.0225) / 12.0),
+        ],
+    )
 }
 
 #[test]
@@ -160,7 +144,7 @@ fn two_free_blocks_strike_keeping_momentum_and_energy() {
     let run = momenta(&strike(0.5, 0.4, [0.0, 0.0]));
     let first = run[0];
     for (k, bar) in [(0, 1e-12), (1, 1e-12), (2, 1e-9)] {
-        let off = run.iter().map(|m| (m[k] - first[k]).abs()).fold(0.0, f64::max);
+        let off = largest_change(&run, k);
         assert!(off < bar, "momentum {k}: moved {off:.3e}");
     }
     let loss = first[3] - run[run.len() - 1][3];
@@ -169,6 +153,6 @@ fn two_free_blocks_strike_keeping_momentum_and_energy() {
     let moved = boosted[0][3] - boosted[boosted.len() - 1][3];
     assert!((moved - loss).abs() < 1e-8, "took {moved} J against {loss} J");
     let run = momenta(&strike(0.0, 0.0, [0.0, 0.0]));
-    let off = run.iter().map(|m| (m[3] - run[0][3]).abs()).fold(0.0, f64::max);
+    let off = largest_change(&run, 3);
     assert!(off < 1e-8, "T + V moved {off:.3e} J");
 }

@@ -17,3 +17,37 @@ pub fn run(scene: &Scene) -> Table {
 pub fn column(table: &Table, name: &str) -> Vec<f64> {
     table.column(name).unwrap()
 }
+
+/// The largest difference between column `name` of two tables of the same samples.
+pub fn largest_difference(a: &Table, b: &Table, name: &str) -> f64 {
+    let (a, b) = (column(a, name), column(b, name));
+    a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+/// The largest change of entry `k` of `rows` from its first row's.
+pub fn largest_change(rows: &[[f64; 4]], k: usize) -> f64 {
+    rows.iter().map(|r| (r[k] - rows[0][k]).abs()).fold(0.0, f64::max)
+}
+
+/// At each sample of `scene`'s run of planar bodies `(name, mass, inertia)`: their linear
+/// momentum `(px, py)`, their angular momentum about the origin, and the run's energy.
+pub fn planar_momenta(scene: &Scene, bodies: &[(&str, f64, f64)]) -> Vec<[f64; 4]> {
+    let t = run(scene);
+    let c = |n: &str| column(&t, n);
+    let cols: Vec<_> = bodies
+        .iter()
+        .map(|(b, m, j)| (["x", "y", "vx", "vy", "omega"].map(|k| c(&format!("{b}.{k}"))), *m, *j))
+        .collect();
+    let energy = c("energy");
+    (0..energy.len())
+        .map(|k| {
+            let mut out = [0.0, 0.0, 0.0, energy[k]];
+            for ([x, y, vx, vy, w], m, j) in &cols {
+                out[0] += m * vx[k];
+                out[1] += m * vy[k];
+                out[2] += m * (x[k] * vy[k] - y[k] * vx[k]) + j * w[k];
+            }
+            out
+        })
+        .collect()
+}
