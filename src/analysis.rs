@@ -170,12 +170,28 @@ impl Scene {
     }
 
     /// Simulates with the scene's settings and keeps every output row in memory. `cancel` stops
-    /// the run after the current step (the rows so far are kept).
+    /// the run after the current step (the rows so far are kept). The warning is `simulate`'s:
+    /// a conservative model's energy, or another's energy balance `E − W`
+    /// ([`crate::energy::EnergyBalance`]), changed by more than
+    /// [`crate::ENERGY_WARNING_FRACTION`] of its energy scale.
     pub fn record(&self, cancel: &AtomicBool) -> Recording {
         let sim = self.simulation();
+        let model = self.model.as_system();
         let mut rec = Recorder::new(&self.model);
-        let outcome = sim.run_cancellable(&mut |s| rec.record(s), cancel);
-        let warning = self.energy_warning_of(&outcome);
+        let mut balance = (!model.is_conservative()).then(|| crate::energy::EnergyBalance::new(model));
+        let outcome = sim.run_cancellable(
+            &mut |s| {
+                if let Some(b) = balance.as_mut() {
+                    b.push(model, s);
+                }
+                rec.record(s)
+            },
+            cancel,
+        );
+        let warning = match (&outcome, &balance) {
+            (Ok(st), Some(b)) => crate::energy_warning(b.largest_drift(), st.energy_scale, true),
+            _ => self.energy_warning_of(&outcome),
+        };
         Recording {
             table: rec.into_table(),
             outcome,

@@ -79,8 +79,9 @@ impl PyRun {
         }
     }
 
-    /// The energy warning of a conservative model whose energy changed by more than 1 % of its
-    /// scale (the same as `dalembert simulate`), or None.
+    /// The energy warning of a conservative model whose energy, or of another model whose energy
+    /// balance E − W, changed by more than 1 % of its energy scale (the same as
+    /// `dalembert simulate`), or None.
     #[getter]
     fn warning(&self) -> Option<String> {
         self.warning.clone()
