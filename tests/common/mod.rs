@@ -51,3 +51,27 @@ pub fn planar_momenta(scene: &Scene, bodies: &[(&str, f64, f64)]) -> Vec<[f64; 4
         })
         .collect()
 }
+
+/// The checks of a strike between free bodies, each run given as rows of invariants with the
+/// energy last (as [`planar_momenta`]'s): along `dissipative`, each invariant `k` of `bars`
+/// moves less than its bar and the strike takes more than `least_loss` J; `boosted`, the same
+/// strike seen from a moving frame, takes the same energy within 1e-8 J; `conservative`, without
+/// dissipation and friction, keeps its energy within 1e-8 J. `what` names the case.
+pub fn check_strike(
+    what: &str,
+    [dissipative, boosted, conservative]: [&[[f64; 4]]; 3],
+    bars: &[(usize, f64)],
+    least_loss: f64,
+) {
+    for &(k, bar) in bars {
+        let off = largest_change(dissipative, k);
+        assert!(off < bar, "{what}: momentum {k} moved {off:.3e}");
+    }
+    let took = |rows: &[[f64; 4]]| rows[0][3] - rows[rows.len() - 1][3];
+    let loss = took(dissipative);
+    assert!(loss > least_loss, "{what}: the strike took {loss} J");
+    let moved = took(boosted);
+    assert!((moved - loss).abs() < 1e-8, "{what}: took {moved} J against {loss} J");
+    let off = largest_change(conservative, 3);
+    assert!(off < 1e-8, "{what}: T + V moved {off:.3e} J");
+}

@@ -182,8 +182,8 @@ impl ForceElement for CircleLine {
 
     fn contact_resultant(&self, _b: &[Body], q: &[f64], qd: &[f64]) -> Option<ContactResultant<2>> {
         let (s, l) = (BodyState::of(self.body, q, qd), BodyState::of(self.line.body, q, qd));
-        let mut out = ContactResultant::new(-self.penetration(q));
-        press(
+        let mut out = ContactResultant::new(0.0);
+        out.gap = -press(
             (self.body, &s),
             (self.centre, self.radius),
             (&self.line, &l),
