@@ -135,8 +135,8 @@ impl Scene {
         let request = LinearizationError::Request;
         if let Some(f) = self.model.system().frictions().first() {
             return Err(LinearizationError::Model(format!(
-                "joint '{}' has Coulomb friction, which has no linearization (stick and slip are not smooth)",
-                f.name
+                "{} '{}' has Coulomb friction, which has no linearization (stick and slip are not smooth)",
+                f.element, f.name
             )));
         }
         let input_of = options

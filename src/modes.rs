@@ -41,8 +41,8 @@ impl Scene {
     pub fn modes(&self) -> Result<Modes, EquilibriumError> {
         if let Some(f) = self.model.system().frictions().first() {
             return Err(EquilibriumError::Model(format!(
-                "joint '{}' has Coulomb friction: small vibrations with it are not linear, so it has no modes",
-                f.name
+                "{} '{}' has Coulomb friction: small vibrations with it are not linear, so it has no modes",
+                f.element, f.name
             )));
         }
         // Limits: the equilibrium is refused where one is reached; small vibrations about it

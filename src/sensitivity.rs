@@ -186,8 +186,8 @@ impl Scene {
         }
         if let Some(f) = self.model.system().frictions().first() {
             return bad(format!(
-                "joint '{}' has Coulomb friction, whose stick and slip switch at events: a run with friction has no sensitivities yet",
-                f.name
+                "{} '{}' has Coulomb friction, whose stick and slip switch at events: a run with friction has no sensitivities yet",
+                f.element, f.name
             ));
         }
         if !(request.relative_change.is_finite() && request.relative_change > 0.0 && request.relative_change < 0.1) {

@@ -515,13 +515,17 @@ pub(crate) fn assemble(
     sys.solve_velocities_weighted(t, q, qd, weights, &opts)
 }
 
-/// The first joint of `system` with friction or limits, and which (`"friction"` or `"limits"`):
-/// a model whose law switches at events (`docs/friction.md`, `docs/limits.md`).
+/// The first joint or contact of `system` with friction or limits, as `joint 'NAME'` or `contact
+/// 'NAME'`, and which (`"friction"` or `"limits"`): a model whose law switches at events
+/// (`docs/friction.md`, `docs/limits.md`).
 pub(crate) fn switching_joint(system: &dyn dalembert_system::MultibodySystem) -> Option<(String, &'static str)> {
     if let Some(f) = system.frictions().first() {
-        return Some((f.name.clone(), "friction"));
+        return Some((format!("{} '{}'", f.element, f.name), "friction"));
     }
-    system.limits().first().map(|l| (l.name.clone(), "limits"))
+    system
+        .limits()
+        .first()
+        .map(|l| (format!("{} '{}'", l.element, l.name), "limits"))
 }
 
 #[cfg(test)]

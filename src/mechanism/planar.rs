@@ -130,10 +130,14 @@ impl ColumnWriter for PlanarColumns {
             names.push(format!("{}.q", l.name()));
             names.push(format!("{}.limit", l.name()));
         }
-        // Rigid contacts: the gap (m) and the normal force on the body (N).
+        // Rigid contacts: the gap (m) and the normal force on the body (N); with friction, the
+        // friction force on the circle along the tangent (n_y, −n_x) (`docs/limits.md`).
         for c in self.model.rigid_contacts() {
             names.push(format!("{}.gap", c.name));
             names.push(format!("{}.normal", c.name));
+            if c.friction.is_some() {
+                names.push(format!("{}.friction", c.name));
+            }
         }
         // Compliant contacts: gap, normal force, force on the body and where it acts.
         for &k in &self.contacts {
@@ -169,8 +173,9 @@ impl ColumnWriter for PlanarColumns {
             }
         }
         let frictions = self.model.frictions().len();
-        if s.friction.len() == frictions {
-            row.extend_from_slice(s.friction);
+        let elements = frictions + self.model.contact_frictions().len();
+        if s.friction.len() == elements {
+            row.extend_from_slice(&s.friction[..frictions]);
         } else {
             row.extend(std::iter::repeat_n(0.0, frictions));
         }
@@ -179,9 +184,13 @@ impl ColumnWriter for PlanarColumns {
             row.push(s.limit.get(k).copied().unwrap_or(0.0));
         }
         let first = self.model.limits().len();
+        let mut contact_friction = s.friction.iter().skip(frictions);
         for (k, c) in self.model.rigid_contacts().iter().enumerate() {
             row.push(c.gap(s.q));
             row.push(s.limit.get(first + k).copied().unwrap_or(0.0));
+            if c.friction.is_some() {
+                row.push(contact_friction.next().copied().unwrap_or(0.0));
+            }
         }
         for &k in &self.contacts {
             let f = &self.model.forces()[k];

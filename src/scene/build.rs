@@ -454,10 +454,10 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
     let owner = format!("force '{}'", d.name);
     let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
     let keys: &[&str] = match d.kind.as_str() {
-        "circle-line" => &["body", "at", "radius", "line", "rigid", "restitution", "rest_speed"],
-        "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed"],
-        "circle-profile" => &["body", "at", "radius", "profile", "rigid", "restitution", "rest_speed"],
-        "line-profile" => &["body", "line", "profile", "rigid", "restitution", "rest_speed"],
+        "circle-line" => &["body", "at", "radius", "line", "rigid", "restitution", "rest_speed", "friction"],
+        "circle-circle" => &["bodies", "at", "radii", "rigid", "restitution", "rest_speed", "friction"],
+        "circle-profile" => &["body", "at", "radius", "profile", "rigid", "restitution", "rest_speed", "friction"],
+        "line-profile" => &["body", "line", "profile", "rigid", "restitution", "rest_speed", "friction"],
         "segment-segment" => {
             return Err(err(
                 "a rigid segment-segment contact is not built (two segments lying along each other touch along a line, and simultaneous impacts are not resolved): use the compliant law".into(),
@@ -509,6 +509,7 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         against,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(REST_SPEED),
+        friction: d.friction,
     };
     contact
         .validate(&b.q)
@@ -1033,6 +1034,7 @@ fn force(
                     },
                     restitution: 0.0,
                     rest_speed: REST_SPEED,
+                    friction: None,
                 };
                 if let Mark::Contact { force, .. } = &mut mark.insert(contact_mark(&drawn, &d.kind)) {
                     *force = false;
@@ -1182,6 +1184,7 @@ fn force(
                 against: against.clone(),
                 restitution: 0.0,
                 rest_speed: REST_SPEED,
+                friction: None,
             };
             if let Mark::Contact { force, .. } = &mut mark.insert(contact_mark(&drawn, &d.kind)) {
                 *force = false;

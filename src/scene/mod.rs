@@ -174,7 +174,7 @@ impl Scene {
             // Limits alone are taken while free (the run stops where one is reached).
             if method.applies == dalembert_integrators::Applies::AugmentedIndex3 && kind == "friction" {
                 return Err(format!(
-                    "invalid integrator options: {} integrates the index-3 equations without joint {kind}: use rk4 or dopri5 with the {kind} of joint '{joint}'",
+                    "invalid integrator options: {} integrates the index-3 equations without joint {kind}: use rk4 or dopri5 with the {kind} of {joint}",
                     method.name
                 ));
             }

@@ -165,11 +165,13 @@ impl Friction {
             FrictionJoint::Prismatic(_) => (self.coefficient, vec![row_offset]),
         };
         JointFriction {
+            element: "joint",
             name: self.name().to_string(),
             coefficient,
             viscous: self.viscous,
             constant: self.constant,
             load_rows,
+            load_limit: None,
             stick_speed: self.stick_speed,
         }
     }

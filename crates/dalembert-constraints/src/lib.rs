@@ -18,6 +18,7 @@
 //! `−λ`, the generalized force the driver applies along the quantity it drives.
 
 pub mod constraint;
+pub mod contact_friction;
 pub mod drivers;
 pub mod friction;
 pub mod joints;

@@ -17,7 +17,10 @@ pub struct Model {
     layout: Layout,
     mass_is_constant: bool,
     frictions: Vec<Friction>,
+    /// The joints' friction elements, then the rigid contacts' with friction.
     friction_specs: Vec<JointFriction>,
+    /// The rigid contacts with friction, in the order of their elements.
+    contact_frictions: Vec<usize>,
     limits: Vec<Limit>,
     rigid_contacts: Vec<RigidContact>,
     /// The joint limits' specs, then the rigid contacts'.
@@ -47,6 +50,7 @@ impl Model {
             mass_is_constant,
             frictions: Vec::new(),
             friction_specs: Vec::new(),
+            contact_frictions: Vec::new(),
             limits: Vec::new(),
             rigid_contacts: Vec::new(),
             limit_specs: Vec::new(),
@@ -68,12 +72,41 @@ impl Model {
                 .into());
             }
         }
-        self.friction_specs = frictions
-            .iter()
-            .map(|f| f.spec(self.constraints.row_offset(f.constraint)))
-            .collect();
         self.frictions = frictions;
+        self.friction_specs = self.friction_elements();
         Ok(self)
+    }
+
+    /// The joints' friction elements, then each rigid contact's with friction (loaded by the
+    /// contact's force, the limit after the joint limits).
+    fn friction_elements(&mut self) -> Vec<JointFriction> {
+        self.contact_frictions = (0..self.rigid_contacts.len())
+            .filter(|&k| self.rigid_contacts[k].friction.is_some())
+            .collect();
+        let joints = self
+            .frictions
+            .iter()
+            .map(|f| f.spec(self.constraints.row_offset(f.constraint)));
+        let contacts = self.contact_frictions.iter().map(|&k| {
+            let c = &self.rigid_contacts[k];
+            JointFriction {
+                element: "contact",
+                name: c.name.clone(),
+                coefficient: c.friction.unwrap_or(0.0),
+                viscous: 0.0,
+                constant: 0.0,
+                load_rows: Vec::new(),
+                load_limit: Some(self.limits.len() + k),
+                stick_speed: crate::STICK_SPEED,
+            }
+        });
+        joints.chain(contacts).collect()
+    }
+
+    /// The rigid contacts with friction, in the order of their friction elements (after the
+    /// joints'), as indices into [`Model::rigid_contacts`].
+    pub fn contact_frictions(&self) -> &[usize] {
+        &self.contact_frictions
     }
 
     /// The joints with friction.
@@ -98,6 +131,7 @@ impl Model {
         }
         self.limits = limits;
         self.limit_specs = self.unilateral_specs();
+        self.friction_specs = self.friction_elements();
         Ok(self)
     }
 
@@ -109,6 +143,7 @@ impl Model {
         }
         self.rigid_contacts = contacts;
         self.limit_specs = self.unilateral_specs();
+        self.friction_specs = self.friction_elements();
         Ok(self)
     }
 
@@ -185,8 +220,12 @@ impl MultibodySystem for Model {
         &self.friction_specs
     }
 
+    /// A joint's slip row, or (after the joints') a rigid contact's at its contact point.
     fn slip_row(&self, k: usize, _t: f64, q: &[f64], v: &[f64], row: &mut SlipRow) {
-        self.frictions[k].slip_row(q, v, row);
+        match self.frictions.get(k) {
+            Some(f) => f.slip_row(q, v, row),
+            None => self.rigid_contacts[self.contact_frictions[k - self.frictions.len()]].slip_row(q, v, row),
+        }
     }
 
     fn limits(&self) -> &[JointLimit] {
@@ -320,7 +359,7 @@ impl MultibodySystem for Model {
     /// whatever the state: asked at zero).
     fn num_events(&self) -> usize {
         let q = vec![0.0; 3 * self.bodies.len()];
-        self.frictions.len()
+        self.friction_specs.len()
             + self.limit_specs.len()
             + self
                 .forces
@@ -333,13 +372,13 @@ impl MultibodySystem for Model {
     /// to its nearer bound, then each contact element's gap, in the order of the force elements.
     fn events(&self, _t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         let mut row = SlipRow::default();
-        let (slips, rest) = out.split_at_mut(self.frictions.len().min(out.len()));
+        let (slips, rest) = out.split_at_mut(self.friction_specs.len().min(out.len()));
         let (stops, gaps) = rest.split_at_mut(self.limit_specs.len().min(rest.len()));
         for (k, (slot, spec)) in stops.iter_mut().zip(&self.limit_specs).enumerate() {
             *slot = spec.free_event(self.limit_row(k, 0.0, q, &[], &mut row));
         }
-        for ((slot, f), spec) in slips.iter_mut().zip(&self.frictions).zip(&self.friction_specs) {
-            f.slip_row(q, v, &mut row);
+        for (k, (slot, spec)) in slips.iter_mut().zip(&self.friction_specs).enumerate() {
+            MultibodySystem::slip_row(self, k, 0.0, q, v, &mut row);
             let w = row.dot(v);
             *slot = if w.abs() > spec.stick_speed { w } else { 0.0 };
         }

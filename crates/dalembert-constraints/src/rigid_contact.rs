@@ -54,6 +54,10 @@ pub struct RigidContact {
     pub restitution: f64,
     /// The rebound speed below which the circle rests on the line (m/s).
     pub rest_speed: f64,
+    /// Coulomb's coefficient `μ ≥ 0` of friction at the contact point (`docs/limits.md`,
+    /// "Friction in rigid contact"), or `None` for a frictionless contact. Against a line or a
+    /// circle only.
+    pub friction: Option<f64>,
 }
 
 /// What a rigid contact's circle touches.
@@ -122,6 +126,17 @@ impl RigidContact {
         };
         check_shapes(&self.name, self.body, self.radius, &self.against)?;
         self.spec().check().map_err(bad)?;
+        if let Some(mu) = self.friction {
+            if matches!(self.against, Against::Profile { .. } | Against::ProfileFace { .. }) {
+                return Err(bad(
+                    "friction in a rigid contact with a cam profile is not built (against a line or a circle it is)"
+                        .into(),
+                ));
+            }
+            if !(mu.is_finite() && mu >= 0.0) {
+                return Err(bad(format!("friction coefficient must be ≥ 0, got {mu}")));
+            }
+        }
         let gap = self.gap(q0);
         if gap < -1e-12 {
             let what = match self.against {
@@ -306,6 +321,7 @@ mod tests {
             against: against(Profile::closed_spline(&egg()).unwrap()),
             restitution: 0.0,
             rest_speed: 1e-3,
+            friction: None,
         }
     }
 

@@ -72,11 +72,13 @@ impl Model {
                 return Err(bad(format!("stick_speed must be > 0, got {}", f.stick_speed)));
             }
             specs.push(JointFriction {
+                element: "joint",
                 name: f.joint.clone(),
                 coefficient,
                 viscous: f.viscous,
                 constant: f.constant,
                 load_rows,
+                load_limit: None,
                 stick_speed: f.stick_speed,
             });
             joints.push(index);

@@ -199,12 +199,12 @@ pub enum DynamicsError {
         /// What happened.
         what: String,
     },
-    /// Joint friction could not be solved (`docs/friction.md`).
-    #[error("t = {t}: friction in joint '{joint}': {what}", t = crate::Shortest(*.time))]
+    /// Joint friction, or a rigid contact's, could not be solved (`docs/friction.md`).
+    #[error("t = {t}: friction in {joint}: {what}", t = crate::Shortest(*.time))]
     Friction {
         /// Time.
         time: f64,
-        /// The joint (or joints).
+        /// The element (or elements), as `joint 'NAME'`, `joints 'A', 'B'` or `contact 'NAME'`.
         joint: String,
         /// What happened.
         what: String,

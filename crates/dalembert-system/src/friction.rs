@@ -34,10 +34,13 @@ use crate::{DynamicsError, MultibodySystem};
 /// The most coordinates a slip row touches (two spatial bodies of six velocities each).
 pub const SLIP_ROW_CAPACITY: usize = 12;
 
-/// One friction element of a system, as the system describes it once.
+/// One friction element of a system, as the system describes it once: a joint's, or a rigid
+/// contact's (`docs/limits.md`, "Friction in rigid contact").
 #[derive(Debug, Clone, PartialEq)]
 pub struct JointFriction {
-    /// The joint's name (in errors and outputs).
+    /// What the element is, in messages: `"joint"` or `"contact"`.
+    pub element: &'static str,
+    /// The joint's or contact's name (in errors and outputs).
     pub name: String,
     /// `μ_k`: the friction force per unit of `|L_k λ|` (the Coulomb coefficient for a slider, the
     /// coefficient times the pin radius for a revolute joint, in metres).
@@ -49,6 +52,11 @@ pub struct JointFriction {
     pub constant: f64,
     /// The multiplier rows whose Euclidean norm is the joint's normal load `N_k`.
     pub load_rows: Vec<usize>,
+    /// The limit ([`MultibodySystem::limits`]) whose force is the normal load, with the
+    /// multiplier rows' if there are any: a rigid contact's friction is loaded by the contact's
+    /// normal force, which acts only while the contact is held (the element is
+    /// [`Mode::Free`] otherwise).
+    pub load_limit: Option<usize>,
     /// `w_s`: the slip rate below which the joint counts as at rest (m/s or rad/s).
     pub stick_speed: f64,
 }
@@ -257,22 +265,31 @@ struct Load {
 }
 
 impl Load {
-    fn at(spec: &JointFriction, lambda: &[f64]) -> Load {
-        let norm = spec
-            .load_rows
-            .iter()
-            .map(|&r| lambda[r] * lambda[r])
-            .sum::<f64>()
-            .sqrt();
+    /// The load under the multipliers `lambda` and the force `limit` of the element's load limit
+    /// (zero without one).
+    fn at(spec: &JointFriction, lambda: &[f64], limit: f64) -> Load {
+        let norm = (spec.load_rows.iter().map(|&r| lambda[r] * lambda[r]).sum::<f64>() + limit * limit).sqrt();
         Load {
             bound: spec.constant + spec.coefficient * norm,
             factor: if norm == 0.0 { 0.0 } else { spec.coefficient / norm },
         }
     }
 
-    /// The bound's change along the multipliers' change `dl`.
-    fn change(&self, spec: &JointFriction, lambda: &[f64], dl: &[f64]) -> f64 {
-        self.factor * spec.load_rows.iter().map(|&r| lambda[r] * dl[r]).sum::<f64>()
+    /// The bound's change along the multipliers' change `dl` and the load limit's `(force,
+    /// change)`.
+    fn change(&self, spec: &JointFriction, lambda: &[f64], dl: &[f64], limit: (f64, f64)) -> f64 {
+        self.factor * (spec.load_rows.iter().map(|&r| lambda[r] * dl[r]).sum::<f64>() + limit.0 * limit.1)
+    }
+}
+
+/// The force of `spec`'s load limit among `terms` (the friction elements first, `frictions` of
+/// them, then the limits), and the index of its element; zero and `usize::MAX` without one.
+fn limit_load(spec: &JointFriction, terms: &[FrictionTerms], frictions: usize) -> (f64, usize) {
+    match spec.load_limit {
+        Some(l) => terms
+            .get(frictions + l)
+            .map_or((0.0, usize::MAX), |t| (t.force, frictions + l)),
+        None => (0.0, usize::MAX),
     }
 }
 
@@ -312,7 +329,7 @@ pub fn solve_friction(
         if k < frictions.len() {
             DynamicsError::Friction {
                 time: t,
-                joint: name(k).to_string(),
+                joint: format!("{} '{}'", frictions[k].element, name(k)),
                 what,
             }
         } else {
@@ -324,10 +341,21 @@ pub fn solve_friction(
             }
         }
     };
-    let all = |what: String, active: &[usize]| DynamicsError::Friction {
-        time: t,
-        joint: active.iter().map(|&k| name(k)).collect::<Vec<_>>().join("', '"),
-        what,
+    let all = |what: String, active: &[usize]| {
+        let names = active.iter().map(|&k| name(k)).collect::<Vec<_>>().join("', '");
+        let joints = active
+            .iter()
+            .all(|&k| k >= frictions.len() || frictions[k].element == "joint");
+        let element = match active {
+            [k] => frictions.get(*k).map_or("joint", |f| f.element),
+            _ if joints => "joints",
+            _ => "elements",
+        };
+        DynamicsError::Friction {
+            time: t,
+            joint: format!("{element} '{names}'"),
+            what,
+        }
     };
     // The elements whose forces are found: not a free limit (no force) and not given.
     work.active.clear();
@@ -410,7 +438,8 @@ pub fn solve_friction(
                 }
                 Mode::Slip(sign) => Law::Slip(sign),
                 Mode::Stick => {
-                    let bound = Load::at(&frictions[k], &work.lambda).bound;
+                    let (limit, _) = limit_load(&frictions[k], terms, frictions.len());
+                    let bound = Load::at(&frictions[k], &work.lambda, limit).bound;
                     if hold.abs() <= bound && !stays_loose {
                         Law::Hold
                     } else if stays_loose && work.direction[a] != 0.0 {
@@ -440,16 +469,19 @@ pub fn solve_friction(
                 }
                 Law::Slip(sign) => {
                     let spec = &frictions[k];
-                    let load = Load::at(spec, &work.lambda);
+                    let (limit, at) = limit_load(spec, terms, frictions.len());
+                    let load = Load::at(spec, &work.lambda, limit);
                     let w = term.row.dot(v);
                     work.residual[a] = term.force + spec.viscous * w + sign * load.bound;
                     for b in 0..n {
                         let e = if b == a { 1.0 } else { 0.0 };
                         let other = &terms[work.active[b]];
-                        work.jacobian[row + b] = e + sign * load.change(spec, &work.lambda, &other.dlambda);
+                        let own = if work.active[b] == at { 1.0 } else { 0.0 };
+                        work.jacobian[row + b] =
+                            e + sign * load.change(spec, &work.lambda, &other.dlambda, (limit, own));
                     }
                     scale = scale.max(term.force.abs()).max(load.bound);
-                    let slope = load.change(spec, &work.lambda, &term.dlambda).abs();
+                    let slope = load.change(spec, &work.lambda, &term.dlambda, (limit, 0.0)).abs();
                     if slope >= 1.0 {
                         return Err(fail(
                             k,
@@ -517,14 +549,16 @@ pub fn solve_friction(
 }
 
 /// The force (F1) of friction element `spec` slipping in direction `sign` at slip rate `w`
-/// under the multipliers `lambda`: `−c w − σ (μ N + f₀)`.
-pub fn slip_force(spec: &JointFriction, sign: f64, w: f64, lambda: &[f64]) -> f64 {
-    -spec.viscous * w - sign * Load::at(spec, lambda).bound
+/// under the multipliers `lambda` and its load limit's force `limit` (zero without one):
+/// `−c w − σ (μ N + f₀)`.
+pub fn slip_force(spec: &JointFriction, sign: f64, w: f64, lambda: &[f64], limit: f64) -> f64 {
+    -spec.viscous * w - sign * Load::at(spec, lambda, limit).bound
 }
 
-/// The friction bound `μ N + f₀` of `spec` under the multipliers `lambda`.
-pub fn friction_bound(spec: &JointFriction, lambda: &[f64]) -> f64 {
-    Load::at(spec, lambda).bound
+/// The friction bound `μ N + f₀` of `spec` under the multipliers `lambda` and its load limit's
+/// force `limit` (zero without one).
+pub fn friction_bound(spec: &JointFriction, lambda: &[f64], limit: f64) -> f64 {
+    Load::at(spec, lambda, limit).bound
 }
 
 /// The law an element follows at one Newton iterate.

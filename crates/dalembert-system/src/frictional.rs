@@ -46,6 +46,10 @@ pub struct Frictional {
     impact_g: Vec<f64>,
     impact_lu: Vec<f64>,
     impact_p: Vec<f64>,
+    /// The impacting contact's friction element in `impact_set` (`usize::MAX` for none), and
+    /// `σ μ` where it slips through the impact (its row then `P_f + σ μ P_n = 0`), `None` where
+    /// it sticks (its rate taken to zero).
+    impact_friction: (usize, Option<f64>),
     /// `v̇₀`, `λ₀` of the last evaluation: the inner formulation's, without friction and limits.
     base_qdd: Vec<f64>,
     base_lambda: Vec<f64>,
@@ -78,8 +82,8 @@ impl Frictional {
         if count > 0 && !inner.set_extra_force(None) {
             let s = inner.system();
             let joint = match s.frictions().first() {
-                Some(f) => f.name.clone(),
-                None => s.limits()[0].name.clone(),
+                Some(f) => format!("{} '{}'", f.element, f.name),
+                None => format!("joint '{}'", s.limits()[0].name),
             };
             return Err(DynamicsError::Friction {
                 time: 0.0,
@@ -111,6 +115,7 @@ impl Frictional {
             impact_g: vec![0.0; count * count],
             impact_lu: vec![0.0; count * count],
             impact_p: vec![0.0; count],
+            impact_friction: (usize::MAX, None),
             base_qdd: vec![0.0; n],
             base_lambda: vec![0.0; m],
             slip_dv: vec![0.0; n],
@@ -301,7 +306,10 @@ impl Frictional {
             for (k, term) in self.terms[..self.frictions].iter().enumerate() {
                 scale = scale.max(term.force.abs());
                 if let (true, Mode::Slip(sign)) = (term.given, term.mode) {
-                    let next = slip_force(&frictions[k], sign, term.row.dot(v), lambda);
+                    let limit = frictions[k]
+                        .load_limit
+                        .map_or(0.0, |l| self.terms[self.frictions + l].force);
+                    let next = slip_force(&frictions[k], sign, term.row.dot(v), lambda, limit);
                     change = change.max((next - term.force).abs());
                     scale = scale.max(next.abs());
                     self.forces[k] = next;
@@ -361,6 +369,18 @@ impl Frictional {
                 self.impact_set.push(j);
             }
         }
+        // A rigid contact's friction: its tangential impulse, last.
+        let contact = k - self.frictions;
+        let friction = self
+            .inner
+            .system()
+            .frictions()
+            .iter()
+            .position(|f| f.load_limit == Some(contact));
+        if let Some(f) = friction {
+            self.impact_set.push(f);
+        }
+        self.impact_friction = (friction.unwrap_or(usize::MAX), None);
         for a in 0..self.impact_set.len() {
             let j = self.impact_set[a];
             if j != k {
@@ -378,8 +398,21 @@ impl Frictional {
         // The rebound too small to leave: the joint rests on its bound, its rate zero.
         let held = restitution * before.abs() < rest_speed;
         let target = if held { 0.0 } else { -restitution * before };
+        let slip_before = friction.map_or(0.0, |f| self.terms[f].row.dot(v));
         loop {
             self.solve_impulses(target, v, t)?;
+            // The contact's friction: held through the impact while the impulse that stops its
+            // slip is within `μ P_n`, else slipping against the slip before it (`docs/limits.md`,
+            // "Friction in rigid contact", (L6)).
+            if let (Some(f), None) = (friction, self.impact_friction.1) {
+                let n = self.impact_set.len();
+                let mu = self.inner.system().frictions()[f].coefficient;
+                let (normal, tangential) = (self.impact_p[0], self.impact_p[n - 1]);
+                if tangential.abs() > mu * normal.abs() {
+                    self.impact_friction.1 = Some(slip_before.signum() * mu * sign);
+                    continue;
+                }
+            }
             // A held limit whose impulse would pull lets go, and the impulses are found again;
             // a pull at round-off of the largest impulse does not count ((L2)'s adhesion).
             let n = self.impact_set.len();
@@ -409,7 +442,34 @@ impl Frictional {
             v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
         }
         self.terms[k].mode = if held { Mode::Held(sign) } else { Mode::Free };
+        self.follow_contacts(t, q, v);
         Ok(true)
+    }
+
+    /// Each rigid contact's friction element's mode from its contact's: free while the contact
+    /// is free; where the contact has just come to rest, stuck or slipping by its slip rate. A
+    /// stuck element whose rate an impulse took beyond its stick speed slips in its direction.
+    fn follow_contacts(&mut self, t: f64, q: &[f64], v: &[f64]) {
+        for k in 0..self.frictions {
+            let system = self.inner.system();
+            let spec = &system.frictions()[k];
+            let held = spec
+                .load_limit
+                .map(|l| matches!(self.terms[self.frictions + l].mode, Mode::Held(_)));
+            if held == Some(false) {
+                self.terms[k].mode = Mode::Free;
+                continue;
+            }
+            let stick_speed = spec.stick_speed;
+            let mode = self.terms[k].mode;
+            if matches!(mode, Mode::Free | Mode::Stick) {
+                system.slip_row(k, t, q, v, &mut self.terms[k].row);
+                let w = self.terms[k].row.dot(v);
+                if mode == Mode::Free || w.abs() > stick_speed {
+                    self.terms[k].mode = Mode::at(w, stick_speed);
+                }
+            }
+        }
     }
 
     /// The impulses `P` over `impact_set` (rows and responses filled) that take the first
@@ -426,6 +486,15 @@ impl Frictional {
             self.impact_p[a] = goal - row.dot(v);
         }
         self.impact_lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
+        // A contact's friction slipping through the impact: `P_f + σ μ P_n = 0` for its row.
+        let (friction, slip) = self.impact_friction;
+        if let Some(slip) = slip.filter(|_| n > 0 && self.impact_set[n - 1] == friction) {
+            let row = &mut self.impact_lu[(n - 1) * n..n * n];
+            row.iter_mut().for_each(|x| *x = 0.0);
+            row[n - 1] = 1.0;
+            row[0] = slip;
+            self.impact_p[n - 1] = 0.0;
+        }
         if solve_dense(&mut self.impact_lu[..n * n], &mut self.impact_p[..n], n) {
             return Ok(());
         }
@@ -634,6 +703,7 @@ impl Formulation for Frictional {
             };
         }
         self.started = true;
+        self.follow_contacts(t, q, v);
     }
 
     /// The system's event functions, with each friction element's [`Mode::event`] first, then
@@ -720,13 +790,17 @@ impl Formulation for Frictional {
                 continue;
             }
             match self.terms[k].mode {
+                // A rigid contact's friction while the contact is free: no event.
+                Mode::Free if k < self.frictions => continue,
                 Mode::Free => {
                     changed |= self.impact(k, t, q, v)?;
                     continue;
                 }
                 Mode::Held(_) => {
-                    // Its force reached zero: the joint leaves the bound.
+                    // Its force reached zero: the joint leaves the bound (a contact's friction
+                    // with it).
                     self.terms[k].mode = Mode::Free;
+                    self.follow_contacts(t, q, v);
                     changed = true;
                     continue;
                 }
