@@ -798,10 +798,17 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
         [[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\n\
         plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\nrigid = true\nrestitution = 0.8\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    // A disk thrown spinning onto a rigid floor with friction (e = 1, μ = 0.3): a tangential
+    // impulse at each bounce (the friction's row and response in the impact).
+    let disk = "[scene]\ngravity = [0.0, -9.81]\n\
+        [[bodies]]\nname = \"disk\"\nmass = 1.0\nshape = { disk = 0.1 }\nposition = [0.0, 0.4]\nvelocity = [2.0, 0.0]\nangular_velocity = 40.0\n\
+        [[forces]]\nname = \"floor\"\ntype = \"circle-line\"\nbody = \"disk\"\nradius = 0.1\n\
+        line = { point = [0.0, 0.0], normal = [0.0, 1.0] }\nrigid = true\nrestitution = 1.0\nfriction = 0.3\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
     // The spatial rod in joint coordinates (the limit's row a unit on the joint's rate; each
     // sample mapped back with the stop's force added).
     let joint = spatial.replace("[simulation]\n", "[simulation]\ncoordinates = \"joint\"\n");
-    let failures = switching_runs_growing(&[text, spatial, ball, &joint], "impact");
+    let failures = switching_runs_growing(&[text, spatial, ball, disk, &joint], "impact");
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

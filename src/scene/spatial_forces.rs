@@ -538,6 +538,7 @@ pub(crate) fn rigid_sphere_plane(
             d.kind
         )));
     }
+    refuse_rigid_friction(d).map_err(|m| err(&m))?;
     d.only(&["body", "at", "radius", "plane", "rigid", "restitution", "rest_speed"])
         .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
     let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
@@ -587,6 +588,19 @@ fn sphere_on_plane<'a>(
     Ok((body, centre, d.radius.ok_or_else(|| err("needs 'radius' (m)"))?, plane))
 }
 
+/// Friction on a rigid spatial contact, refused: its force lies in the tangent plane, bounded by
+/// a cone, which the stick–slip law of one slip rate per element does not hold (the planar rigid
+/// contacts take it, `docs/limits.md`, "Friction in rigid contact").
+fn refuse_rigid_friction(d: &ForceDef) -> Result<(), String> {
+    match d.friction {
+        Some(_) => Err(
+            "friction in a rigid spatial contact is not built (its force lies in the tangent plane, within a cone): use the compliant law, or a planar scene"
+                .into(),
+        ),
+        None => Ok(()),
+    }
+}
+
 /// A `sphere-sphere` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the two
 /// spheres as for the compliant element, `restitution` (0) and `rest_speed` (1e-3).
 pub(crate) fn rigid_sphere_pair(
@@ -598,6 +612,7 @@ pub(crate) fn rigid_sphere_pair(
     positions: &[[f64; 3]],
 ) -> Result<dalembert_spatial::limits::SphereSphereContact, SceneError> {
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    refuse_rigid_friction(d).map_err(|m| err(&m))?;
     d.only(&["bodies", "at", "radii", "rigid", "restitution", "rest_speed"])
         .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
     let (bodies, centres, radii) = two_spheres(d, names, ctx, span, owner, positions)?;
