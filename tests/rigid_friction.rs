@@ -428,3 +428,26 @@ fn a_disk_rolling_off_a_fixed_cylinder_slips_where_its_friction_reaches_mu_n() {
         }
     }
 }
+
+#[test]
+fn the_shipped_draw_shot_comes_back_rolling_at_its_closed_form_speed() {
+    // `scenes/draw-shot.toml`: struck at v₀ = 3 m/s with backspin ω₀ = 315 rad/s (R = 0.0286 m,
+    // μ = 0.2), it slides until t* = (v₀ + ω₀ R) / (3 μ g), then rolls at (2 v₀ − ω₀ R) / 3. Its
+    // position is the closed form's at every sample (dopri5 1e-10: 1e-10 m, as the floor above).
+    let scene = Scene::from_path("scenes/draw-shot.toml").unwrap();
+    let (v0, w0, r, mu) = (3.0, 315.0, 0.0286, 0.2);
+    let t_star = (v0 + w0 * r) / (3.0 * mu * G);
+    let table = run(&scene);
+    let (t, x, vx) = (column(&table, "t"), column(&table, "ball.x"), column(&table, "ball.vx"));
+    for k in 0..t.len() {
+        let s = t[k].min(t_star);
+        let xe = v0 * s - 0.5 * mu * G * s * s + (2.0 * v0 - w0 * r) / 3.0 * (t[k] - s);
+        assert!((x[k] - xe).abs() < 1e-10, "x({}) = {} against {xe}", t[k], x[k]);
+    }
+    let last = *vx.last().unwrap();
+    assert!(
+        (last - (2.0 * v0 - w0 * r) / 3.0).abs() < 1e-9,
+        "it rolls back at {last}"
+    );
+    assert!(t_star < t[t.len() - 1] && last < 0.0);
+}
