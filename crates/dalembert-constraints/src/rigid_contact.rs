@@ -1,6 +1,7 @@
 //! Rigid (unilateral) contact of a circle on a planar body with a line on another body or the
 //! ground, or with another circle (`docs/limits.md`, "Rigid contact"): a gap `s ≥ 0` kept by the
-//! same impact and resting law as a joint limit ([`dalembert_system::limit`]), with no friction.
+//! same impact and resting law as a joint limit ([`dalembert_system::limit`]), with Coulomb
+//! friction if asked (its slip row: [`crate::contact_friction`]).
 //!
 //! - Against a line with point `p` and unit normal `n` fixed in its body: `s = n·(c − p) − R`,
 //!   where `s + R` is the coordinate of the centre `c` along `n` from `p`, the
@@ -55,8 +56,7 @@ pub struct RigidContact {
     /// The rebound speed below which the circle rests on the line (m/s).
     pub rest_speed: f64,
     /// Coulomb's coefficient `μ ≥ 0` of friction at the contact point (`docs/limits.md`,
-    /// "Friction in rigid contact"), or `None` for a frictionless contact. Against a line or a
-    /// circle only.
+    /// "Friction in rigid contact"), or `None` for a frictionless contact.
     pub friction: Option<f64>,
 }
 
@@ -103,7 +103,7 @@ pub enum Against {
 
 impl RigidContact {
     /// The body the circle touches (a line's or the other circle's).
-    fn other_body(&self) -> BodyRef {
+    pub(crate) fn other_body(&self) -> BodyRef {
         match self.against {
             Against::Line { body, .. }
             | Against::Circle { body, .. }
@@ -127,12 +127,6 @@ impl RigidContact {
         check_shapes(&self.name, self.body, self.radius, &self.against)?;
         self.spec().check().map_err(bad)?;
         if let Some(mu) = self.friction {
-            if matches!(self.against, Against::Profile { .. } | Against::ProfileFace { .. }) {
-                return Err(bad(
-                    "friction in a rigid contact with a cam profile is not built (against a line or a circle it is)"
-                        .into(),
-                ));
-            }
             if !(mu.is_finite() && mu >= 0.0) {
                 return Err(bad(format!("friction coefficient must be ≥ 0, got {mu}")));
             }
@@ -296,12 +290,12 @@ pub fn check_shapes(name: &str, body: BodyRef, radius: f64, against: &Against) -
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use dalembert_kinematics::BodyId;
 
     /// An egg-shaped closed profile (convex), 200 points, local to its body.
-    fn egg() -> Vec<Vec2> {
+    pub(crate) fn egg() -> Vec<Vec2> {
         (0..=200)
             .map(|k| {
                 let a = std::f64::consts::TAU * k as f64 / 200.0;
