@@ -330,9 +330,14 @@ pub(crate) fn build(file: SceneFile, text: &str, origin: &str) -> Result<Scene, 
         let d = sf.get_ref();
         b.unique(&d.name, &span, "force")?;
         if d.rigid == Some(true) {
-            let contact = rigid_contact(&b, d, &span)?;
-            drawing.add(contact_mark(&contact, d.kind.as_str()));
-            rigid_contacts.push(contact);
+            let contacts = match d.kind.as_str() {
+                "polygon-line" | "segment-line" => rigid_corners(&b, d, &span)?,
+                _ => vec![rigid_contact(&b, d, &span)?],
+            };
+            for contact in contacts {
+                drawing.add(contact_mark(&contact, d.kind.as_str()));
+                rigid_contacts.push(contact);
+            }
             continue;
         }
         let (element, mark) = force(&b, d, &span, &joints)?;
@@ -463,11 +468,11 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
                 "a rigid segment-segment contact is not built (two segments lying along each other touch along a line, and simultaneous impacts are not resolved): use the compliant law".into(),
             ))
         }
-        "polygon-line" | "segment-line" | "polygon-polygon" => {
-            return Err(err(format!(
-                "a rigid {} contact is not built (its vertices or ends strike at once, and simultaneous impacts are not resolved): use the compliant law",
-                d.kind
-            )))
+        "polygon-polygon" => {
+            return Err(err(
+                "a rigid polygon-polygon contact is not built (a vertex's nearest edge changes as it slides): use the compliant law"
+                    .into(),
+            ))
         }
         other => {
             return Err(err(format!(
@@ -515,6 +520,131 @@ fn rigid_contact(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<R
         .validate(&b.q)
         .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
     Ok(contact)
+}
+
+/// A `polygon-line` or `segment-line` element with `rigid = true` (`docs/limits.md`, "Rigid
+/// polygons and segments"): a rigid contact of each vertex (a circle of radius 0) or each end (a
+/// circle of the segment's radius) with the line, named `<name>.<k>` (from 0, in the order given),
+/// each with the element's `restitution`, `rest_speed` and `friction`; none may start into the
+/// line.
+fn rigid_corners(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<Vec<RigidContact>, SceneError> {
+    let owner = format!("force '{}'", d.name);
+    let err = |m: String| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let keys: &[&str] = if d.kind == "polygon-line" {
+        &[
+            "body",
+            "vertices",
+            "line",
+            "rigid",
+            "restitution",
+            "rest_speed",
+            "friction",
+        ]
+    } else {
+        &[
+            "body",
+            "at",
+            "radius",
+            "line",
+            "rigid",
+            "restitution",
+            "rest_speed",
+            "friction",
+        ]
+    };
+    if let Some(key) = d.keys_given().find(|k| !keys.contains(k)) {
+        return Err(err(format!(
+            "'{key}' does not belong to a rigid contact (it has no compliant law)"
+        )));
+    }
+    let (body, corners, radius) = corners_of(b, d, span, &owner)?;
+    let line = line_of(b, d, span, &owner)?;
+    let what = if d.kind == "polygon-line" { "vertex" } else { "end" };
+    let mut contacts = Vec::with_capacity(corners.len());
+    for (k, centre) in corners.into_iter().enumerate() {
+        let contact = RigidContact {
+            name: format!("{}.{k}", d.name),
+            body,
+            centre,
+            radius,
+            against: Against::Line {
+                body: line.body,
+                point: line.point,
+                normal: line.normal,
+            },
+            restitution: d.restitution.unwrap_or(0.0),
+            rest_speed: d.rest_speed.unwrap_or(REST_SPEED),
+            friction: d.friction,
+        };
+        let gap = contact.gap(&b.q);
+        if gap < -1e-12 {
+            return Err(err(format!("its {what} {k} starts {:e} m into the line", -gap)));
+        }
+        contact
+            .validate(&b.q)
+            .map_err(|e| b.ctx.err(Some(span.clone()), e.to_string()))?;
+        contacts.push(contact);
+    }
+    Ok(contacts)
+}
+
+/// The body of a `polygon-line` or `segment-line` element and its corners (local): the polygon's
+/// vertices (radius 0) or the segment's two ends (its radius).
+fn corners_of(
+    b: &Builder<'_>,
+    d: &ForceDef,
+    span: &Range<usize>,
+    owner: &str,
+) -> Result<(BodyRef, Vec<Vec2>, f64), SceneError> {
+    let err = |m: &str| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let name = d.body.as_deref().ok_or_else(|| err("needs 'body'"))?;
+    let body = b.body(name, span, owner)?;
+    if d.kind == "polygon-line" {
+        let vertices = d
+            .vertices
+            .as_ref()
+            .ok_or_else(|| err("needs 'vertices = [[x, y], …]' (the polygon's, global)"))?;
+        if vertices.is_empty() {
+            return Err(err("'vertices' is empty"));
+        }
+        Ok((
+            body,
+            vertices.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(),
+            0.0,
+        ))
+    } else {
+        let Some(Points::Two(ends)) = d.at else {
+            return Err(err("needs 'at = [[x1, y1], [x2, y2]]' (the segment's ends, global)"));
+        };
+        let radius = d.radius.ok_or_else(|| err("needs 'radius' (m)"))?;
+        Ok((
+            body,
+            ends.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(),
+            radius,
+        ))
+    }
+}
+
+/// The `line` of a `polygon-line` or `segment-line` element: of the ground, or of the body it
+/// names; its point and unit normal local to that body.
+fn line_of(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>, owner: &str) -> Result<Line, SceneError> {
+    let err = |m: &str| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
+    let line = d.line.as_ref().ok_or_else(|| {
+        err("needs 'line = { point = [x, y], normal = [nx, ny] }' (global; of the ground unless it names a 'body', the normal out of it)")
+    })?;
+    let normal = v2(line.normal);
+    if normal.norm().is_nan() || normal.norm() == 0.0 {
+        return Err(err("the line's normal must not be zero"));
+    }
+    let body = match &line.body {
+        Some(name) => b.body(name, span, owner)?,
+        None => BodyRef::Ground,
+    };
+    Ok(Line {
+        body,
+        point: local_point_of(body, &b.q, v2(line.point)),
+        normal: local_direction_of(body, &b.q, normal / normal.norm()),
+    })
 }
 
 /// The circle and profile of a `circle-profile` element (a roller on a cam): the circle's body,
@@ -1083,8 +1213,7 @@ fn force(
             })
         }
         "polygon-line" | "segment-line" => {
-            let polygon = d.kind == "polygon-line";
-            let keys: &[&str] = if polygon {
+            let keys: &[&str] = if d.kind == "polygon-line" {
                 &["body", "vertices", "line", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"]
             } else {
                 &["body", "at", "radius", "line", "stiffness", "exponent", "dissipation", "friction", "smoothing_velocity"]
@@ -1092,45 +1221,13 @@ fn force(
             if let Some(key) = d.keys_given().find(|k| !keys.contains(k)) {
                 return Err(err(format!("'{key}' does not belong to a {} element", d.kind)));
             }
-            let name = d.body.as_deref().ok_or_else(|| err("needs 'body'".into()))?;
-            let body = b.body(name, span, &owner)?;
-            let (centres, radius) = if polygon {
-                let vertices = d
-                    .vertices
-                    .as_ref()
-                    .ok_or_else(|| err("needs 'vertices = [[x, y], …]' (the polygon's, global)".into()))?;
-                if vertices.is_empty() {
-                    return Err(err("'vertices' is empty".into()));
-                }
-                (vertices.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(), 0.0)
-            } else {
-                let Some(Points::Two(ends)) = d.at else {
-                    return Err(err("needs 'at = [[x1, y1], [x2, y2]]' (the segment's ends, global)".into()));
-                };
-                let radius = d.radius.ok_or_else(|| err("needs 'radius' (m)".into()))?;
-                (ends.iter().map(|&p| local_point_of(body, &b.q, v2(p))).collect(), radius)
-            };
-            let line = d.line.as_ref().ok_or_else(|| {
-                err("needs 'line = { point = [x, y], normal = [nx, ny] }' (global; of the ground unless it names a 'body', the normal out of it)".into())
-            })?;
-            let normal = v2(line.normal);
-            if normal.norm().is_nan() || normal.norm() == 0.0 {
-                return Err(err("the line's normal must not be zero".into()));
-            }
-            let line_body = match &line.body {
-                Some(name) => b.body(name, span, &owner)?,
-                None => BodyRef::Ground,
-            };
+            let (body, centres, radius) = corners_of(b, d, span, &owner)?;
             Box::new(ShapeLine {
                 name: d.name.clone(),
                 body,
                 centres,
                 radius,
-                line: Line {
-                    body: line_body,
-                    point: local_point_of(line_body, &b.q, v2(line.point)),
-                    normal: local_direction_of(line_body, &b.q, normal / normal.norm()),
-                },
+                line: line_of(b, d, span, &owner)?,
                 law: contact_law(d).map_err(err)?,
             })
         }

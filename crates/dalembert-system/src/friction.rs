@@ -177,6 +177,9 @@ pub struct FrictionTerms {
     pub direction: f64,
     /// The force that would hold a stuck or held element (`ẇ = 0`) at the last evaluation.
     pub hold: f64,
+    /// True for an element that has just come to stick (at the start, where its slip stopped, or
+    /// where its contact came to rest), held at the first Newton iterate of the next evaluation.
+    pub fresh: bool,
     /// True when the element's force is given: already in the `a` and `λ` that
     /// [`solve_friction`] starts from, which leaves it as it is and reads neither its row's
     /// coupling nor its response (a slipping element in [`crate::Frictional`]'s iteration on the
@@ -196,6 +199,7 @@ impl FrictionTerms {
             mode: Mode::Stick,
             direction: 0.0,
             hold: 0.0,
+            fresh: false,
             given: false,
         }
     }
@@ -225,6 +229,14 @@ pub struct FrictionWork {
     lambda: Vec<f64>,
     /// Each element's law in the last iteration: true where (F2) holds it.
     holding: Vec<bool>,
+    /// The Newton matrix and residuals kept for [`minimum_norm_step`], and its `J Jᵀ`.
+    copy: Vec<f64>,
+    rhs: Vec<f64>,
+    gram: Vec<f64>,
+    /// The forces the Newton step starts from.
+    start: Vec<f64>,
+    /// Work space of [`least_norm`].
+    scratch: Vec<f64>,
     /// The slip direction of each element in the last iteration (0 where held).
     direction: Vec<f64>,
     /// The pull a held limit may take and stay held (N or N·m): [`RELEASE_SHARE`] of the
@@ -249,6 +261,11 @@ impl FrictionWork {
             alpha0: vec![0.0; k],
             lambda: vec![0.0; m],
             holding: vec![false; k],
+            copy: vec![0.0; k * k],
+            rhs: vec![0.0; k],
+            gram: vec![0.0; k * k],
+            start: vec![0.0; k],
+            scratch: vec![0.0; k],
             direction: vec![0.0; k],
             adhesion: 0.0,
         }
@@ -440,7 +457,12 @@ pub fn solve_friction(
                 Mode::Stick => {
                     let (limit, _) = limit_load(&frictions[k], terms, frictions.len());
                     let bound = Load::at(&frictions[k], &work.lambda, limit).bound;
-                    if hold.abs() <= bound && !stays_loose {
+                    // An element that has just come to stick is held at the first iterate, so that
+                    // its law is decided on forces found together: where stuck elements are
+                    // redundant (two corners of a block on a floor) each one's holding force with
+                    // the others' left as they were is not its share, and would leave them
+                    // pulling against each other at their bounds.
+                    if ((iteration == 0 && terms[k].fresh) || hold.abs() <= bound) && !stays_loose {
                         Law::Hold
                     } else if stays_loose && work.direction[a] != 0.0 {
                         Law::Slip(work.direction[a])
@@ -494,7 +516,12 @@ pub fn solve_friction(
                 }
             }
         }
-        if !solve_dense(&mut work.jacobian[..n * n], &mut work.residual[..n], n) {
+        work.copy[..n * n].copy_from_slice(&work.jacobian[..n * n]);
+        work.rhs[..n].copy_from_slice(&work.residual[..n]);
+        for a in 0..n {
+            work.start[a] = terms[work.active[a]].force;
+        }
+        if !solve_dense(&mut work.jacobian[..n * n], &mut work.residual[..n], n) && !minimum_norm_step(work, n) {
             let what = "the friction and limit forces of these joints are not determined (their joints move together)";
             // Name the elements that hold (a stop or a sticking joint): theirs are the forces in
             // question; when only stops hold, say so.
@@ -546,6 +573,71 @@ pub fn solve_friction(
             .for_each(|(x, r)| *x += r * term.force);
     }
     Ok(())
+}
+
+/// The Newton step from forces `F₀` (`work.start`) where the Newton matrix `J` is singular (`J`
+/// and the residuals `r` in `work.copy`, `work.rhs`; the step into `work.residual`, as
+/// [`solve_dense`] leaves it): the forces `F` of the linearized equations `J F = J F₀ − r` of least
+/// norm, `F = Jᵀ (J Jᵀ + δ I)⁻¹ (J F₀ − r)` with `δ` 10⁻¹³ of `J Jᵀ`'s largest diagonal entry,
+/// the step `F₀ − F`. `J` is singular where elements that hold are redundant: two corners of a
+/// block stuck on a floor hold one motion, so only the sum of their friction forces is
+/// determined (two stops held on one motion, only the sum of theirs); the least-norm split is the
+/// one redundant joints' reactions get (`docs/sign-conventions.md`), and it does not depend on
+/// the forces the iteration starts from. `δ` leaves the forces `J` determines exact to `δ / s²`
+/// of a singular value `s`, which the Newton iteration takes back. False where even that fails.
+fn minimum_norm_step(work: &mut FrictionWork, n: usize) -> bool {
+    let j = &work.copy[..n * n];
+    for a in 0..n {
+        work.rhs[a] = (0..n).map(|c| j[a * n + c] * work.start[c]).sum::<f64>() - work.rhs[a];
+    }
+    let scratch = (&mut work.gram[..n * n], &mut work.scratch[..n]);
+    if !least_norm(j, &mut work.rhs[..n], n, scratch, &mut work.residual[..n]) {
+        return false;
+    }
+    for (step, start) in work.residual[..n].iter_mut().zip(&work.start[..n]) {
+        *step = start - *step;
+    }
+    true
+}
+
+/// The least-norm solution `x` of `A x = b` (`A` row-major `n × n`, singular where rows are
+/// redundant), by iterated Tikhonov regularization: `x ← x + Aᵀ (A Aᵀ + δ I)⁻¹ (b − A x)` from
+/// `x = 0`, three times, `δ` 10⁻¹³ of `A Aᵀ`'s largest diagonal entry. Each pass leaves `δ / s²`
+/// of the error along a singular value `s` of `A` (three passes: round-off where `s²` is within
+/// 10⁴ of the largest), and adds nothing along the directions of zero singular values, whatever
+/// the round-off in `b`: it converges to `A⁺ b`. `b`, `gram` (`n × n`) and `scratch` (`n`) are
+/// overwritten. False where it is not finite.
+pub(crate) fn least_norm(
+    a: &[f64],
+    b: &mut [f64],
+    n: usize,
+    (gram, scratch): (&mut [f64], &mut [f64]),
+    x: &mut [f64],
+) -> bool {
+    scratch[..n].copy_from_slice(&b[..n]);
+    x[..n].iter_mut().for_each(|v| *v = 0.0);
+    for _ in 0..3 {
+        for r in 0..n {
+            b[r] = scratch[r] - (0..n).map(|c| a[r * n + c] * x[c]).sum::<f64>();
+            for c in 0..n {
+                gram[r * n + c] = (0..n).map(|k| a[r * n + k] * a[c * n + k]).sum();
+            }
+        }
+        let largest = (0..n).map(|r| gram[r * n + r]).fold(0.0f64, f64::max);
+        if !(largest > 0.0 && largest.is_finite()) {
+            return false;
+        }
+        for r in 0..n {
+            gram[r * n + r] += 1e-13 * largest;
+        }
+        if !solve_dense(gram, b, n) {
+            return false;
+        }
+        for (c, out) in x.iter_mut().enumerate().take(n) {
+            *out += (0..n).map(|r| a[r * n + c] * b[r]).sum::<f64>();
+        }
+    }
+    x[..n].iter().all(|v| v.is_finite())
 }
 
 /// The force (F1) of friction element `spec` slipping in direction `sign` at slip rate `w`

@@ -4,8 +4,8 @@
 //! [`crate::friction`] and the impact law of [`crate::limit`] on top. One code for every
 //! formulation.
 
+use crate::friction::{least_norm, solve_dense, RELEASE_SHARE};
 use crate::friction::{slip_force, solve_friction, FrictionTerms, FrictionWork, Mode, SLIP_END};
-use crate::friction::{solve_dense, RELEASE_SHARE};
 use crate::limit::{impact_impulse, impact_loss, unwrap_angle, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
@@ -50,6 +50,12 @@ pub struct Frictional {
     /// `σ μ` where it slips through the impact (its row then `P_f + σ μ P_n = 0`), `None` where
     /// it sticks (its rate taken to zero).
     impact_friction: (usize, Option<f64>),
+    /// Work space of the impulses' least-norm solution where their set is redundant.
+    impact_gram: Vec<f64>,
+    impact_rhs: Vec<f64>,
+    impact_scratch: Vec<f64>,
+    /// The slips that stop at an event, with their directions ([`Frictional::stop_slips`]).
+    stopping: Vec<(usize, f64)>,
     /// `v̇₀`, `λ₀` of the last evaluation: the inner formulation's, without friction and limits.
     base_qdd: Vec<f64>,
     base_lambda: Vec<f64>,
@@ -116,6 +122,10 @@ impl Frictional {
             impact_lu: vec![0.0; count * count],
             impact_p: vec![0.0; count],
             impact_friction: (usize::MAX, None),
+            impact_gram: vec![0.0; count * count],
+            impact_rhs: vec![0.0; count],
+            impact_scratch: vec![0.0; count],
+            stopping: Vec::with_capacity(count),
             base_qdd: vec![0.0; n],
             base_lambda: vec![0.0; m],
             slip_dv: vec![0.0; n],
@@ -467,9 +477,55 @@ impl Frictional {
                 let w = self.terms[k].row.dot(v);
                 if mode == Mode::Free || w.abs() > stick_speed {
                     self.terms[k].mode = Mode::at(w, stick_speed);
+                    self.terms[k].fresh = self.terms[k].mode == Mode::Stick;
                 }
             }
         }
+    }
+
+    /// The slips that stop at an event (`stopping`): the impulse that sets each one's rate to
+    /// zero, `v ← v + Σ A P`, together with the impulses that keep every held limit on its bound
+    /// and every stuck element stuck (a block whose corners rest on a floor turns about neither),
+    /// from `G P = −w` over them (`G_ab = g_a·A_b`, least-norm where they are redundant); then each
+    /// stops, and the evaluation there says whether it sticks (its force found with the others',
+    /// [`FrictionTerms::fresh`]).
+    fn stop_slips(&mut self, t: f64, q: &[f64], v: &mut [f64]) -> Result<(), DynamicsError> {
+        let mut qdd = std::mem::take(&mut self.event_qdd);
+        let mut lambda = std::mem::take(&mut self.event_lambda);
+        let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda).and_then(|()| {
+            self.impact_set.clear();
+            self.impact_set.extend(self.stopping.iter().map(|&(k, _)| k));
+            for j in 0..self.terms.len() {
+                let holds = match self.terms[j].mode {
+                    Mode::Held(_) => true,
+                    Mode::Stick => j < self.frictions && self.terms[j].sticks,
+                    _ => false,
+                };
+                if holds && !self.impact_set.contains(&j) {
+                    self.impact_set.push(j);
+                }
+            }
+            for a in 0..self.impact_set.len() {
+                let j = self.impact_set[a];
+                self.fill_row(j, t, q, v);
+                self.response_from_base(j, (t, q, v), None)?;
+            }
+            self.impact_friction = (usize::MAX, None);
+            self.solve_impulses(0.0, v, t)?;
+            for a in 0..self.impact_set.len() {
+                let (term, impulse) = (&self.terms[self.impact_set[a]], self.impact_p[a]);
+                v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
+            }
+            for i in 0..self.stopping.len() {
+                let k = self.stopping[i].0;
+                self.terms[k].mode = Mode::Stick;
+                self.terms[k].fresh = true;
+            }
+            self.accelerations(t, q, v, None, &mut qdd, &mut lambda)
+        });
+        self.event_qdd = qdd;
+        self.event_lambda = lambda;
+        result
     }
 
     /// The impulses `P` over `impact_set` (rows and responses filled) that take the first
@@ -495,14 +551,37 @@ impl Frictional {
             row[0] = slip;
             self.impact_p[n - 1] = 0.0;
         }
+        self.impact_rhs[..n].copy_from_slice(&self.impact_p[..n]);
         if solve_dense(&mut self.impact_lu[..n * n], &mut self.impact_p[..n], n) {
+            return Ok(());
+        }
+        // Redundant: two corners of a block held on a floor, or stuck on it, hold one motion; the
+        // least-norm impulses (as `solve_friction`'s least-norm forces).
+        self.impact_lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
+        if let (Some(slip), true) = (self.impact_friction.1, self.impact_set[n - 1] == self.impact_friction.0) {
+            let row = &mut self.impact_lu[(n - 1) * n..n * n];
+            row.iter_mut().for_each(|x| *x = 0.0);
+            row[n - 1] = 1.0;
+            row[0] = slip;
+            self.impact_rhs[n - 1] = 0.0;
+        }
+        if least_norm(
+            &self.impact_lu[..n * n],
+            &mut self.impact_rhs[..n],
+            n,
+            (&mut self.impact_gram[..n * n], &mut self.impact_scratch[..n]),
+            &mut self.impact_p[..n],
+        ) {
             return Ok(());
         }
         let system = self.inner.system();
         let names: Vec<&str> = self
             .impact_set
             .iter()
-            .map(|&j| system.limits()[j - self.frictions].name.as_str())
+            .map(|&j| match j.checked_sub(self.frictions) {
+                Some(l) => system.limits()[l].name.as_str(),
+                None => system.frictions()[j].name.as_str(),
+            })
             .collect();
         Err(DynamicsError::Limit {
             time: t,
@@ -627,6 +706,9 @@ impl Formulation for Frictional {
         for (f, k) in self.forces.iter_mut().zip(&self.terms) {
             *f = k.force;
         }
+        for term in &mut self.terms[..self.frictions] {
+            term.fresh = false;
+        }
         self.record(t);
         Ok(())
     }
@@ -680,6 +762,7 @@ impl Formulation for Frictional {
         for (k, (term, spec)) in self.terms.iter_mut().zip(system.frictions()).enumerate() {
             system.slip_row(k, t, q, v, &mut term.row);
             term.mode = Mode::at(term.row.dot(v), spec.stick_speed);
+            term.fresh = term.mode == Mode::Stick;
         }
         let limits = &mut self.terms[self.frictions..];
         for (k, (term, limit)) in limits.iter_mut().zip(system.limits()).enumerate() {
@@ -806,35 +889,27 @@ impl Formulation for Frictional {
                 }
                 Mode::Stick | Mode::Slip(_) => changed = true,
             }
-            let sign = match self.terms[k].mode {
+            match self.terms[k].mode {
                 Mode::Stick => {
                     self.inner.system().slip_row(k, t, q, v, &mut self.terms[k].row);
                     self.terms[k].mode = Mode::Slip(self.terms[k].row.dot(v).signum());
-                    continue;
                 }
-                Mode::Slip(sign) => sign,
-                Mode::Free | Mode::Held(_) => continue,
-            };
-            let mut qdd = std::mem::take(&mut self.event_qdd);
-            let mut lambda = std::mem::take(&mut self.event_lambda);
-            let result = self
-                .accelerations(t, q, v, None, &mut qdd, &mut lambda)
-                .and_then(|()| self.response_from_base(k, (t, q, v), None));
-            let sticks = result.and_then(|()| {
-                let term = &mut self.terms[k];
-                let impulse = -term.row.dot(v) / term.row.dot(&term.dv);
-                v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
-                term.mode = Mode::Stick;
-                self.accelerations(t, q, v, None, &mut qdd, &mut lambda)?;
-                Ok(self.terms[k].sticks)
-            });
-            self.event_qdd = qdd;
-            self.event_lambda = lambda;
-            if !sticks? {
-                // It slips on where (F3) says: nearly always back (−σ).
-                let direction = self.terms[k].direction;
-                self.terms[k].mode = Mode::Slip(if direction != 0.0 { direction } else { -sign });
+                Mode::Slip(sign) => self.stopping.push((k, sign)),
+                Mode::Free | Mode::Held(_) => {}
             }
+        }
+        if !self.stopping.is_empty() {
+            // The slips that stop at this event, together (two corners of a block sliding on a
+            // floor stop at once).
+            self.stop_slips(t, q, v)?;
+            for &(k, sign) in &self.stopping {
+                if !self.terms[k].sticks {
+                    // It slips on where (F3) says: nearly always back (−σ).
+                    let direction = self.terms[k].direction;
+                    self.terms[k].mode = Mode::Slip(if direction != 0.0 { direction } else { -sign });
+                }
+            }
+            self.stopping.clear();
         }
         Ok(changed)
     }
