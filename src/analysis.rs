@@ -117,13 +117,19 @@ impl Scene {
         let coordinate_names = model.velocity_names();
         let (n, m) = (model.num_velocities(), model.num_equations());
         let (mut qdd, mut lam) = (vec![0.0; n], vec![0.0; m]);
+        // The friction and limit forces of that evaluation (joints' friction, stops and rigid
+        // contacts held at the start).
+        let (mut friction, mut limit) = (Vec::new(), Vec::new());
         let accelerations = self
             .simulation()
             .formulation()
             .map_err(|e| e.to_string())
             .and_then(|mut f| {
                 f.accelerations(0.0, &self.q, &self.qd, None, &mut qdd, &mut lam)
-                    .map_err(|e| e.to_string())
+                    .map_err(|e| e.to_string())?;
+                friction = f.friction_forces().to_vec();
+                limit = f.limit_forces().to_vec();
+                Ok(())
             });
         let reactions = match accelerations {
             Ok(()) => {
@@ -134,8 +140,8 @@ impl Scene {
                     qd: &self.qd,
                     qdd: &qdd,
                     lambda: &lam,
-                    friction: &[],
-                    limit: &[],
+                    friction: &friction,
+                    limit: &limit,
                     impact_loss: 0.0,
                     work: f64::NAN,
                     constraint_violation: 0.0,

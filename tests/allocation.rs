@@ -808,7 +808,17 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
     // The spatial rod in joint coordinates (the limit's row a unit on the joint's rate; each
     // sample mapped back with the stop's force added).
     let joint = spatial.replace("[simulation]\n", "[simulation]\ncoordinates = \"joint\"\n");
-    let failures = switching_runs_growing(&[text, spatial, ball, disk, &joint], "impact");
+    // A block on a rigid floor (its four corners, μ = 0.4) pushed to and fro (20 N at 1 Hz):
+    // stick and slip of two redundant corners (their least-norm forces and impulses).
+    let pushed = "[scene]\ngravity = [0.0, -9.81]\n\
+        [[bodies]]\nname = \"block\"\nmass = 2.0\nshape = { rectangle = [0.4, 0.2] }\nposition = [0.0, 0.1]\n\
+        [[forces]]\nname = \"floor\"\ntype = \"polygon-line\"\nbody = \"block\"\n\
+        vertices = [[-0.2, 0.0], [0.2, 0.0], [0.2, 0.2], [-0.2, 0.2]]\n\
+        line = { point = [0.0, 0.0], normal = [0.0, 1.0] }\nrigid = true\nfriction = 0.4\n\
+        [[forces]]\nname = \"push\"\ntype = \"force\"\nbody = \"block\"\n\
+        fx = { kind = \"harmonic\", amplitude = 20.0, frequency = 1.0 }\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    let failures = switching_runs_growing(&[text, spatial, ball, disk, pushed, &joint], "impact");
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

@@ -578,7 +578,7 @@ fn rigid_corners(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>) -> Result<V
         };
         let gap = contact.gap(&b.q);
         if gap < -1e-12 {
-            return Err(err(format!("its {what} {k} starts {:e} m into the line", -gap)));
+            return Err(err(format!("its {what} {k} starts {:.3e} m into the line", -gap)));
         }
         contact
             .validate(&b.q)

@@ -103,14 +103,18 @@ fn print_planar(r: &CheckReport, qdd: &[f64]) {
             outln!("{:>16} {:>14} {:>14} {}", name, "", "", fixed(e, 14, 6));
             continue;
         }
+        let (Some(fx), Some(fy)) = (value("fx"), value("fy")) else {
+            // A rigid contact's gap, normal force and friction, a limit's coordinate and force:
+            // each by its name.
+            out!("{name:>16}");
+            for (field, v) in &fields {
+                out!("  {field} {}", fixed(*v, 0, 6));
+            }
+            outln!();
+            continue;
+        };
         let t = value("torque").map(|t| fixed(t, 14, 6)).unwrap_or_default();
-        outln!(
-            "{:>16} {} {} {:>14}",
-            name,
-            fixed(value("fx").unwrap_or(f64::NAN), 14, 6),
-            fixed(value("fy").unwrap_or(f64::NAN), 14, 6),
-            t
-        );
+        outln!("{:>16} {} {} {:>14}", name, fixed(fx, 14, 6), fixed(fy, 14, 6), t);
     }
 }
 
