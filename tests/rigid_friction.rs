@@ -10,8 +10,7 @@
 
 mod common;
 
-use common::{column, run};
-use dalembert::energy::EnergyBalance;
+use common::{balance_drift, column, run};
 use dalembert::Scene;
 
 const G: f64 = 9.81;
@@ -66,24 +65,6 @@ impl Disk<'_> {
         );
         Scene::from_toml(&text, "disk").unwrap()
     }
-}
-
-/// `(t, E − W)` at every sample of `scene`'s run, and the run's table.
-fn balance(scene: &Scene) -> Vec<(f64, f64)> {
-    let model = scene.model.as_system();
-    let mut b = EnergyBalance::new(model);
-    let mut out = Vec::new();
-    scene
-        .simulation()
-        .run(&mut |s| out.push((s.t, b.push(model, s))))
-        .unwrap();
-    out
-}
-
-/// The largest change of `E − W` over a run (J).
-fn balance_drift(scene: &Scene) -> f64 {
-    let rows = balance(scene);
-    rows.iter().map(|r| (r.1 - rows[0].1).abs()).fold(0.0, f64::max)
 }
 
 #[test]

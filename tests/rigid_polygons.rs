@@ -8,8 +8,7 @@
 
 mod common;
 
-use common::{column, run};
-use dalembert::energy::EnergyBalance;
+use common::{balance_drift, column, run};
 use dalembert::Scene;
 
 const G: f64 = 9.81;
@@ -59,15 +58,6 @@ fn block(w: f64, h: f64, alpha: f64, mu: f64, speed: f64, rounded: bool, run: (&
         n[1]
     );
     Scene::from_toml(&text, "block").unwrap()
-}
-
-/// The largest change of `E − W` over `scene`'s run (J).
-fn balance_drift(scene: &Scene) -> f64 {
-    let model = scene.model.as_system();
-    let mut b = EnergyBalance::new(model);
-    let mut rows = Vec::new();
-    scene.simulation().run(&mut |s| rows.push(b.push(model, s))).unwrap();
-    rows.iter().map(|r| (r - rows[0]).abs()).fold(0.0, f64::max)
 }
 
 #[test]

@@ -2,6 +2,7 @@
 // Each test file uses what it needs of these.
 #![allow(dead_code)]
 
+use dalembert::energy::EnergyBalance;
 use dalembert::output::Table;
 use dalembert::Scene;
 use std::sync::atomic::AtomicBool;
@@ -11,6 +12,16 @@ pub fn run(scene: &Scene) -> Table {
     let rec = scene.record(&AtomicBool::new(false));
     rec.outcome.unwrap();
     rec.table
+}
+
+/// The largest change of the energy balance `E − W` over `scene`'s run (J;
+/// `dalembert::energy::EnergyBalance`, `docs/energy.md`).
+pub fn balance_drift(scene: &Scene) -> f64 {
+    let model = scene.model.as_system();
+    let mut b = EnergyBalance::new(model);
+    let mut rows = Vec::new();
+    scene.simulation().run(&mut |s| rows.push(b.push(model, s))).unwrap();
+    rows.iter().map(|r| (r - rows[0]).abs()).fold(0.0, f64::max)
 }
 
 /// The column `name` of `table` (it must exist).

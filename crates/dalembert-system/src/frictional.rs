@@ -541,30 +541,27 @@ impl Frictional {
             let goal = if a == 0 { target } else { 0.0 };
             self.impact_p[a] = goal - row.dot(v);
         }
-        self.impact_lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
         // A contact's friction slipping through the impact: `P_f + σ μ P_n = 0` for its row.
         let (friction, slip) = self.impact_friction;
-        if let Some(slip) = slip.filter(|_| n > 0 && self.impact_set[n - 1] == friction) {
-            let row = &mut self.impact_lu[(n - 1) * n..n * n];
-            row.iter_mut().for_each(|x| *x = 0.0);
-            row[n - 1] = 1.0;
-            row[0] = slip;
-            self.impact_p[n - 1] = 0.0;
-        }
+        let slip = slip.filter(|_| n > 0 && self.impact_set[n - 1] == friction);
+        let equations = |lu: &mut [f64], rhs: &mut [f64]| {
+            lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
+            if let Some(slip) = slip {
+                let row = &mut lu[(n - 1) * n..n * n];
+                row.iter_mut().for_each(|x| *x = 0.0);
+                row[n - 1] = 1.0;
+                row[0] = slip;
+                rhs[n - 1] = 0.0;
+            }
+        };
+        equations(&mut self.impact_lu, &mut self.impact_p);
         self.impact_rhs[..n].copy_from_slice(&self.impact_p[..n]);
         if solve_dense(&mut self.impact_lu[..n * n], &mut self.impact_p[..n], n) {
             return Ok(());
         }
         // Redundant: two corners of a block held on a floor, or stuck on it, hold one motion; the
         // least-norm impulses (as `solve_friction`'s least-norm forces).
-        self.impact_lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
-        if let (Some(slip), true) = (self.impact_friction.1, self.impact_set[n - 1] == self.impact_friction.0) {
-            let row = &mut self.impact_lu[(n - 1) * n..n * n];
-            row.iter_mut().for_each(|x| *x = 0.0);
-            row[n - 1] = 1.0;
-            row[0] = slip;
-            self.impact_rhs[n - 1] = 0.0;
-        }
+        equations(&mut self.impact_lu, &mut self.impact_rhs);
         if least_norm(
             &self.impact_lu[..n * n],
             &mut self.impact_rhs[..n],
