@@ -625,8 +625,8 @@ fn corners_of(
     }
 }
 
-/// The `line` of a `polygon-line` or `segment-line` element: of the ground, or of the body it
-/// names; its point and unit normal local to that body.
+/// The `line` of a `circle-line`, `polygon-line` or `segment-line` element: of the ground, or of
+/// the body it names; its point and unit normal local to that body.
 fn line_of(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>, owner: &str) -> Result<Line, SceneError> {
     let err = |m: &str| b.ctx.err(Some(span.clone()), format!("{owner}: {m}"));
     let line = d.line.as_ref().ok_or_else(|| {
@@ -812,24 +812,14 @@ fn circle_on_line(b: &Builder<'_>, d: &ForceDef, span: &Range<usize>, owner: &st
         None => Vec2::zeros(),
         Some(Points::Two(_)) => return Err(err("'at' is the circle's centre, one point [x, y] (global)")),
     };
-    let line = d.line.as_ref().ok_or_else(|| {
-        err("needs 'line = { point = [x, y], normal = [nx, ny] }' (of the ground, the normal out of it)")
-    })?;
-    let normal = v2(line.normal);
-    if normal.norm().is_nan() || normal.norm() == 0.0 {
-        return Err(err("the line's normal must not be zero"));
-    }
-    let line_body = match &line.body {
-        Some(name) => b.body(name, span, owner)?,
-        None => BodyRef::Ground,
-    };
+    let line = line_of(b, d, span, owner)?;
     Ok(CircleOnLine {
         body,
         centre,
         radius: d.radius.ok_or_else(|| err("needs 'radius' (m)"))?,
-        line_body,
-        point: local_point_of(line_body, &b.q, v2(line.point)),
-        normal: local_direction_of(line_body, &b.q, normal / normal.norm()),
+        line_body: line.body,
+        point: line.point,
+        normal: line.normal,
     })
 }
 
