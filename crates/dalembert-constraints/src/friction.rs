@@ -10,7 +10,7 @@
 //! The prismatic joint's moment row does not load its friction: the joint is a short slider
 //! whose normal force is the reaction across the guide.
 
-use crate::primitives::{line_coordinate, relative_angle, unit, Row};
+use crate::primitives::{angle_row, line_coordinate, unit, Row};
 use crate::{Prismatic, Reaction, Revolute};
 use dalembert_kinematics::rotation::cross;
 use dalembert_kinematics::{BodyRef, BodyState, Vec2};
@@ -71,11 +71,18 @@ impl FrictionJoint {
     /// force along the joint on each body.
     pub fn row(&self, q: &[f64], v: &[f64]) -> Row {
         let bodies = self.bodies();
-        let first = BodyState::of(bodies[0], q, v);
-        let second = BodyState::of(bodies[1], q, v);
         match self {
-            FrictionJoint::Revolute(_) => relative_angle(&first, &second, 1.0),
+            // The relative angle's row is constant: no body state (and no sine) to compute.
+            FrictionJoint::Revolute(_) => {
+                let angle = |body: BodyRef| match body {
+                    BodyRef::Ground => 0.0,
+                    BodyRef::Body(id) => q[id.offset() + 2],
+                };
+                angle_row(angle(bodies[0]), angle(bodies[1]), 1.0)
+            }
             FrictionJoint::Prismatic(p) => {
+                let first = BodyState::of(bodies[0], q, v);
+                let second = BodyState::of(bodies[1], q, v);
                 let a = unit(p.axis).unwrap_or(Vec2::x());
                 line_coordinate(&first, p.points[0], a, &second, p.points[1])
             }

@@ -101,8 +101,13 @@ pub fn line_coordinate(line: &BodyState, u_l: Vec2, w_local: Vec2, other: &BodyS
 
 /// Relative angle `C = θ_j − ratio · θ_i` (add the offset with [`Row::drive`]).
 pub fn relative_angle(first: &BodyState, second: &BodyState, ratio: f64) -> Row {
+    angle_row(first.angle, second.angle, ratio)
+}
+
+/// [`relative_angle`] from the two angles alone (the row needs neither position nor rotation).
+pub fn angle_row(first: f64, second: f64, ratio: f64) -> Row {
     Row {
-        c: second.angle - ratio * first.angle,
+        c: second - ratio * first,
         c_t: 0.0,
         gamma: 0.0,
         first: [0.0, 0.0, -ratio],

@@ -420,6 +420,9 @@ pub fn solve_friction(
         .chain(terms.iter().map(|t| &t.force))
         .fold(0.0f64, |m, x| m.max(x.abs()));
     work.adhesion = RELEASE_SHARE * largest;
+    // True when the last step solved linear equations exactly (every law `ẇ = 0` or `F = 0`,
+    // by the LU): if the laws stay, the forces are their solution, without another solve.
+    let mut exact = false;
     for iteration in 0..MAX_ITERATIONS {
         // λ(F) and the residuals and Newton matrix at F.
         work.lambda.copy_from_slice(lambda);
@@ -431,6 +434,7 @@ pub fn solve_friction(
                 .for_each(|(l, d)| *l += d * term.force);
         }
         let mut changed = false;
+        let mut linear = true;
         let mut scale = 0.0f64;
         for a in 0..n {
             let k = work.active[a];
@@ -472,6 +476,7 @@ pub fn solve_friction(
                 }
             };
             let holding = law == Law::Hold;
+            linear &= !matches!(law, Law::Slip(_));
             work.direction[a] = if let Law::Slip(sign) = law { sign } else { 0.0 };
             changed |= holding != work.holding[a];
             work.holding[a] = holding;
@@ -516,12 +521,17 @@ pub fn solve_friction(
                 }
             }
         }
+        if exact && linear && !changed {
+            break;
+        }
         work.copy[..n * n].copy_from_slice(&work.jacobian[..n * n]);
         work.rhs[..n].copy_from_slice(&work.residual[..n]);
         for a in 0..n {
             work.start[a] = terms[work.active[a]].force;
         }
-        if !solve_dense(&mut work.jacobian[..n * n], &mut work.residual[..n], n) && !minimum_norm_step(work, n) {
+        let solved = solve_dense(&mut work.jacobian[..n * n], &mut work.residual[..n], n);
+        exact = linear && solved;
+        if !solved && !minimum_norm_step(work, n) {
             let what = "the friction and limit forces of these joints are not determined (their joints move together)";
             // Name the elements that hold (a stop or a sticking joint): theirs are the forces in
             // question; when only stops hold, say so.

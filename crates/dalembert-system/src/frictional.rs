@@ -62,6 +62,8 @@ pub struct Frictional {
     /// The response to the slipping elements' forces together ([`Frictional::slipping`]).
     slip_dv: Vec<f64>,
     slip_dlambda: Vec<f64>,
+    /// Each slipping element's last iterate `F′` and `φ(F′)` ([`Frictional::mix_slipping`]).
+    mix: Vec<(f64, f64)>,
     /// The forces of the last two evaluations at different times, and those times (NaN where
     /// there is none): the forces at the next time are extrapolated from them
     /// ([`Frictional::predict`]).
@@ -130,6 +132,7 @@ impl Frictional {
             base_lambda: vec![0.0; m],
             slip_dv: vec![0.0; n],
             slip_dlambda: vec![0.0; m],
+            mix: vec![(0.0, 0.0); count],
             past: vec![0.0; count],
             latest: vec![0.0; count],
             times: (f64::NAN, f64::NAN),
@@ -328,28 +331,60 @@ impl Frictional {
             if !change.is_finite() {
                 return Ok(false);
             }
-            // Settled when the change is at round-off, or when what the contraction seen leaves
-            // of it is (`ρ / (1 − ρ)` of the last change); the forces of this iterate are kept,
-            // so `v̇`, `λ` are theirs.
-            let ratio = change / last;
-            let fast = last.is_finite() && ratio < 0.5;
-            if change <= 1e-15 * scale
-                || (fast && ratio / (1.0 - ratio) * change <= 1e-15 * scale)
-                || (last.is_finite() && !fast && change <= 1e-13 * scale)
-            {
+            // The forces of this iterate `F` are kept, so `v̇`, `λ` are theirs; their error is
+            // within `|φ(F) − F| / (1 − ρ)` for the contraction `ρ < 1/2`: settled when that
+            // change is within `SLIP_TOLERANCE` of the largest force.
+            if change <= SLIP_TOLERANCE * scale {
                 return Ok(true);
             }
-            if last.is_finite() && !fast {
+            if last.is_finite() && change >= 0.5 * last {
                 return Ok(false);
             }
-            for (term, &next) in self.terms[..self.frictions].iter_mut().zip(&self.forces) {
-                if term.given {
-                    term.force = next;
-                }
-            }
+            self.mix_slipping(last.is_finite());
             last = change;
         }
         Ok(false)
+    }
+
+    /// The slipping elements' next forces from this iterate's `F` (their forces) and `φ(F)` (in
+    /// `forces`), and the last iterate's (in `mix`, when `secant`): Anderson's mixing of depth
+    /// one, `F⁺ = φ(F) − θ (φ(F) − φ(F′))` with `θ` the least-squares combination of the two
+    /// residuals `r = φ(F) − F` (`θ = r·Δr / |Δr|²`, `Δr = r − r′`), which takes out the slowest
+    /// direction of the contraction (`docs/friction.md`, "Cost"); the plain iteration
+    /// `F⁺ = φ(F)` at the first iterate. Keeps `F` and `φ(F)` in `mix`.
+    fn mix_slipping(&mut self, secant: bool) {
+        let theta = if secant {
+            let (mut num, mut den) = (0.0, 0.0);
+            for ((term, &next), &(before, next_before)) in
+                self.terms[..self.frictions].iter().zip(&self.forces).zip(&self.mix)
+            {
+                if term.given {
+                    let (r, r_before) = (next - term.force, next_before - before);
+                    num += r * (r - r_before);
+                    den += (r - r_before) * (r - r_before);
+                }
+            }
+            // A contraction below one half has `θ = −ρ / (1 − ρ)` within (−1, 1).
+            let theta = num / den;
+            if theta.is_finite() {
+                theta.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            }
+        } else {
+            0.0
+        };
+        for ((term, &next), mix) in self.terms[..self.frictions]
+            .iter_mut()
+            .zip(&self.forces)
+            .zip(&mut self.mix)
+        {
+            if term.given {
+                let next_before = mix.1;
+                *mix = (term.force, next);
+                term.force = next - if secant { theta * (next - next_before) } else { 0.0 };
+            }
+        }
     }
 
     /// An impact of limit `k` (its index among the elements) at `(t, q, v)`, by (L3) of
@@ -591,6 +626,10 @@ impl Frictional {
 
 /// The most iterations of [`Frictional::slipping`] (each contracts by half or more).
 const SLIP_ITERATIONS: usize = 40;
+
+/// The change `|φ(F) − F|` of the slipping elements' forces, relative to the largest force, at
+/// which [`Frictional::slipping`] keeps `F` (its error is within twice that).
+const SLIP_TOLERANCE: f64 = 1e-13;
 
 /// The rate (m/s or rad/s) below which a limit that starts at its bound and moves away from it
 /// starts held: round-off of a rate that is zero (a cam's surface sliding along its follower).
