@@ -46,10 +46,20 @@ pub struct Frictional {
     impact_g: Vec<f64>,
     impact_lu: Vec<f64>,
     impact_p: Vec<f64>,
-    /// The impacting contact's friction element in `impact_set` (`usize::MAX` for none), and
-    /// `σ μ` where it slips through the impact (its row then `P_f + σ μ P_n = 0`), `None` where
-    /// it sticks (its rate taken to zero).
-    impact_friction: (usize, Option<f64>),
+    /// Each element's rate after an impact, `w⁺` (read for the elements in `impact_set`).
+    impact_target: Vec<f64>,
+    /// The striking contacts' friction elements in an impact: `(friction element, its contact's
+    /// limit element, σ μ)`, `σ μ` where it slips through the impact (its row then
+    /// `P_f + σ μ P_n = 0`), `None` where it sticks (its rate taken to zero).
+    impact_frictions: Vec<(usize, usize, Option<f64>)>,
+    /// The limits that strike at an event ([`Frictional::at_event`]), as element indices.
+    striking: Vec<usize>,
+    /// Per element: in an impact, a striking limit's nearer bound's sign and whether it comes to
+    /// rest there ([`Frictional::impact`]); `None` otherwise.
+    strike: Vec<Option<(f64, bool)>>,
+    /// Per element: a held limit whose impulse would pull in the impact under way (it lets go
+    /// where some limit strikes).
+    released: Vec<bool>,
     /// Work space of the impulses' least-norm solution where their set is redundant.
     impact_gram: Vec<f64>,
     impact_rhs: Vec<f64>,
@@ -123,7 +133,11 @@ impl Frictional {
             impact_g: vec![0.0; count * count],
             impact_lu: vec![0.0; count * count],
             impact_p: vec![0.0; count],
-            impact_friction: (usize::MAX, None),
+            impact_target: vec![0.0; count],
+            impact_frictions: Vec::with_capacity(count),
+            striking: Vec::with_capacity(count),
+            strike: vec![None; count],
+            released: vec![false; count],
             impact_gram: vec![0.0; count * count],
             impact_rhs: vec![0.0; count],
             impact_scratch: vec![0.0; count],
@@ -387,91 +401,153 @@ impl Frictional {
         }
     }
 
-    /// An impact of limit `k` (its index among the elements) at `(t, q, v)`, by (L3) of
-    /// `docs/limits.md`: `v` changes by the impulse along the limit's row, and the joint is held
-    /// at the bound when its rebound is below its rest speed (its rate then set to zero) and
-    /// free otherwise. The limits held at their bounds keep their joints there through the
-    /// impact, each by an impulse of its own that pushes (L5): the impulses solve
-    /// `G P = w⁺ − w⁻` with `G_ab = g_a·A_b` over the impacting limit and the held ones, and a
-    /// held limit whose impulse would pull lets go. Nothing happens where the joint moves away
-    /// from its nearer bound.
-    fn impact(&mut self, k: usize, t: f64, q: &[f64], v: &mut [f64]) -> Result<bool, DynamicsError> {
-        let s = self.fill_row(k, t, q, v);
-        let limit = &self.inner.system().limits()[k - self.frictions];
-        let (sign, rest_speed, restitution) = (limit.nearer_bound(s), limit.rest_speed, limit.restitution);
-        let before = self.terms[k].row.dot(v);
-        if sign * before >= 0.0 {
+    /// The impacts of the limits in `striking` (their indices among the elements) at `(t, q, v)`,
+    /// together, by (L3) and (L5) of `docs/limits.md`: each limit moving towards its nearer bound
+    /// strikes; its rate is to leave at `−e w⁻`, or at zero where that rebound is below its rest
+    /// speed (it is then held on the bound). The limits already held stay on their bounds, and a
+    /// striking contact's friction element stops its slip through the impact or, where that
+    /// needs more than `μ P_n`, slips with `μ P_n` (L6). The impulses solve `G P = w⁺ − w⁻` with
+    /// `G_ab = g_a·A_b` over them all; a limit whose impulse would pull takes none (a held one
+    /// lets go), and they are found again (L9). So a block landing flat on two corners bounces
+    /// as one body, whatever the order its corners are listed in. Nothing happens where no
+    /// limit moves towards its bound.
+    fn impact(&mut self, t: f64, q: &[f64], v: &mut [f64]) -> Result<bool, DynamicsError> {
+        // The striking limits first, with their targets; then the held ones; then the striking
+        // contacts' friction elements.
+        self.impact_set.clear();
+        self.impact_frictions.clear();
+        for i in 0..self.striking.len() {
+            let k = self.striking[i];
+            let s = self.fill_row(k, t, q, v);
+            let limit = &self.inner.system().limits()[k - self.frictions];
+            let (sign, rest_speed, restitution) = (limit.nearer_bound(s), limit.rest_speed, limit.restitution);
+            let before = self.terms[k].row.dot(v);
+            if sign * before >= 0.0 {
+                continue;
+            }
+            // The rebound too small to leave: the joint rests on its bound, its rate zero.
+            let held = restitution * before.abs() < rest_speed;
+            self.impact_target[k] = if held { 0.0 } else { -restitution * before };
+            self.strike[k] = Some((sign, held));
+            self.impact_set.push(k);
+        }
+        if self.impact_set.is_empty() {
             return Ok(false);
+        }
+        for j in self.frictions..self.terms.len() {
+            if matches!(self.terms[j].mode, Mode::Held(_)) && self.strike[j].is_none() {
+                self.impact_set.push(j);
+                self.impact_target[j] = 0.0;
+            }
+        }
+        let strikes = self.impact_set.len();
+        for a in 0..strikes {
+            let contact = self.impact_set[a] - self.frictions;
+            let friction = (self.inner.system().frictions().iter()).position(|f| f.load_limit == Some(contact));
+            if let Some(f) = friction {
+                self.impact_set.push(f);
+                self.impact_target[f] = 0.0;
+                self.impact_frictions.push((f, self.impact_set[a], None));
+            }
         }
         let mut qdd = std::mem::take(&mut self.event_qdd);
         let mut lambda = std::mem::take(&mut self.event_lambda);
         let mut result = self.inner.accelerations(t, q, v, None, &mut qdd, &mut lambda);
-        // The impacting limit first, then the held ones.
-        self.impact_set.clear();
-        self.impact_set.push(k);
-        for j in self.frictions..self.terms.len() {
-            if j != k && matches!(self.terms[j].mode, Mode::Held(_)) {
-                self.impact_set.push(j);
-            }
-        }
-        // A rigid contact's friction: its tangential impulse, last.
-        let contact = k - self.frictions;
-        let friction = self
-            .inner
-            .system()
-            .frictions()
-            .iter()
-            .position(|f| f.load_limit == Some(contact));
-        if let Some(f) = friction {
-            self.impact_set.push(f);
-        }
-        self.impact_friction = (friction.unwrap_or(usize::MAX), None);
         for a in 0..self.impact_set.len() {
             let j = self.impact_set[a];
-            if j != k {
+            if a >= strikes {
                 self.fill_row(j, t, q, v);
             }
             result = result.and_then(|()| self.response(j, (t, q, v), None, (&qdd, &lambda)));
         }
         self.event_qdd = qdd;
         self.event_lambda = lambda;
-        result?;
-        let term = &self.terms[k];
-        let limit = &self.inner.system().limits()[k - self.frictions];
-        // Alone, (L3) in closed form (and its check that the impulse moves the joint).
-        impact_impulse(limit, before, term.row.dot(&term.dv), t)?;
-        // The rebound too small to leave: the joint rests on its bound, its rate zero.
-        let held = restitution * before.abs() < rest_speed;
-        let target = if held { 0.0 } else { -restitution * before };
-        let slip_before = friction.map_or(0.0, |f| self.terms[f].row.dot(v));
+        let outcome = result.and_then(|()| self.solve_strikes(t, v));
+        // The modes after it: a striking limit held or free; a held one that let go free (only
+        // where some limit struck).
+        let struck = self.strike.iter().any(|s| s.is_some());
+        for k in self.frictions..self.terms.len() {
+            if let Some((sign, held)) = self.strike[k].take() {
+                self.terms[k].mode = if held { Mode::Held(sign) } else { Mode::Free };
+            }
+            if std::mem::take(&mut self.released[k]) && struck {
+                self.terms[k].mode = Mode::Free;
+            }
+        }
+        outcome?;
+        if struck {
+            self.follow_contacts(t, q, v);
+        }
+        Ok(struck)
+    }
+
+    /// The impulses of [`Frictional::impact`] over `impact_set` (rows and responses filled),
+    /// applied to `v`; a striking limit that takes none is left out of `strike`.
+    fn solve_strikes(&mut self, t: f64, v: &mut [f64]) -> Result<(), DynamicsError> {
+        // Each striking limit alone, (L3) in closed form: its check that the impulse moves the
+        // joint.
+        for &k in &self.impact_set {
+            if let Some(limit) = self.strike[k].and(k.checked_sub(self.frictions)) {
+                let term = &self.terms[k];
+                impact_impulse(
+                    &self.inner.system().limits()[limit],
+                    term.row.dot(v),
+                    term.row.dot(&term.dv),
+                    t,
+                )?;
+            }
+        }
         loop {
-            self.solve_impulses(target, v, t)?;
-            // The contact's friction: held through the impact while the impulse that stops its
+            self.solve_impulses(v, t)?;
+            // A contact's friction: held through the impact while the impulse that stops its
             // slip is within `μ P_n`, else slipping against the slip before it (`docs/limits.md`,
             // "Friction in rigid contact", (L6)).
-            if let (Some(f), None) = (friction, self.impact_friction.1) {
-                let n = self.impact_set.len();
-                let mu = self.inner.system().frictions()[f].coefficient;
-                let (normal, tangential) = (self.impact_p[0], self.impact_p[n - 1]);
-                if tangential.abs() > mu * normal.abs() {
-                    self.impact_friction.1 = Some(slip_before.signum() * mu * sign);
+            let system = self.inner.system();
+            let position = |set: &[usize], k: usize| set.iter().position(|&j| j == k);
+            let mut switched = false;
+            for i in 0..self.impact_frictions.len() {
+                let (f, normal, slip) = self.impact_frictions[i];
+                let (Some(a), Some(b), None) =
+                    (position(&self.impact_set, f), position(&self.impact_set, normal), slip)
+                else {
                     continue;
+                };
+                let mu = system.frictions()[f].coefficient;
+                let (p_n, p_t) = (self.impact_p[b], self.impact_p[a]);
+                if p_t.abs() > mu * p_n.abs() {
+                    let sign = self.strike[normal].map_or(1.0, |(sign, _)| sign);
+                    let slip_before = self.terms[f].row.dot(v);
+                    self.impact_frictions[i].2 = Some(slip_before.signum() * mu * sign);
+                    switched = true;
                 }
             }
-            // A held limit whose impulse would pull lets go, and the impulses are found again;
-            // a pull at round-off of the largest impulse does not count ((L2)'s adhesion).
+            if switched {
+                continue;
+            }
+            // A limit whose impulse would pull takes none (a held one lets go), with its
+            // contact's friction, and the impulses are found again; a pull at round-off of the
+            // largest impulse does not count ((L2)'s adhesion).
             let n = self.impact_set.len();
             let largest = self.impact_p[..n].iter().fold(0.0f64, |m, p| m.max(p.abs()));
-            let pulling = (1..n).find(|&a| match self.terms[self.impact_set[a]].mode {
-                Mode::Held(sigma) => sigma * self.impact_p[a] < -RELEASE_SHARE * largest,
-                _ => false,
+            let pulling = (0..n).find(|&a| {
+                let k = self.impact_set[a];
+                let sign = match (self.strike[k], self.terms[k].mode) {
+                    (Some((sign, _)), _) | (None, Mode::Held(sign)) if k >= self.frictions => sign,
+                    _ => return false,
+                };
+                sign * self.impact_p[a] < -RELEASE_SHARE * largest
             });
-            match pulling {
-                Some(a) => {
-                    let j = self.impact_set.remove(a);
-                    self.terms[j].mode = Mode::Free;
-                }
-                None => break,
+            let Some(a) = pulling else { break };
+            let k = self.impact_set.remove(a);
+            if self.strike[k].take().is_none() {
+                self.released[k] = true;
+            }
+            if let Some(i) = self.impact_frictions.iter().position(|&(_, normal, _)| normal == k) {
+                let (f, _, _) = self.impact_frictions.remove(i);
+                self.impact_set.retain(|&j| j != f);
+            }
+            if !self.impact_set.iter().any(|&j| self.strike[j].is_some()) {
+                return Ok(());
             }
         }
         // The kinetic energy the impulses take, −Σ P (w⁻ + w⁺) / 2 with w⁺ = w⁻ + G P, goes to
@@ -486,9 +562,7 @@ impl Frictional {
             let (term, impulse) = (&self.terms[self.impact_set[a]], self.impact_p[a]);
             v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
         }
-        self.terms[k].mode = if held { Mode::Held(sign) } else { Mode::Free };
-        self.follow_contacts(t, q, v);
-        Ok(true)
+        Ok(())
     }
 
     /// Each rigid contact's friction element's mode from its contact's: free while the contact
@@ -545,8 +619,11 @@ impl Frictional {
                 self.fill_row(j, t, q, v);
                 self.response_from_base(j, (t, q, v), None)?;
             }
-            self.impact_friction = (usize::MAX, None);
-            self.solve_impulses(0.0, v, t)?;
+            self.impact_frictions.clear();
+            for &j in &self.impact_set {
+                self.impact_target[j] = 0.0;
+            }
+            self.solve_impulses(v, t)?;
             for a in 0..self.impact_set.len() {
                 let (term, impulse) = (&self.terms[self.impact_set[a]], self.impact_p[a]);
                 v.iter_mut().zip(&term.dv).for_each(|(x, r)| *x += r * impulse);
@@ -563,30 +640,38 @@ impl Frictional {
         result
     }
 
-    /// The impulses `P` over `impact_set` (rows and responses filled) that take the first
-    /// limit's rate to `target` and keep each other one's at zero: `G P = w⁺ − w⁻` with
-    /// `G_ab = g_a·A_b` (kept in `impact_g`), into `impact_p`.
-    fn solve_impulses(&mut self, target: f64, v: &[f64], t: f64) -> Result<(), DynamicsError> {
+    /// The impulses `P` over `impact_set` (rows and responses filled) that take each element's
+    /// rate to its `impact_target`: `G P = w⁺ − w⁻` with `G_ab = g_a·A_b` (kept in `impact_g`),
+    /// a slipping friction element's row `P_f + σ μ P_n = 0` instead ([`Frictional::impact`]),
+    /// into `impact_p`.
+    fn solve_impulses(&mut self, v: &[f64], t: f64) -> Result<(), DynamicsError> {
         let n = self.impact_set.len();
         for a in 0..n {
-            let row = &self.terms[self.impact_set[a]].row;
+            let k = self.impact_set[a];
+            let row = &self.terms[k].row;
             for b in 0..n {
                 self.impact_g[a * n + b] = row.dot(&self.terms[self.impact_set[b]].dv);
             }
-            let goal = if a == 0 { target } else { 0.0 };
-            self.impact_p[a] = goal - row.dot(v);
+            self.impact_p[a] = self.impact_target[k] - row.dot(v);
         }
         // A contact's friction slipping through the impact: `P_f + σ μ P_n = 0` for its row.
-        let (friction, slip) = self.impact_friction;
-        let slip = slip.filter(|_| n > 0 && self.impact_set[n - 1] == friction);
+        let set = &self.impact_set;
+        let slips = &self.impact_frictions;
         let equations = |lu: &mut [f64], rhs: &mut [f64]| {
             lu[..n * n].copy_from_slice(&self.impact_g[..n * n]);
-            if let Some(slip) = slip {
-                let row = &mut lu[(n - 1) * n..n * n];
+            for &(f, normal, slip) in slips {
+                let (Some(slip), Some(a), Some(b)) = (
+                    slip,
+                    set.iter().position(|&j| j == f),
+                    set.iter().position(|&j| j == normal),
+                ) else {
+                    continue;
+                };
+                let row = &mut lu[a * n..a * n + n];
                 row.iter_mut().for_each(|x| *x = 0.0);
-                row[n - 1] = 1.0;
-                row[0] = slip;
-                rhs[n - 1] = 0.0;
+                row[a] = 1.0;
+                row[b] = slip;
+                rhs[a] = 0.0;
             }
         };
         equations(&mut self.impact_lu, &mut self.impact_p);
@@ -912,7 +997,8 @@ impl Formulation for Frictional {
                 // A rigid contact's friction while the contact is free: no event.
                 Mode::Free if k < self.frictions => continue,
                 Mode::Free => {
-                    changed |= self.impact(k, t, q, v)?;
+                    // Struck together after the loop (L9).
+                    self.striking.push(k);
                     continue;
                 }
                 Mode::Held(_) => {
@@ -933,6 +1019,11 @@ impl Formulation for Frictional {
                 Mode::Slip(sign) => self.stopping.push((k, sign)),
                 Mode::Free | Mode::Held(_) => {}
             }
+        }
+        if !self.striking.is_empty() {
+            let struck = self.impact(t, q, v);
+            self.striking.clear();
+            changed |= struck?;
         }
         if !self.stopping.is_empty() {
             // The slips that stop at this event, together (two corners of a block sliding on a
