@@ -37,6 +37,7 @@ fn block(w: f64, h: f64, alpha: f64, mu: f64, speed: f64, rounded: bool, run: (&
             h / 2.0
         )
     } else {
+        // The front lower corner `tilt` higher: the corners' round-off.
         let corners = [at(-w / 2.0, 0.0), at(w / 2.0, 0.0), at(w / 2.0, h), at(-w / 2.0, h)];
         let list: Vec<String> = corners.iter().map(|p| format!("[{}, {}]", p[0], p[1])).collect();
         format!("type = \"polygon-line\"\nvertices = [{}]\n", list.join(", "))
@@ -205,18 +206,20 @@ fn a_sliding_block_tips_where_its_friction_moment_passes_its_weight_moment() {
 /// A block `0.4 × 0.2` m (2 kg) held level with its lower face `drop` above a floor, its centre
 /// of mass `offset` along the face from the face's middle, released; its corners listed from
 /// `first` on (0: back lower, 1: front lower, 2: front upper, 3: back upper), backwards where
-/// `reversed`; moving forwards at `speed`. The floor's restitution `e`, friction `mu`.
+/// `reversed`; moving forwards at `speed`; its front lower corner `tilt` higher than the back one.
+/// The floor's restitution `e`, friction `mu`.
 fn dropped_block(
-    (offset, drop, speed): (f64, f64, f64),
+    (offset, drop, speed, tilt): (f64, f64, f64, f64),
     (e, mu): (f64, f64),
     (first, reversed): (usize, bool),
     run: (&str, &str, f64),
 ) -> Scene {
     let (formulation, integrator, end) = run;
     let (w, h) = (0.4, 0.2);
+    // The front lower corner `tilt` higher: the corners' round-off.
     let corners = [
         [-w / 2.0, drop],
-        [w / 2.0, drop],
+        [w / 2.0, drop + tilt],
         [w / 2.0, drop + h],
         [-w / 2.0, drop + h],
     ];
@@ -250,7 +253,9 @@ fn a_block_landing_flat_bounces_flat_whatever_the_order_of_its_corners() {
     // corners, whatever its place (the corners' impulses share the momentum by the moments), so
     // it rises to e² d and lands flat again. Taken one corner at a time, the first impulse
     // turned it and the result hung on the corners' order. Centre of mass in the middle and
-    // 0.12 m off it; the corners in four orders; without friction, and with μ = 0.4 while it
+    // 0.12 m off it; the corners in four orders, and the front one listed 1e-15 m higher or
+    // lower (within 1e-12 m of the floor, they strike together); without friction, and with
+    // μ = 0.4 while it
     // also moves forwards at 3 m/s: both corners then slip through the impact (stopping the
     // slip would take 6 N·s, beyond μ (1 + e) m v = 1.68 N·s), each with the tangential impulse
     // μ P_n, which leaves it at 3 − μ (1 + e) v forwards, still with no turn (both corners leave
@@ -269,18 +274,22 @@ fn a_block_landing_flat_bounces_flat_whatever_the_order_of_its_corners() {
         }
     };
     for offset in [0.0, 0.12] {
-        for (order, mu, u) in [
-            ((0, false), 0.0, 0.0),
-            ((1, false), 0.4, 3.0),
-            ((2, true), 0.0, 0.0),
-            ((3, true), 0.4, 3.0),
+        for (order, mu, u, tilt) in [
+            ((0, false), 0.0, 0.0, 0.0),
+            ((1, false), 0.4, 3.0, 0.0),
+            ((2, true), 0.0, 0.0, 0.0),
+            ((3, true), 0.4, 3.0, 0.0),
+            ((0, false), 0.0, 0.0, 1e-15),
+            ((0, false), 0.4, 3.0, -1e-15),
         ] {
             let after = u - mu * (1.0 + e) * v;
             let along = |t: f64| offset + u * t.min(t1) + after * (t - t1).max(0.0);
             for formulation in FORMULATIONS {
                 for integrator in METHODS {
-                    let scene = dropped_block((offset, drop, u), (e, mu), order, (formulation, integrator, 0.28));
-                    let what = format!("{formulation} {integrator}, offset {offset}, order {order:?}, μ = {mu}");
+                    let scene = dropped_block((offset, drop, u, tilt), (e, mu), order, (formulation, integrator, 0.28));
+                    let what = format!(
+                        "{formulation} {integrator}, offset {offset}, order {order:?}, μ = {mu}, tilt {tilt:e}"
+                    );
                     let table = run(&scene);
                     let c = |n: &str| column(&table, n);
                     let (t, x, y, angle) = (c("t"), c("block.x"), c("block.y"), c("block.angle"));

@@ -716,6 +716,11 @@ const SLIP_ITERATIONS: usize = 40;
 /// which [`Frictional::slipping`] keeps `F` (its error is within twice that).
 const SLIP_TOLERANCE: f64 = 1e-13;
 
+/// How near its bound (m or rad) a free limit strikes with another that strikes
+/// ([`Frictional::at_event`], (L9) of `docs/limits.md`): far above the round-off of a coordinate
+/// (a block's corners listed level to 10⁻¹⁵ m land together), far below any gap a run resolves.
+const STRIKE_TOGETHER: f64 = 1e-12;
+
 /// The rate (m/s or rad/s) below which a limit that starts at its bound and moves away from it
 /// starts held: round-off of a rate that is zero (a cam's surface sliding along its follower).
 const START_RATE: f64 = 1e-12;
@@ -1021,6 +1026,17 @@ impl Formulation for Frictional {
             }
         }
         if !self.striking.is_empty() {
+            // The free limits within `STRIKE_TOGETHER` of their bounds strike with them (where
+            // they move towards them): corners that land together at round-off.
+            for k in self.frictions..self.terms.len() {
+                if self.terms[k].mode == Mode::Free && !self.striking.contains(&k) {
+                    let s = self.fill_row(k, t, q, v);
+                    let limit = &self.inner.system().limits()[k - self.frictions];
+                    if limit.free_event(s) <= LIMIT_SLACK + STRIKE_TOGETHER {
+                        self.striking.push(k);
+                    }
+                }
+            }
             let struck = self.impact(t, q, v);
             self.striking.clear();
             changed |= struck?;
