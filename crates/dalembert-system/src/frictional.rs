@@ -431,7 +431,8 @@ impl Frictional {
             self.strike[k] = Some((sign, held));
             self.impact_set.push(k);
         }
-        if self.impact_set.is_empty() {
+        let strikes = self.impact_set.len();
+        if strikes == 0 {
             return Ok(false);
         }
         for j in self.frictions..self.terms.len() {
@@ -440,7 +441,6 @@ impl Frictional {
                 self.impact_target[j] = 0.0;
             }
         }
-        let strikes = self.impact_set.len();
         for a in 0..strikes {
             let contact = self.impact_set[a] - self.frictions;
             let friction = (self.inner.system().frictions().iter()).position(|f| f.load_limit == Some(contact));
