@@ -317,3 +317,70 @@ fn a_block_landing_flat_bounces_flat_whatever_the_order_of_its_corners() {
         }
     }
 }
+
+#[test]
+fn a_wedge_stuck_on_an_incline_stays_stuck_through_an_impact_on_it() {
+    // A wedge (2 kg) at rest on an incline of 0.3 rad with μ = 0.6 > tan α, its lower corners in
+    // rigid contact with the incline and its upper face level; a ball (0.5 kg) dropped 0.2 m onto
+    // that face above the wedge's middle, e = 0.5. The ball's vertical impulse J pushes the wedge
+    // downhill by J sin α and into the incline by J cos α: the corners' friction impulses (L6)
+    // hold it while J sin α ≤ μ J cos α, as its weight is held. So the wedge does not move
+    // (1e-12 m and rad), and the ball meets an immovable face: it leaves at e v and rises to
+    // e² × 0.2 m (1e-10 m). Without the held corners' friction in the impulse the wedge slid off
+    // at the impact.
+    let (alpha, mu, w, e, drop, r) = (0.3f64, 0.6, 0.4, 0.5, 0.2, 0.05);
+    let d = [alpha.cos(), alpha.sin()];
+    let (b0, b1) = ([-w / 2.0 * d[0], -w / 2.0 * d[1]], [w / 2.0 * d[0], w / 2.0 * d[1]]);
+    let top = 0.3;
+    let v = (2.0 * G * drop).sqrt();
+    let (t1, t2) = (v / G, v / G + 2.0 * e * v / G);
+    for formulation in FORMULATIONS {
+        for integrator in METHODS {
+            let text = format!(
+                "[scene]\ngravity = [0.0, {}]\n\
+                 [[bodies]]\nname = \"wedge\"\nmass = {M}\nshape = {{ rectangle = [0.4, 0.3] }}\nposition = [0.0, 0.15]\n\
+                 [[bodies]]\nname = \"ball\"\nmass = 0.5\nshape = {{ disk = {r} }}\nposition = [0.0, {}]\n\
+                 [[forces]]\nname = \"incline\"\ntype = \"polygon-line\"\nbody = \"wedge\"\n\
+                 vertices = [[{}, {}], [{}, {}], [{}, {top}], [{}, {top}]]\n\
+                 line = {{ point = [0.0, 0.0], normal = [{}, {}] }}\nrigid = true\nfriction = {mu}\n\
+                 [[forces]]\nname = \"face\"\ntype = \"circle-line\"\nbody = \"ball\"\nradius = {r}\n\
+                 line = {{ body = \"wedge\", point = [0.0, {top}], normal = [0.0, 1.0] }}\nrigid = true\nrestitution = {e}\n\
+                 [simulation]\nend = 0.35\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                 step = 1e-3\nrtol = 1e-11\natol = 1e-11\noutput_every = 0.01\n",
+                -G,
+                top + r + drop,
+                b0[0],
+                b0[1],
+                b1[0],
+                b1[1],
+                b1[0],
+                b0[0],
+                -alpha.sin(),
+                alpha.cos(),
+            );
+            let scene = Scene::from_toml(&text, "wedge").unwrap();
+            let what = format!("{formulation} {integrator}");
+            let table = run(&scene);
+            let c = |n: &str| column(&table, n);
+            let (t, x, y, ball) = (c("t"), c("wedge.x"), c("wedge.y"), c("ball.y"));
+            let turn = c("wedge.angle");
+            assert!(t[t.len() - 1] < t2, "the run ends before the ball's second landing");
+            for k in 0..t.len() {
+                let moved = x[k].abs().max((y[k] - 0.15).abs()).max(turn[k].abs());
+                assert!(moved < 1e-12, "{what}: the wedge moved by {moved:e} at {}", t[k]);
+                let s = t[k] - t1;
+                let expected = if s <= 0.0 {
+                    top + r + drop - 0.5 * G * t[k] * t[k]
+                } else {
+                    top + r + e * v * s - 0.5 * G * s * s
+                };
+                assert!(
+                    (ball[k] - expected).abs() < 1e-10,
+                    "{what}: the ball at {} m at {}, against {expected}",
+                    ball[k],
+                    t[k]
+                );
+            }
+        }
+    }
+}

@@ -441,10 +441,15 @@ impl Frictional {
                 self.impact_target[j] = 0.0;
             }
         }
-        for a in 0..strikes {
+        // Each striking contact's friction, and each held contact's that sticks: a contact at
+        // rest on a floor takes its friction impulse too (L6), within `μ P_n` of its own impulse.
+        let limits = self.impact_set.len();
+        for a in 0..limits {
             let contact = self.impact_set[a] - self.frictions;
             let friction = (self.inner.system().frictions().iter()).position(|f| f.load_limit == Some(contact));
-            if let Some(f) = friction {
+            if let Some(f) =
+                friction.filter(|&f| a < strikes || (self.terms[f].mode == Mode::Stick && self.terms[f].sticks))
+            {
                 self.impact_set.push(f);
                 self.impact_target[f] = 0.0;
                 self.impact_frictions.push((f, self.impact_set[a], None));
@@ -515,9 +520,19 @@ impl Frictional {
                 let mu = system.frictions()[f].coefficient;
                 let (p_n, p_t) = (self.impact_p[b], self.impact_p[a]);
                 if p_t.abs() > mu * p_n.abs() {
-                    let sign = self.strike[normal].map_or(1.0, |(sign, _)| sign);
+                    let sign = match (self.strike[normal], self.terms[normal].mode) {
+                        (Some((sign, _)), _) | (None, Mode::Held(sign)) => sign,
+                        _ => 1.0,
+                    };
+                    // It slips against its slip before the impact; from rest, against the
+                    // impulse that would have held it.
                     let slip_before = self.terms[f].row.dot(v);
-                    self.impact_frictions[i].2 = Some(slip_before.signum() * mu * sign);
+                    let direction = if slip_before.abs() > system.frictions()[f].stick_speed {
+                        slip_before.signum()
+                    } else {
+                        -p_t.signum()
+                    };
+                    self.impact_frictions[i].2 = Some(direction * mu * sign);
                     switched = true;
                 }
             }
