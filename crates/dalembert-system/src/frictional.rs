@@ -48,9 +48,10 @@ pub struct Frictional {
     impact_p: Vec<f64>,
     /// Each element's rate after an impact, `w⁺` (read for the elements in `impact_set`).
     impact_target: Vec<f64>,
-    /// The striking contacts' friction elements in an impact: `(friction element, its contact's
-    /// limit element, σ μ)`, `σ μ` where it slips through the impact (its row then
-    /// `P_f + σ μ P_n = 0`), `None` where it sticks (its rate taken to zero).
+    /// The contacts' friction elements in an impact (the striking contacts', and the held
+    /// contacts' that stick): `(friction element, its contact's limit element, σ μ)`, `σ μ` where
+    /// it slips through the impact (its row then `P_f + σ μ P_n = 0`), `None` where it sticks
+    /// (its rate taken to zero).
     impact_frictions: Vec<(usize, usize, Option<f64>)>,
     /// The limits that strike at an event ([`Frictional::at_event`]), as element indices.
     striking: Vec<usize>,
@@ -404,16 +405,16 @@ impl Frictional {
     /// The impacts of the limits in `striking` (their indices among the elements) at `(t, q, v)`,
     /// together, by (L3) and (L5) of `docs/limits.md`: each limit moving towards its nearer bound
     /// strikes; its rate is to leave at `−e w⁻`, or at zero where that rebound is below its rest
-    /// speed (it is then held on the bound). The limits already held stay on their bounds, and a
-    /// striking contact's friction element stops its slip through the impact or, where that
-    /// needs more than `μ P_n`, slips with `μ P_n` (L6). The impulses solve `G P = w⁺ − w⁻` with
+    /// speed (it is then held on the bound). The limits already held stay on their bounds, and
+    /// the friction element of a striking contact, or of a held one that sticks, stops its slip
+    /// through the impact or, where that needs more than `μ P_n`, slips with `μ P_n` (L6). The impulses solve `G P = w⁺ − w⁻` with
     /// `G_ab = g_a·A_b` over them all; a limit whose impulse would pull takes none (a held one
     /// lets go), and they are found again (L9). So a block landing flat on two corners bounces
     /// as one body, whatever the order its corners are listed in. Nothing happens where no
     /// limit moves towards its bound.
     fn impact(&mut self, t: f64, q: &[f64], v: &mut [f64]) -> Result<bool, DynamicsError> {
-        // The striking limits first, with their targets; then the held ones; then the striking
-        // contacts' friction elements.
+        // The striking limits first, with their targets; then the held ones; then the contacts'
+        // friction elements.
         self.impact_set.clear();
         self.impact_frictions.clear();
         for i in 0..self.striking.len() {
@@ -486,6 +487,17 @@ impl Frictional {
         Ok(struck)
     }
 
+    /// The sign `σ` with which limit element `k`'s impulse pushes in the impact under way (its
+    /// nearer bound's where it strikes, its held bound's where it is held); `None` for a friction
+    /// element or a free limit that does not strike.
+    fn pushing_sign(&self, k: usize) -> Option<f64> {
+        match (self.strike.get(k).copied().flatten(), self.terms[k].mode) {
+            _ if k < self.frictions => None,
+            (Some((sign, _)), _) | (None, Mode::Held(sign)) => Some(sign),
+            _ => None,
+        }
+    }
+
     /// The impulses of [`Frictional::impact`] over `impact_set` (rows and responses filled),
     /// applied to `v`; a striking limit that takes none is left out of `strike`.
     fn solve_strikes(&mut self, t: f64, v: &mut [f64]) -> Result<(), DynamicsError> {
@@ -520,10 +532,7 @@ impl Frictional {
                 let mu = system.frictions()[f].coefficient;
                 let (p_n, p_t) = (self.impact_p[b], self.impact_p[a]);
                 if p_t.abs() > mu * p_n.abs() {
-                    let sign = match (self.strike[normal], self.terms[normal].mode) {
-                        (Some((sign, _)), _) | (None, Mode::Held(sign)) => sign,
-                        _ => 1.0,
-                    };
+                    let sign = self.pushing_sign(normal).unwrap_or(1.0);
                     // It slips against its slip before the impact; from rest, against the
                     // impulse that would have held it.
                     let slip_before = self.terms[f].row.dot(v);
@@ -545,12 +554,8 @@ impl Frictional {
             let n = self.impact_set.len();
             let largest = self.impact_p[..n].iter().fold(0.0f64, |m, p| m.max(p.abs()));
             let pulling = (0..n).find(|&a| {
-                let k = self.impact_set[a];
-                let sign = match (self.strike[k], self.terms[k].mode) {
-                    (Some((sign, _)), _) | (None, Mode::Held(sign)) if k >= self.frictions => sign,
-                    _ => return false,
-                };
-                sign * self.impact_p[a] < -RELEASE_SHARE * largest
+                self.pushing_sign(self.impact_set[a])
+                    .is_some_and(|sign| sign * self.impact_p[a] < -RELEASE_SHARE * largest)
             });
             let Some(a) = pulling else { break };
             let k = self.impact_set.remove(a);
