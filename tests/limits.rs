@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{column, run};
+use common::{column, largest_difference, run};
 use dalembert::Scene;
 use std::sync::atomic::AtomicBool;
 
@@ -649,6 +649,41 @@ fn a_stop_in_joint_coordinates_is_met_as_in_absolute_coordinates() {
         let worst = ea.iter().zip(&eb).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
         assert!(worst < 1e-8, "{formulation}: energies {worst:e} J apart");
         assert!(eb[0] - eb[eb.len() - 1] > 1.0, "the impacts took too little energy");
+    }
+}
+
+#[test]
+fn a_stop_on_a_joint_listed_child_first_is_met_in_joint_coordinates_as_in_absolute_ones() {
+    // The rod of the test above with its pin's bodies listed the other way round, `["rod",
+    // "ground"]`: the joint's value is then the ground's angle relative to the rod (the rod's
+    // angle turned in sign), so the rod thrown the same way now strikes the upper stop at 2 rad.
+    // The tree's coordinate is the rod's angle relative to the ground, so the limit reads it
+    // with its sign turned. Reference: the absolute-coordinate run of the same scene (the
+    // model's own row): within 1e-8 rad (dopri5 1e-11 both) and the energies within 1e-8 J.
+    // Before the sign was kept, the joint-coordinate run struck the lower stop at −4 rad.
+    let reversed = |coordinates: &str, formulation: &str| {
+        let scene = rod_beyond_a_half_turn_in(true, formulation, coordinates);
+        let text = scene
+            .source
+            .replace("bodies = [\"ground\", \"rod\"]", "bodies = [\"rod\", \"ground\"]");
+        assert_ne!(text, scene.source);
+        run(&Scene::from_toml(&text, "rod listed first").unwrap())
+    };
+    for formulation in FORMULATIONS {
+        let absolute = reversed("absolute", formulation);
+        let joint = reversed("joint", formulation);
+        let highest = column(&absolute, "pin.q").iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            highest < 2.0 + 1e-9 && highest > 1.9,
+            "{formulation}: the joint's highest value is {highest}, expected the stop at 2"
+        );
+        for (name, bar) in [("pin.q", 1e-8), ("pin.limit", 1e-6), ("energy", 1e-8)] {
+            let worst = largest_difference(&joint, &absolute, name);
+            assert!(
+                worst < bar,
+                "{formulation} {name}: joint coordinates {worst:e} from absolute ones"
+            );
+        }
     }
 }
 

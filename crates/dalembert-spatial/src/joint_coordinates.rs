@@ -14,7 +14,7 @@ use crate::forces::ForceData;
 use crate::frame::{NQ, NV};
 use crate::joints::JointKind;
 use crate::Model;
-use dalembert_system::tree::JointAxisLaw;
+use dalembert_system::tree::{JointAxisLaw, TreeCoordinate};
 use dalembert_system::tree::{self, KinematicTree, TreeBody, WorldFrame};
 use dalembert_system::{JointSpace, ModelError};
 use nalgebra::{Matrix3, Vector3};
@@ -264,11 +264,24 @@ impl Model {
         for (t, &(_, _, k)) in order.iter().enumerate() {
             tree_joint[k] = t;
         }
+        // A model's joint value turns sign on the tree's coordinate where the joint's first body
+        // is the child (the model measures the second body relative to the first).
+        let sign = |k: usize| {
+            if joints[k].body_j == Some(order[tree_joint[k]].0) {
+                1.0
+            } else {
+                -1.0
+            }
+        };
         let mut row = dalembert_system::SlipRow::default();
         let limited = self
             .limited_joints
             .iter()
-            .map(|&k| (tree_joint[k], self.joint_row_into(k, q, v, &mut row)))
+            .map(|&k| TreeCoordinate {
+                joint: tree_joint[k],
+                sign: sign(k),
+                offset: self.joint_row_into(k, q, v, &mut row),
+            })
             .collect();
         // Each law about or along a joint's axis on its joint's coordinate: the law's angle or
         // displacement here added,
@@ -289,15 +302,9 @@ impl Model {
                 _ => None,
             })
             .map(|((k, law), offset)| {
-                let t = tree_joint[k];
-                let sign = if joints[k].body_j == Some(order[t].0) {
-                    1.0
-                } else {
-                    -1.0
-                };
                 JointAxisLaw {
-                    joint: t,
-                    sign,
+                    joint: tree_joint[k],
+                    sign: sign(k),
                     offset,
                     law: law.clone(),
                 }

@@ -25,7 +25,7 @@ mod system;
 
 pub use articulated::Articulated;
 pub use recursion::WorldFrame;
-pub use system::{JointAxisLaw, JointSpace};
+pub use system::{JointAxisLaw, JointSpace, TreeCoordinate};
 
 use crate::ModelError;
 use algebra::{Inertia, M3, V3};

@@ -22,8 +22,8 @@ pub struct JointSpace {
     scratch: Mutex<Scratch>,
     /// Limits on some joints ([`JointSpace::with_limits`]).
     limits: Vec<JointLimit>,
-    /// Each limit's joint (tree index) and its coordinate at the tree's zero configuration.
-    limited: Vec<(usize, f64)>,
+    /// Each limit's coordinate on the tree ([`JointSpace::with_limits`]).
+    limited: Vec<TreeCoordinate>,
     /// Torque laws about joints' axes ([`JointSpace::with_axis_laws`]).
     laws: Vec<JointAxisLaw>,
 }
@@ -54,6 +54,19 @@ impl JointAxisLaw {
     fn deflection(&self, t: f64, q: &[f64]) -> f64 {
         self.offset + self.sign * q[self.joint] - self.law.free(t)
     }
+}
+
+/// A joint's coordinate as a model reads it, on a joint of the tree: `offset + sign q` and its
+/// rate `sign q̇` (a limit's or a friction element's). `sign` is −1 where the model measures the
+/// joint's parent moving relative to its child (its two bodies listed the other way round).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeCoordinate {
+    /// The joint (tree index).
+    pub joint: usize,
+    /// ±1.
+    pub sign: f64,
+    /// The model's coordinate at the tree's zero configuration (rad or m).
+    pub offset: f64,
 }
 
 #[derive(Debug)]
@@ -112,20 +125,16 @@ impl JointSpace {
         Ok(self)
     }
 
-    /// The system with limits on some of its joints (`docs/limits.md`): limit `k` is on joint
-    /// (tree index) `joints[k].0`, whose limit coordinate is `q + joints[k].1` (the coordinate at
-    /// the tree's zero configuration added). The joint coordinate is continuous, so a revolute
-    /// joint's limit is not read within a turn. An error names a limit whose joint the tree does
-    /// not have.
-    pub fn with_limits(mut self, mut limits: Vec<JointLimit>, joints: Vec<(usize, f64)>) -> Result<Self, ModelError> {
-        if let Some((l, _)) = limits
-            .iter()
-            .zip(&joints)
-            .find(|(_, (j, offset))| *j >= self.tree.len() || !offset.is_finite())
-        {
+    /// The system with limits on some of its joints (`docs/limits.md`): limit `k` reads the
+    /// coordinate `joints[k]` (the model's joint value at the tree's zero configuration, and its
+    /// sign on the tree's coordinate). The joint coordinate is continuous, so a revolute joint's
+    /// limit is not read within a turn. An error names a limit whose joint the tree does not
+    /// have.
+    pub fn with_limits(mut self, mut limits: Vec<JointLimit>, joints: Vec<TreeCoordinate>) -> Result<Self, ModelError> {
+        if let Some((l, _)) = limits.iter().zip(&joints).find(|(_, c)| !self.holds(c)) {
             return Err(ModelError::InvalidParameter {
                 element: format!("{} '{}'", l.element, l.name),
-                what: "its joint is not in the tree".into(),
+                what: "its joint is not in the tree (or its sign is not ±1)".into(),
             });
         }
         if limits.len() != joints.len() {
@@ -138,6 +147,11 @@ impl JointSpace {
         self.limits = limits;
         self.limited = joints;
         Ok(self)
+    }
+
+    /// True when `c` is on a joint of the tree, with a sign of ±1 and a finite offset.
+    fn holds(&self, c: &TreeCoordinate) -> bool {
+        c.joint < self.tree.len() && c.sign.abs() == 1.0 && c.offset.is_finite()
     }
 
     /// The tree.
@@ -236,14 +250,14 @@ impl MultibodySystem for JointSpace {
         self.limits.len()
     }
 
-    /// The joint's own coordinate: the row is a unit on it, with no bias.
+    /// The joint's own coordinate as the model reads it: the row is `±1` on it, with no bias.
     fn limit_row(&self, k: usize, _t: f64, q: &[f64], _v: &[f64], row: &mut SlipRow) -> f64 {
         row.clear();
-        let Some(&(joint, offset)) = self.limited.get(k) else {
+        let Some(c) = self.limited.get(k) else {
             return 0.0;
         };
-        row.push(joint, 1.0);
-        q[joint] + offset
+        row.push(c.joint, c.sign);
+        c.offset + c.sign * q[c.joint]
     }
 
     fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
