@@ -19,9 +19,10 @@ use dalembert_system::{DynamicsError, Formulation, ModelError};
 pub(crate) struct JointMap {
     jc: JointCoordinates,
     /// The chosen formulation on the model's absolute coordinates (for `q̈`, `λ`, residuals),
-    /// without the switching law: the run's limit forces are added to it.
+    /// without the switching law: the run's friction and limit forces are added to it.
     absolute: Box<dyn Formulation>,
-    /// The run's limit forces as one generalized force of the model, and one limit's row.
+    /// The run's friction and limit forces as one generalized force of the model, and one
+    /// element's row.
     extra: Vec<f64>,
     row: dalembert_system::SlipRow,
     frames: Vec<WorldFrame>,
@@ -93,18 +94,24 @@ impl JointMap {
     }
 
     /// Sample `s` of the joint-coordinate run in the model's coordinates: the state mapped, `q̈`,
-    /// `λ` and the residuals evaluated there by the model's formulation with the run's limit
-    /// forces added (each along its limit's row in the model's coordinates, whose rate is the
-    /// same joint rate, so the same force); the energy, the limit forces and the energy the
-    /// impacts took are the run's (the same mechanism's).
+    /// `λ` and the residuals evaluated there by the model's formulation with the run's friction
+    /// and limit forces added (each along its element's row in the model's coordinates, whose
+    /// rate is the same joint rate, so the same force); the energy, the friction and limit forces
+    /// and the energy the impacts took are the run's (the same mechanism's).
     pub fn sample<'a>(&'a mut self, s: &Sample<'a>) -> Result<Sample<'a>, DynamicsError> {
         self.map(s.q, s.qd);
-        let limited = s.limit.iter().any(|f| *f != 0.0);
+        let limited = s.limit.iter().chain(s.friction).any(|f| *f != 0.0);
         if limited {
             self.extra.iter_mut().for_each(|x| *x = 0.0);
             let model = self.absolute.system();
             for (k, f) in s.limit.iter().enumerate() {
                 model.limit_row(k, s.t, &self.q, &self.qd, &mut self.row);
+                for &(i, g) in self.row.entries() {
+                    self.extra[i] += g * f;
+                }
+            }
+            for (k, f) in s.friction.iter().enumerate() {
+                model.slip_row(k, s.t, &self.q, &self.qd, &mut self.row);
                 for &(i, g) in self.row.entries() {
                     self.extra[i] += g * f;
                 }
@@ -127,7 +134,7 @@ impl JointMap {
             qd: &self.qd,
             qdd: &self.qdd,
             lambda: &self.lambda,
-            friction: &[],
+            friction: s.friction,
             limit: s.limit,
             impact_loss: s.impact_loss,
             work: s.work,

@@ -732,8 +732,8 @@ fn runs_with_capsule_and_cam_contacts_allocate_nothing_per_step() {
 
 /// A run with joint friction (a pendulum with pin friction: the stick–slip law solved at every
 /// evaluation, its responses from the formulation's factorization, its swings reversing at
-/// events) allocates nothing per step, every formulation × every method that takes friction: a
-/// run through twice the reversals costs no more allocations.
+/// events) allocates nothing per step, every formulation × every method that takes friction, in
+/// absolute and joint coordinates: a run through twice the reversals costs no more allocations.
 #[test]
 fn a_run_with_joint_friction_allocates_nothing_per_step() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
@@ -743,7 +743,15 @@ fn a_run_with_joint_friction_allocates_nothing_per_step() {
         [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0]\n\
         friction = { coefficient = 0.2, radius = 0.05 }\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
-    let failures = switching_runs_growing(&[text], "reversal");
+    // The spatial rod in joint coordinates too: its load the force the joint transmits, from
+    // the tree's recursive Newton–Euler pass (`docs/friction.md`, "In joint coordinates").
+    let joint = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"rod\"\nmass = 1.0\ninertia = [0.001, 0.08333333333333333, 0.08333333333333333]\n\
+        position = [0.5, 0.0, 0.0]\n\
+        [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
+        axis = [0.0, -1.0, 0.0]\nfriction = { coefficient = 0.2, radius = 0.05 }\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\ncoordinates = \"joint\"\n";
+    let failures = switching_runs_growing(&[text, joint], "reversal");
     assert!(failures.is_empty(), "{failures:#?}");
 }
 

@@ -275,9 +275,11 @@ fn a_spatial_pendulum_with_pin_friction_follows_the_same_equation_of_motion() {
     // body-frame angular velocities) and its load (the pin's three force rows; the moment rows
     // hold the axis and do not load the friction), against the same independent integration.
     // The bar is the planar test's, 1e-8 rad.
+    // In joint coordinates too (the tree's one coordinate, its load the force the joint
+    // transmits by the recursive Newton–Euler pass): the same bar.
     let (mu, r, end) = (0.2, 0.05, 3.0);
     let reference = pendulum_reference(mu, r, end);
-    for formulation in FORMULATIONS {
+    for (formulation, coordinates) in FORMULATIONS.iter().flat_map(|f| [(f, "absolute"), (f, "joint")]) {
         for integrator in ["dopri5", "rk4"] {
             let text = format!(
                 "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
@@ -286,7 +288,7 @@ fn a_spatial_pendulum_with_pin_friction_follows_the_same_equation_of_motion() {
                  [[joints]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\nat = [0.0, 0.0, 0.0]\n\
                  axis = [0.0, -1.0, 0.0]\nfriction = {{ coefficient = {mu}, radius = {r} }}\n\
                  [simulation]\nend = {end}\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
-                 step = 1e-3\nrtol = 1e-11\natol = 1e-11\noutput_every = 0.01\n"
+                 step = 1e-3\nrtol = 1e-11\natol = 1e-11\noutput_every = 0.01\ncoordinates = \"{coordinates}\"\n"
             );
             let rec = Scene::from_toml(&text, "spatial pendulum")
                 .unwrap()
@@ -301,9 +303,9 @@ fn a_spatial_pendulum_with_pin_friction_follows_the_same_equation_of_motion() {
                 .fold(0.0, f64::max);
             assert!(
                 worst < 1e-8,
-                "{formulation}, {integrator}: {worst:.2e} rad from the reference"
+                "{formulation}, {integrator}, {coordinates}: {worst:.2e} rad from the reference"
             );
-            assert_eq!(stats.events, 4, "{formulation}, {integrator}: events");
+            assert_eq!(stats.events, 4, "{formulation}, {integrator}, {coordinates}: events");
         }
     }
 }
@@ -313,10 +315,12 @@ fn a_spatial_block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_stays_when_it_
     // A box on a spatial prismatic joint along a slope of α in the x–z plane: the normal load is
     // the guide's two lateral force rows (their norm, m g cos α), the closed forms of the planar
     // tests: s = ½ g (sin α − μ cos α) t² when tan α > μ, at rest when tan α < μ, within 1e-12 m.
+    // In joint coordinates too: the load is then the force across the axis that the guide
+    // transmits (the recursive Newton–Euler pass), the same bars.
     let alpha: f64 = 0.5;
     let (c, s) = (alpha.cos(), alpha.sin());
     for (mu, a) in [(0.3, G * (s - 0.3 * c)), (0.6, 0.0)] {
-        for formulation in FORMULATIONS {
+        for (formulation, coordinates) in FORMULATIONS.iter().flat_map(|f| [(f, "absolute"), (f, "joint")]) {
             for integrator in ["rk4", "dopri5"] {
                 let text = format!(
                     "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
@@ -324,7 +328,7 @@ fn a_spatial_block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_stays_when_it_
                      [[joints]]\nname = \"guide\"\ntype = \"prismatic\"\nbodies = [\"ground\", \"block\"]\n\
                      at = [0.0, 0.0, 1.0]\naxis = [{c}, 0.0, {}]\nfriction = {{ coefficient = {mu} }}\n\
                      [simulation]\nend = 2.0\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
-                     step = 1e-3\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.05\n",
+                     step = 1e-3\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.05\ncoordinates = \"{coordinates}\"\n",
                     -s
                 );
                 let table = run(&Scene::from_toml(&text, "spatial incline").unwrap());
@@ -333,7 +337,7 @@ fn a_spatial_block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_stays_when_it_
                     let error = (q[k] - 0.5 * a * t[k] * t[k]).abs();
                     assert!(
                         error < 1e-12,
-                        "μ = {mu}, {formulation}, {integrator}: t = {}: off by {error:.2e} m",
+                        "μ = {mu}, {formulation}, {integrator}, {coordinates}: t = {}: off by {error:.2e} m",
                         t[k]
                     );
                 }
@@ -346,7 +350,7 @@ fn a_spatial_block_on_an_incline_slides_at_g_sin_minus_mu_cos_and_stays_when_it_
                     let got = *table.column(&format!("guide.{axis}")).unwrap().last().unwrap();
                     assert!(
                         (got - want).abs() < 1e-9,
-                        "μ = {mu}, {formulation}, {integrator}: guide.{axis} = {got}, Newton's law {want}"
+                        "μ = {mu}, {formulation}, {integrator}, {coordinates}: guide.{axis} = {got}, Newton's law {want}"
                     );
                 }
             }

@@ -672,7 +672,10 @@ fn a_stop_on_a_joint_listed_child_first_is_met_in_joint_coordinates_as_in_absolu
     for formulation in FORMULATIONS {
         let absolute = reversed("absolute", formulation);
         let joint = reversed("joint", formulation);
-        let highest = column(&absolute, "pin.q").iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        let highest = column(&absolute, "pin.q")
+            .iter()
+            .cloned()
+            .fold(f64::NEG_INFINITY, f64::max);
         assert!(
             highest < 2.0 + 1e-9 && highest > 1.9,
             "{formulation}: the joint's highest value is {highest}, expected the stop at 2"

@@ -14,8 +14,8 @@ use crate::forces::ForceData;
 use crate::frame::{NQ, NV};
 use crate::joints::JointKind;
 use crate::Model;
-use dalembert_system::tree::{JointAxisLaw, TreeCoordinate};
 use dalembert_system::tree::{self, KinematicTree, TreeBody, WorldFrame};
+use dalembert_system::tree::{JointAxisLaw, TreeCoordinate};
 use dalembert_system::{JointSpace, ModelError};
 use nalgebra::{Matrix3, Vector3};
 use std::sync::Arc;
@@ -59,12 +59,6 @@ impl Model {
     pub fn joint_coordinates_at(&self, q: &[f64], v: &[f64]) -> Result<JointCoordinates, ModelError> {
         if let Some(d) = self.driver_names().next() {
             return Err(refuse(format!("driver '{d}'"), "joint coordinates take no drivers yet"));
-        }
-        if let Some(f) = self.frictions.first() {
-            return Err(refuse(
-                format!("joint '{}'", f.name),
-                "has friction, solved in absolute coordinates only (its load is the joint's reaction)",
-            ));
         }
         if let Some(c) = self.limits.get(self.limited_joints.len()) {
             return Err(refuse(
@@ -301,17 +295,27 @@ impl Model {
                 ForceData::AlongAxis(a) => Some((a.joint_law(), a.displacement_at(&frame))),
                 _ => None,
             })
-            .map(|((k, law), offset)| {
-                JointAxisLaw {
-                    joint: tree_joint[k],
-                    sign: sign(k),
-                    offset,
-                    law: law.clone(),
-                }
+            .map(|((k, law), offset)| JointAxisLaw {
+                joint: tree_joint[k],
+                sign: sign(k),
+                offset,
+                law: law.clone(),
+            })
+            .collect();
+        // Each friction element on its joint's coordinate (its slip rate the joint's rate as the
+        // model reads it); its load the force the joint transmits, from the tree.
+        let friction_joints = self
+            .friction_joints
+            .iter()
+            .map(|&k| TreeCoordinate {
+                joint: tree_joint[k],
+                sign: sign(k),
+                offset: 0.0,
             })
             .collect();
         let system = JointSpace::new(tree)
             .with_limits(self.limits.clone(), limited)?
+            .with_frictions(self.frictions.clone(), friction_joints)?
             .with_axis_laws(laws)?;
         Ok(JointCoordinates {
             system: Arc::new(system),

@@ -81,6 +81,13 @@ pub struct Frictional {
     past: Vec<f64>,
     latest: Vec<f64>,
     times: (f64, f64),
+    /// The system's multipliers `m`, and its reaction loads after them
+    /// ([`MultibodySystem::num_reaction_loads`]: a tree in joint coordinates): the multipliers
+    /// the friction law reads (`λ`, `Λ_k`) are the `m` extended by these.
+    m: usize,
+    loads: usize,
+    /// `λ` extended by the reaction loads, during an evaluation where there are any.
+    ext: Vec<f64>,
 }
 
 impl std::fmt::Debug for Frictional {
@@ -93,11 +100,13 @@ impl Frictional {
     /// `inner` with the friction of its system's joints; an error when the formulation cannot
     /// take an added force (a tree solved outright by the articulated-body algorithm).
     pub fn new(mut inner: Box<dyn Formulation>) -> Result<Self, DynamicsError> {
-        let (n, m, frictions, count) = {
+        let (n, m, loads, frictions, count) = {
             let s = inner.system();
             let f = s.frictions().len();
-            (s.layout().n_v(), s.num_equations(), f, f + s.limits().len())
+            let loads = if f > 0 { s.num_reaction_loads() } else { 0 };
+            (s.layout().n_v(), s.num_equations(), loads, f, f + s.limits().len())
         };
+        let ml = m + loads;
         if count > 0 && !inner.set_extra_force(None) {
             let s = inner.system();
             let joint = match s.frictions().first() {
@@ -116,12 +125,12 @@ impl Frictional {
         }
         Ok(Frictional {
             inner,
-            terms: (0..count).map(|_| FrictionTerms::new(n, m)).collect(),
-            work: FrictionWork::new(count, m),
+            terms: (0..count).map(|_| FrictionTerms::new(n, ml)).collect(),
+            work: FrictionWork::new(count, ml),
             forces: vec![0.0; count],
             dense: vec![0.0; n],
             qdd: vec![0.0; n],
-            lambda: vec![0.0; m],
+            lambda: vec![0.0; ml],
             event_qdd: vec![0.0; n],
             event_lambda: vec![0.0; m],
             started: false,
@@ -144,13 +153,16 @@ impl Frictional {
             impact_scratch: vec![0.0; count],
             stopping: Vec::with_capacity(count),
             base_qdd: vec![0.0; n],
-            base_lambda: vec![0.0; m],
+            base_lambda: vec![0.0; ml],
             slip_dv: vec![0.0; n],
-            slip_dlambda: vec![0.0; m],
+            slip_dlambda: vec![0.0; ml],
             mix: vec![(0.0, 0.0); count],
             past: vec![0.0; count],
             latest: vec![0.0; count],
             times: (f64::NAN, f64::NAN),
+            m,
+            loads,
+            ext: vec![0.0; ml],
         })
     }
 
@@ -195,28 +207,32 @@ impl Frictional {
         baumgarte: Option<Baumgarte>,
         (qdd0, lambda0): (&[f64], &[f64]),
     ) -> Result<(), DynamicsError> {
+        let m = self.m;
         self.terms[k].row.write_dense(&mut self.dense);
         let term = &mut self.terms[k];
-        if self
+        if !self
             .inner
-            .force_response(t, &self.dense, &mut term.dv, &mut term.dlambda)?
+            .force_response(t, &self.dense, &mut term.dv, &mut term.dlambda[..m])?
         {
-            return Ok(());
+            let scale = lambda0[..m].iter().fold(1.0f64, |a, l| a.max(l.abs()));
+            self.dense.iter_mut().for_each(|g| *g *= scale);
+            self.inner.set_extra_force(Some(&self.dense));
+            let solved = self
+                .inner
+                .accelerations(t, q, v, baumgarte, &mut self.qdd, &mut self.lambda[..m]);
+            self.inner.set_extra_force(None);
+            solved?;
+            let term = &mut self.terms[k];
+            for ((r, a), a0) in term.dv.iter_mut().zip(&self.qdd).zip(qdd0) {
+                *r = (a - a0) / scale;
+            }
+            for ((r, l), l0) in term.dlambda[..m].iter_mut().zip(&self.lambda).zip(&lambda0[..m]) {
+                *r = (l - l0) / scale;
+            }
         }
-        let scale = lambda0.iter().fold(1.0f64, |a, l| a.max(l.abs()));
-        self.dense.iter_mut().for_each(|g| *g *= scale);
-        self.inner.set_extra_force(Some(&self.dense));
-        let solved = self
-            .inner
-            .accelerations(t, q, v, baumgarte, &mut self.qdd, &mut self.lambda);
-        self.inner.set_extra_force(None);
-        solved?;
-        let term = &mut self.terms[k];
-        for ((r, a), a0) in term.dv.iter_mut().zip(&self.qdd).zip(qdd0) {
-            *r = (a - a0) / scale;
-        }
-        for ((r, l), l0) in term.dlambda.iter_mut().zip(&self.lambda).zip(lambda0) {
-            *r = (l - l0) / scale;
+        if self.loads > 0 {
+            let term = &mut self.terms[k];
+            (self.inner.system()).reaction_loads(t, q, v, &term.dv, true, &mut term.dlambda[m..]);
         }
         Ok(())
     }
@@ -277,7 +293,12 @@ impl Frictional {
     /// `lambda` (the base `v̇₀`, `λ₀` kept); true when found, false when the iteration gave up
     /// (it contracts by less than half, or the formulation cannot respond to a force outright):
     /// Newton's method on every element then decides, and names a Painlevé configuration.
-    fn slipping(&mut self, t: f64, v: &[f64], qdd: &mut [f64], lambda: &mut [f64]) -> Result<bool, DynamicsError> {
+    fn slipping(
+        &mut self,
+        (t, q, v): (f64, &[f64], &[f64]),
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<bool, DynamicsError> {
         for term in &mut self.terms[..self.frictions] {
             if matches!(term.mode, Mode::Slip(_)) {
                 term.given = true;
@@ -286,7 +307,7 @@ impl Frictional {
                 }
             }
         }
-        let found = self.iterate_slipping(t, v, qdd, lambda);
+        let found = self.iterate_slipping((t, q, v), qdd, lambda);
         for term in &mut self.terms[..self.frictions] {
             term.given = false;
         }
@@ -296,8 +317,7 @@ impl Frictional {
     /// The iteration of [`Frictional::slipping`], the slipping elements marked given.
     fn iterate_slipping(
         &mut self,
-        t: f64,
-        v: &[f64],
+        (t, q, v): (f64, &[f64], &[f64]),
         qdd: &mut [f64],
         lambda: &mut [f64],
     ) -> Result<bool, DynamicsError> {
@@ -312,9 +332,13 @@ impl Frictional {
             }
             if !self
                 .inner
-                .force_response(t, &self.dense, &mut self.slip_dv, &mut self.slip_dlambda)?
+                .force_response(t, &self.dense, &mut self.slip_dv, &mut self.slip_dlambda[..self.m])?
             {
                 return Ok(false);
+            }
+            if self.loads > 0 {
+                let (m, system) = (self.m, self.inner.system());
+                system.reaction_loads(t, q, v, &self.slip_dv, true, &mut self.slip_dlambda[m..]);
             }
             for ((a, a0), d) in qdd.iter_mut().zip(&self.base_qdd).zip(&self.slip_dv) {
                 *a = a0 + d;
@@ -727,6 +751,81 @@ impl Frictional {
                 .into(),
         })
     }
+
+    /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
+    /// reaction loads (`m + loads` of them).
+    fn evaluate(
+        &mut self,
+        (t, q, qd): (f64, &[f64], &[f64]),
+        baumgarte: Option<Baumgarte>,
+        qdd: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let m = self.m;
+        self.inner.accelerations(t, q, qd, baumgarte, qdd, &mut lambda[..m])?;
+        if self.loads > 0 {
+            (self.inner.system()).reaction_loads(t, q, qd, qdd, false, &mut lambda[m..]);
+        }
+        if self.terms.is_empty() {
+            return Ok(());
+        }
+        if !self.started {
+            self.start_events(t, q, qd);
+        }
+        for k in 0..self.terms.len() {
+            let s = self.fill_row(k, t, q, qd);
+            if self.refuse_impacts && k >= self.frictions {
+                let limit = &self.inner.system().limits()[k - self.frictions];
+                if self.terms[k].mode != Mode::Free || limit.free_event(s) <= LIMIT_SLACK {
+                    return Err(DynamicsError::Limit {
+                        time: t,
+                        element: format!("{} '{}'", limit.element, limit.name),
+                        what: format!(
+                            "reaches its limits [{}, {}] (at {s}), and {}",
+                            limit.lower, limit.upper, self.refusal
+                        ),
+                    });
+                }
+            }
+            // A slipping element's force is found by the iteration on them all (no response).
+            if !matches!(self.terms[k].mode, Mode::Free | Mode::Slip(_)) {
+                self.response(k, (t, q, qd), baumgarte, (qdd, lambda))?;
+            }
+        }
+        self.base_qdd.copy_from_slice(qdd);
+        self.base_lambda.copy_from_slice(lambda);
+        let slipping = self.terms[..self.frictions]
+            .iter()
+            .any(|term| matches!(term.mode, Mode::Slip(_)));
+        self.predict(t);
+        let found = slipping && self.slipping((t, q, qd), qdd, lambda)?;
+        if !found {
+            // Newton's method on every element: each slipping one's response too.
+            for k in 0..self.frictions {
+                if matches!(self.terms[k].mode, Mode::Slip(_)) {
+                    self.response_from_base(k, (t, q, qd), baumgarte)?;
+                }
+            }
+            qdd.copy_from_slice(&self.base_qdd);
+            lambda.copy_from_slice(&self.base_lambda);
+            solve_friction(
+                self.inner.system(),
+                t,
+                qd,
+                (qdd, lambda),
+                &mut self.terms,
+                &mut self.work,
+            )?;
+        }
+        for (f, k) in self.forces.iter_mut().zip(&self.terms) {
+            *f = k.force;
+        }
+        for term in &mut self.terms[..self.frictions] {
+            term.fresh = false;
+        }
+        self.record(t);
+        Ok(())
+    }
 }
 
 /// The most iterations of [`Frictional::slipping`] (each contracts by half or more).
@@ -787,7 +886,8 @@ impl Formulation for Frictional {
 
     /// `v̇₀`, `λ₀` without friction and limits; each element's response to a unit force along
     /// it (not a free limit's: it has no force); then (F1)–(F3) of `docs/friction.md` and
-    /// (L1)–(L2) of `docs/limits.md`.
+    /// (L1)–(L2) of `docs/limits.md`. Where the system has reaction loads (a tree in joint
+    /// coordinates), the friction reads them after the multipliers.
     fn accelerations(
         &mut self,
         t: f64,
@@ -797,66 +897,14 @@ impl Formulation for Frictional {
         qdd: &mut [f64],
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        self.inner.accelerations(t, q, qd, baumgarte, qdd, lambda)?;
-        if self.terms.is_empty() {
-            return Ok(());
+        if self.loads == 0 {
+            return self.evaluate((t, q, qd), baumgarte, qdd, lambda);
         }
-        if !self.started {
-            self.start_events(t, q, qd);
-        }
-        for k in 0..self.terms.len() {
-            let s = self.fill_row(k, t, q, qd);
-            if self.refuse_impacts && k >= self.frictions {
-                let limit = &self.inner.system().limits()[k - self.frictions];
-                if self.terms[k].mode != Mode::Free || limit.free_event(s) <= LIMIT_SLACK {
-                    return Err(DynamicsError::Limit {
-                        time: t,
-                        element: format!("{} '{}'", limit.element, limit.name),
-                        what: format!(
-                            "reaches its limits [{}, {}] (at {s}), and {}",
-                            limit.lower, limit.upper, self.refusal
-                        ),
-                    });
-                }
-            }
-            // A slipping element's force is found by the iteration on them all (no response).
-            if !matches!(self.terms[k].mode, Mode::Free | Mode::Slip(_)) {
-                self.response(k, (t, q, qd), baumgarte, (qdd, lambda))?;
-            }
-        }
-        self.base_qdd.copy_from_slice(qdd);
-        self.base_lambda.copy_from_slice(lambda);
-        let slipping = self.terms[..self.frictions]
-            .iter()
-            .any(|term| matches!(term.mode, Mode::Slip(_)));
-        self.predict(t);
-        let found = slipping && self.slipping(t, qd, qdd, lambda)?;
-        if !found {
-            // Newton's method on every element: each slipping one's response too.
-            for k in 0..self.frictions {
-                if matches!(self.terms[k].mode, Mode::Slip(_)) {
-                    self.response_from_base(k, (t, q, qd), baumgarte)?;
-                }
-            }
-            qdd.copy_from_slice(&self.base_qdd);
-            lambda.copy_from_slice(&self.base_lambda);
-            solve_friction(
-                self.inner.system(),
-                t,
-                qd,
-                (qdd, lambda),
-                &mut self.terms,
-                &mut self.work,
-            )?;
-        }
-        for (f, k) in self.forces.iter_mut().zip(&self.terms) {
-            *f = k.force;
-        }
-        for term in &mut self.terms[..self.frictions] {
-            term.fresh = false;
-        }
-        self.record(t);
-        Ok(())
+        let mut ext = std::mem::take(&mut self.ext);
+        let result = self.evaluate((t, q, qd), baumgarte, qdd, &mut ext);
+        lambda.copy_from_slice(&ext[..self.m]);
+        self.ext = ext;
+        result
     }
 
     fn residuals(&mut self, t: f64, q: &[f64], qd: &[f64], c: &mut [f64], cdot: &mut [f64]) {

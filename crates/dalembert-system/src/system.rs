@@ -100,6 +100,21 @@ pub trait MultibodySystem: Send + Sync + std::fmt::Debug {
         row.clear();
     }
 
+    /// The number of reaction loads the system computes from the motion, after its multipliers:
+    /// a friction element's [`crate::JointFriction::load_rows`] index the multipliers `λ`
+    /// extended by these ([`MultibodySystem::reaction_loads`]). A system whose joints are
+    /// equations has its reactions in `λ` and none here; a tree in joint coordinates has no
+    /// equations, and its joints' forces follow from the accelerations. Default 0.
+    fn num_reaction_loads(&self) -> usize {
+        0
+    }
+
+    /// The reaction loads at `(t, q, v)` under the accelerations `qdd` into `out` (length
+    /// [`MultibodySystem::num_reaction_loads`]); with `response`, only their part linear in
+    /// `qdd` (no velocities, no gravity, no applied force): the loads' change under a change
+    /// `qdd` of the accelerations. Allocates nothing. Default: nothing.
+    fn reaction_loads(&self, _t: f64, _q: &[f64], _v: &[f64], _qdd: &[f64], _response: bool, _out: &mut [f64]) {}
+
     /// The joint limits (`docs/limits.md`), in a fixed order. Default none.
     fn limits(&self) -> &[crate::JointLimit] {
         &[]

@@ -120,6 +120,46 @@ impl KinematicTree {
         }
     }
 
+    /// The force each joint transmits to its body's subtree at `(q, q̇)` under the
+    /// accelerations `q̈`, `[n; f]` in the body's axes at its origin (on the joint), into `p.f`:
+    /// the recursive Newton–Euler algorithm's backward pass (Featherstone table 5.1), gravity as
+    /// the base's acceleration `[0; −g]`. It holds the joint's reaction and its own force along
+    /// its motion subspace. With `response`, only the part linear in `q̈` (no velocities, no
+    /// gravity): the forces' change under a change `q̈` of the accelerations.
+    pub(crate) fn joint_wrenches(&self, q: &[f64], qd: &[f64], qdd: &[f64], response: bool, p: &mut Pass) {
+        let n = self.links.len();
+        if response {
+            for i in 0..n {
+                p.x[i] = self.joint_transform(i, q[i]);
+            }
+        } else {
+            self.velocities(q, qd, p);
+        }
+        let a0 = if response { Sv::ZERO } else { self.base_acceleration() };
+        for i in 0..n {
+            let a_parent = self.links[i].parent.map_or(a0, |k| p.f[k]);
+            let mut a = p.x[i].motion(&a_parent) + self.subspace(i).scale(qdd[i]);
+            if !response {
+                a += p.c[i];
+            }
+            p.f[i] = a;
+        }
+        for i in 0..n {
+            let inertia = &self.links[i].inertia;
+            let a = p.f[i];
+            p.f[i] = inertia.mul(&a);
+            if !response {
+                p.f[i] += p.v[i].cross_force(&inertia.mul(&p.v[i]));
+            }
+        }
+        for i in (0..n).rev() {
+            if let Some(k) = self.links[i].parent {
+                let back = p.x[i].force_back(&p.f[i]);
+                p.f[k] += back;
+            }
+        }
+    }
+
     /// The joint-space mass matrix `M(q)` into `m` (row-major, n × n) by the composite-rigid-body
     /// algorithm (Featherstone table 6.2).
     pub(crate) fn mass_matrix(&self, q: &[f64], p: &mut Pass, m: &mut [f64]) {

@@ -4,8 +4,8 @@
 use super::recursion::{Pass, WorldFrame};
 use super::{JointKind, KinematicTree};
 use crate::{
-    AxisLaw, BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef, JointLimit,
-    Layout, ModelError, MultibodySystem, SlipRow,
+    AxisLaw, BlockDiagonal, ConstraintPattern, ConstraintSet, ConstraintValues, DynamicsError, EquationRef,
+    JointFriction, JointLimit, Layout, ModelError, MultibodySystem, SlipRow,
 };
 use std::sync::Mutex;
 
@@ -26,6 +26,9 @@ pub struct JointSpace {
     limited: Vec<TreeCoordinate>,
     /// Torque laws about joints' axes ([`JointSpace::with_axis_laws`]).
     laws: Vec<JointAxisLaw>,
+    /// Friction in some joints ([`JointSpace::with_frictions`]), and each one's coordinate.
+    frictions: Vec<JointFriction>,
+    friction_joints: Vec<TreeCoordinate>,
 }
 
 /// An [`AxisLaw`] on a joint of the tree: the law's angle (a prismatic joint's displacement) is
@@ -105,6 +108,8 @@ impl JointSpace {
             limits: Vec::new(),
             limited: Vec::new(),
             laws: Vec::new(),
+            frictions: Vec::new(),
+            friction_joints: Vec::new(),
         }
     }
 
@@ -146,6 +151,42 @@ impl JointSpace {
         limits.iter_mut().for_each(|l| l.within_turn = false);
         self.limits = limits;
         self.limited = joints;
+        Ok(self)
+    }
+
+    /// The system with friction in some of its joints (`docs/friction.md`, "In joint
+    /// coordinates"): element `k` is `frictions[k]` (its coefficient, viscous and constant parts,
+    /// stick speed) on the coordinate `joints[k]`, whose rate is its slip rate. Its load is the
+    /// force the joint transmits ([`MultibodySystem::reaction_loads`]): the whole force for a
+    /// revolute joint (the pin's), the part across the axis for a prismatic one (the guide's),
+    /// as in absolute coordinates. An error names an element whose joint the tree does not
+    /// have, or one loaded by a contact (rigid contact is solved in absolute coordinates only).
+    pub fn with_frictions(
+        mut self,
+        mut frictions: Vec<JointFriction>,
+        joints: Vec<TreeCoordinate>,
+    ) -> Result<Self, ModelError> {
+        if frictions.len() != joints.len() {
+            return Err(ModelError::InvalidParameter {
+                element: "frictions".into(),
+                what: format!("{} friction elements for {} joints", frictions.len(), joints.len()),
+            });
+        }
+        for (f, c) in frictions.iter_mut().zip(&joints) {
+            let bad = |what: &str| ModelError::InvalidParameter {
+                element: format!("{} '{}'", f.element, f.name),
+                what: what.into(),
+            };
+            if !self.holds(c) {
+                return Err(bad("its joint is not in the tree (or its sign is not ±1)"));
+            }
+            if f.load_limit.is_some() {
+                return Err(bad("its load is a contact's, solved in absolute coordinates only"));
+            }
+            f.load_rows = (3 * c.joint..3 * c.joint + 3).collect();
+        }
+        self.frictions = frictions;
+        self.friction_joints = joints;
         Ok(self)
     }
 
@@ -245,9 +286,51 @@ impl MultibodySystem for JointSpace {
         &self.limits
     }
 
-    /// One per limit (the switching formulation writes them, [`crate::Frictional`]).
+    /// One per friction element, then one per limit (the switching formulation writes them,
+    /// [`crate::Frictional`]).
     fn num_events(&self) -> usize {
-        self.limits.len()
+        self.frictions.len() + self.limits.len()
+    }
+
+    fn frictions(&self) -> &[JointFriction] {
+        &self.frictions
+    }
+
+    /// The joint's own rate as the model reads it: `±1` on its coordinate, with no bias.
+    fn slip_row(&self, k: usize, _t: f64, _q: &[f64], _v: &[f64], row: &mut SlipRow) {
+        row.clear();
+        if let Some(c) = self.friction_joints.get(k) {
+            row.push(c.joint, c.sign);
+        }
+    }
+
+    /// Three per joint where some joint has friction (none otherwise): the force joint `i`
+    /// transmits to its body's subtree ([`KinematicTree`]'s recursive Newton–Euler pass), in
+    /// the body's axes, for a prismatic joint without its part along the axis; so its norm is
+    /// the load of the joint's friction ([`JointSpace::with_frictions`]). The joint's own force
+    /// along its axis (its friction, a torque law) is not in it: a revolute joint's is a moment,
+    /// a prismatic joint's is taken out.
+    fn num_reaction_loads(&self) -> usize {
+        if self.frictions.is_empty() {
+            0
+        } else {
+            3 * self.tree.len()
+        }
+    }
+
+    fn reaction_loads(&self, _t: f64, q: &[f64], v: &[f64], qdd: &[f64], response: bool, out: &mut [f64]) {
+        if out.len() != 3 * self.tree.len() {
+            return;
+        }
+        let mut s = self.scratch();
+        self.tree.joint_wrenches(q, v, qdd, response, &mut s.pass);
+        for (i, (load, link)) in out.chunks_exact_mut(3).zip(&self.tree.links).enumerate() {
+            let mut f = s.pass.f[i].v;
+            if link.kind == JointKind::Prismatic {
+                f -= link.axis * link.axis.dot(&f);
+            }
+            load.copy_from_slice(f.as_slice());
+        }
     }
 
     /// The joint's own coordinate as the model reads it: the row is `±1` on it, with no bias.
@@ -273,8 +356,12 @@ impl MultibodySystem for JointSpace {
         self.tree.potential(q, &s.frames) + laws
     }
 
+    /// As a model in absolute coordinates: not with friction, nor with limits (their impacts).
     fn is_conservative(&self) -> bool {
-        self.tree.is_conservative() && self.laws.iter().all(|l| l.law.is_conservative())
+        self.tree.is_conservative()
+            && self.laws.iter().all(|l| l.law.is_conservative())
+            && self.frictions.is_empty()
+            && self.limits.is_empty()
     }
 
     /// The joint dampers' `−c q̇²` (a joint's stiffness and constant effort are in its
