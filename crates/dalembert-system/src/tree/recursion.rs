@@ -125,15 +125,22 @@ impl KinematicTree {
     /// the recursive Newton–Euler algorithm's backward pass (Featherstone table 5.1), gravity as
     /// the base's acceleration `[0; −g]`. It holds the joint's reaction and its own force along
     /// its motion subspace. With `response`, only the part linear in `q̈` (no velocities, no
-    /// gravity): the forces' change under a change `q̈` of the accelerations.
-    pub(crate) fn joint_wrenches(&self, q: &[f64], qd: &[f64], qdd: &[f64], response: bool, p: &mut Pass) {
+    /// gravity): the forces' change under a change `q̈` of the accelerations; `p.x` is then
+    /// taken as it is where `transforms` says it holds `q`'s transforms already.
+    pub(crate) fn joint_wrenches(
+        &self,
+        (q, qd, qdd): (&[f64], &[f64], &[f64]),
+        response: bool,
+        transforms: bool,
+        p: &mut Pass,
+    ) {
         let n = self.links.len();
-        if response {
+        if !response {
+            self.velocities(q, qd, p);
+        } else if !transforms {
             for i in 0..n {
                 p.x[i] = self.joint_transform(i, q[i]);
             }
-        } else {
-            self.velocities(q, qd, p);
         }
         let a0 = if response { Sv::ZERO } else { self.base_acceleration() };
         for i in 0..n {

@@ -76,6 +76,11 @@ pub struct TreeCoordinate {
 struct Scratch {
     pass: Pass,
     frames: Vec<WorldFrame>,
+    /// The reaction loads' pass ([`MultibodySystem::reaction_loads`]) and the coordinates its
+    /// transforms are at (NaN before the first): the responses at a state reuse the transforms
+    /// of its evaluation.
+    loads: Pass,
+    loads_q: Vec<f64>,
 }
 
 const ANGLE: &[&str] = &["angle"];
@@ -101,6 +106,8 @@ impl JointSpace {
             scratch: Mutex::new(Scratch {
                 pass: Pass::new(n),
                 frames: vec![frame; n],
+                loads: Pass::new(n),
+                loads_q: vec![f64::NAN; n],
             }),
             tree,
             layout,
@@ -322,10 +329,16 @@ impl MultibodySystem for JointSpace {
         if out.len() != 3 * self.tree.len() {
             return;
         }
-        let mut s = self.scratch();
-        self.tree.joint_wrenches(q, v, qdd, response, &mut s.pass);
+        let mut guard = self.scratch();
+        let s = &mut *guard;
+        let transforms = s.loads_q == q;
+        self.tree
+            .joint_wrenches((q, v, qdd), response, transforms, &mut s.loads);
+        if !transforms {
+            s.loads_q.copy_from_slice(q);
+        }
         for (i, (load, link)) in out.chunks_exact_mut(3).zip(&self.tree.links).enumerate() {
-            let mut f = s.pass.f[i].v;
+            let mut f = s.loads.f[i].v;
             if link.kind == JointKind::Prismatic {
                 f -= link.axis * link.axis.dot(&f);
             }
