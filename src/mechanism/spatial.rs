@@ -77,7 +77,8 @@ impl ModelKind for Model {
             drivers: Model::driver_names(&self).count(),
             joint_values: vec![(0.0, 0.0); self.joint_value_names().count()],
             joint_accelerations: vec![0.0; self.joint_value_names().count()],
-            previous: vec![0.0; self.joint_value_names().count()],
+            previous: vec![(0.0, 0.0, 0.0); self.joint_value_names().count()],
+            previous_t: f64::NAN,
             contacts: vec![Default::default(); self.contact_names().count()],
             rigid: vec![Default::default(); self.rigid_contact_count()],
             model: self,
@@ -103,9 +104,11 @@ struct SpatialColumns {
     joint_values: Vec<(f64, f64)>,
     /// And of their accelerations (`<joint>.qdd`).
     joint_accelerations: Vec<f64>,
-    /// Each joint value of the previous row (0 before the first): angles are unwrapped against
-    /// it so that a joint's angle is continuous over a run.
-    previous: Vec<f64>,
+    /// Each joint value, rate and acceleration of the previous row (0 before the first), and its
+    /// time (NaN before the first): an angle is unwrapped against its value carried from there
+    /// ([`carried_angle`]), so that it is continuous over a run.
+    previous: Vec<(f64, f64, f64)>,
+    previous_t: f64,
     /// Scratch space of the compliant contacts' resultants.
     contacts: Vec<dalembert_system::ContactResultant<3>>,
     /// And of the rigid contacts' (their normal forces the run's limit forces).
@@ -168,13 +171,15 @@ impl ColumnWriter for SpatialColumns {
             .joint_accelerations_into(s.q, s.qd, s.qdd, &mut self.joint_accelerations);
         let kinds = self.model.joint_value_names().map(|(_, k)| k);
         let values = self.joint_values.iter_mut().zip(&self.joint_accelerations);
-        for (((value, rate), acceleration), (last, kind)) in values.zip(self.previous.iter_mut().zip(kinds)) {
+        let h = s.t - self.previous_t;
+        for (((value, rate), &acceleration), (last, kind)) in values.zip(self.previous.iter_mut().zip(kinds)) {
             if kind == JointValueKind::Angle {
-                *value = unwrap_angle(*last, *value);
+                *value = unwrap_angle(carried_angle(*last, (*rate, acceleration), h), *value);
             }
-            *last = *value;
-            row.extend([*value, *rate, *acceleration]);
+            *last = (*value, *rate, acceleration);
+            row.extend([*value, *rate, acceleration]);
         }
+        self.previous_t = s.t;
         self.model.reactions_into(s.t, s.q, s.lambda, &mut self.reactions);
         self.model
             .add_joint_forces_into(s.q, s.limit, s.friction, &mut self.reactions);
@@ -211,5 +216,20 @@ impl ColumnWriter for SpatialColumns {
 
     fn boxed_clone(&self) -> Box<dyn ColumnWriter> {
         Box::new(self.clone())
+    }
+}
+
+/// The angle of the last row `(θ₀, θ̇₀, θ̈₀)` carried `h` on, to the row whose rate and
+/// acceleration are `(θ̇₁, θ̈₁)`: `θ₀ + h (θ̇₀ + θ̇₁)/2 + h² (θ̈₀ − θ̈₁)/12`, the integral of the
+/// rate's cubic through both rows (`docs/scenes.md`, "Joint values"). The row's angle, read
+/// within a turn, is taken on the turn nearest it, so a joint turning more than half a turn
+/// between rows keeps counting. `θ₀` alone where there is no step forward (the first row, a run
+/// moved back) or a value is not finite.
+fn carried_angle((angle, rate, acceleration): (f64, f64, f64), (rate_1, acceleration_1): (f64, f64), h: f64) -> f64 {
+    let carried = angle + 0.5 * h * (rate + rate_1) + h * h / 12.0 * (acceleration - acceleration_1);
+    if h > 0.0 && carried.is_finite() {
+        carried
+    } else {
+        angle
     }
 }
