@@ -384,3 +384,80 @@ fn a_wedge_stuck_on_an_incline_stays_stuck_through_an_impact_on_it() {
         }
     }
 }
+
+#[test]
+fn a_block_sliding_on_a_floor_takes_its_friction_impulse_when_a_ball_strikes_it() {
+    // A block (2 kg, 0.4 × 0.2 m) sliding on a level floor, both lower corners in rigid contact
+    // with it, μ = 0.4; a ball (0.5 kg) dropped 0.2 m lands on its upper face above its middle,
+    // e = 0.5, at t₁ = √(2 × 0.2 / g). The ball leaves at e v, so its impulse is J = m (1 + e) v,
+    // all of it passed to the floor through the held corners; their friction impulses (L6),
+    // μ J while the block still slips, slow it by μ J / M at once. So the block's speed is
+    // u₀ − μ g t before t₁ and u₀ − μ g t − μ J / M after (1e-10 m/s, its position 1e-10 m),
+    // without turning (1e-12 rad). Where its speed at t₁ is less than μ J / M (0.1 m/s here
+    // against 0.297 m/s), the impact stops it and it stays (1e-10 m). Without the held corners'
+    // slipping friction in the impulse, the block kept its speed through the impact.
+    let (mu, e, drop, r, m) = (0.4f64, 0.5, 0.2, 0.05, 0.5);
+    let v = (2.0 * G * drop).sqrt();
+    let t1 = v / G;
+    let j = m * (1.0 + e) * v;
+    let kick = mu * j / M;
+    for speed_at_impact in [2.2, 0.1] {
+        let u0 = speed_at_impact + mu * G * t1;
+        // Centred under the ball at the impact.
+        let x0 = -(u0 * t1 - 0.5 * mu * G * t1 * t1);
+        for formulation in FORMULATIONS {
+            for integrator in METHODS {
+                let text = format!(
+                    "[scene]\ngravity = [0.0, {}]\n\
+                     [[bodies]]\nname = \"block\"\nmass = {M}\nshape = {{ rectangle = [0.4, 0.2] }}\nposition = [{x0}, 0.1]\n\
+                     velocity = [{u0}, 0.0]\n\
+                     [[bodies]]\nname = \"ball\"\nmass = {m}\nshape = {{ disk = {r} }}\nposition = [0.0, {}]\n\
+                     [[forces]]\nname = \"floor\"\ntype = \"polygon-line\"\nbody = \"block\"\n\
+                     vertices = [[{}, 0.0], [{}, 0.0], [{}, 0.2], [{}, 0.2]]\n\
+                     line = {{ point = [0.0, 0.0], normal = [0.0, 1.0] }}\nrigid = true\nfriction = {mu}\n\
+                     [[forces]]\nname = \"face\"\ntype = \"circle-line\"\nbody = \"ball\"\nradius = {r}\n\
+                     line = {{ body = \"block\", point = [{x0}, 0.2], normal = [0.0, 1.0] }}\nrigid = true\nrestitution = {e}\n\
+                     [simulation]\nend = {}\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                     step = 1e-3\nrtol = 1e-11\natol = 1e-11\noutput_every = 0.01\n",
+                    -G,
+                    0.2 + r + drop,
+                    x0 - 0.2,
+                    x0 + 0.2,
+                    x0 + 0.2,
+                    x0 - 0.2,
+                    // Before the ball's second landing.
+                    t1 + 0.15,
+                );
+                let scene = Scene::from_toml(&text, "struck block").unwrap();
+                let what = format!("{speed_at_impact} m/s {formulation} {integrator}");
+                let table = run(&scene);
+                let c = |n: &str| column(&table, n);
+                let (t, x, u, y, turn) = (c("t"), c("block.x"), c("block.vx"), c("block.y"), c("block.angle"));
+                for k in 0..t.len() {
+                    let (xe, ue) = if t[k] <= t1 {
+                        (x0 + u0 * t[k] - 0.5 * mu * G * t[k] * t[k], u0 - mu * G * t[k])
+                    } else if speed_at_impact > kick {
+                        let s = t[k] - t1;
+                        let after = speed_at_impact - kick;
+                        (after * s - 0.5 * mu * G * s * s, after - mu * G * s)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    assert!(
+                        (x[k] - xe).abs() < 1e-10 && (u[k] - ue).abs() < 1e-10,
+                        "{what}: at {} the block is at {} m, {} m/s, against {xe}, {ue}",
+                        t[k],
+                        x[k],
+                        u[k]
+                    );
+                    let moved = (y[k] - 0.1).abs().max(turn[k].abs());
+                    assert!(
+                        moved < 1e-12,
+                        "{what}: the block rose or turned by {moved:e} at {}",
+                        t[k]
+                    );
+                }
+            }
+        }
+    }
+}

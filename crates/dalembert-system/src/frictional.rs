@@ -48,8 +48,8 @@ pub struct Frictional {
     impact_p: Vec<f64>,
     /// Each element's rate after an impact, `w⁺` (read for the elements in `impact_set`).
     impact_target: Vec<f64>,
-    /// The contacts' friction elements in an impact (the striking contacts', and the held
-    /// contacts' that stick): `(friction element, its contact's limit element, σ μ)`, `σ μ` where
+    /// The contacts' friction elements in an impact (the striking contacts' and the held
+    /// contacts'): `(friction element, its contact's limit element, σ μ)`, `σ μ` where
     /// it slips through the impact (its row then `P_f + σ μ P_n = 0`), `None` where it sticks
     /// (its rate taken to zero).
     impact_frictions: Vec<(usize, usize, Option<f64>)>,
@@ -430,8 +430,9 @@ impl Frictional {
     /// together, by (L3) and (L5) of `docs/limits.md`: each limit moving towards its nearer bound
     /// strikes; its rate is to leave at `−e w⁻`, or at zero where that rebound is below its rest
     /// speed (it is then held on the bound). The limits already held stay on their bounds, and
-    /// the friction element of a striking contact, or of a held one that sticks, stops its slip
-    /// through the impact or, where that needs more than `μ P_n`, slips with `μ P_n` (L6). The impulses solve `G P = w⁺ − w⁻` with
+    /// the friction element of a striking or a held contact (at rest or sliding) stops its slip
+    /// through the impact or, where that needs more than `μ P_n`, slips with `μ P_n` (L6). The
+    /// impulses solve `G P = w⁺ − w⁻` with
     /// `G_ab = g_a·A_b` over them all; a limit whose impulse would pull takes none (a held one
     /// lets go), and they are found again (L9). So a block landing flat on two corners bounces
     /// as one body, whatever the order its corners are listed in. Nothing happens where no
@@ -466,15 +467,14 @@ impl Frictional {
                 self.impact_target[j] = 0.0;
             }
         }
-        // Each striking contact's friction, and each held contact's that sticks: a contact at
-        // rest on a floor takes its friction impulse too (L6), within `μ P_n` of its own impulse.
+        // Each striking contact's friction, and each held contact's: a contact resting or
+        // sliding on a floor takes its friction impulse too (L6), within `μ P_n` of its own
+        // impulse (its slip stopped where that suffices, else slowed by `μ P_n`).
         let limits = self.impact_set.len();
         for a in 0..limits {
             let contact = self.impact_set[a] - self.frictions;
             let friction = (self.inner.system().frictions().iter()).position(|f| f.load_limit == Some(contact));
-            if let Some(f) =
-                friction.filter(|&f| a < strikes || (self.terms[f].mode == Mode::Stick && self.terms[f].sticks))
-            {
+            if let Some(f) = friction.filter(|&f| a < strikes || self.terms[f].mode != Mode::Free) {
                 self.impact_set.push(f);
                 self.impact_target[f] = 0.0;
                 self.impact_frictions.push((f, self.impact_set[a], None));
@@ -611,7 +611,9 @@ impl Frictional {
 
     /// Each rigid contact's friction element's mode from its contact's: free while the contact
     /// is free; where the contact has just come to rest, stuck or slipping by its slip rate. A
-    /// stuck element whose rate an impulse took beyond its stick speed slips in its direction.
+    /// stuck element whose rate an impulse took beyond its stick speed slips in its direction; a
+    /// slipping one whose slip an impulse stopped (within its stick speed) sticks, and one whose
+    /// slip it turned slips the other way.
     fn follow_contacts(&mut self, t: f64, q: &[f64], v: &[f64]) {
         for k in 0..self.frictions {
             let system = self.inner.system();
@@ -625,10 +627,11 @@ impl Frictional {
             }
             let stick_speed = spec.stick_speed;
             let mode = self.terms[k].mode;
-            if matches!(mode, Mode::Free | Mode::Stick) {
+            if matches!(mode, Mode::Free | Mode::Stick | Mode::Slip(_)) {
                 system.slip_row(k, t, q, v, &mut self.terms[k].row);
                 let w = self.terms[k].row.dot(v);
-                if mode == Mode::Free || w.abs() > stick_speed {
+                let turned = matches!(mode, Mode::Slip(sign) if sign * w <= stick_speed);
+                if mode == Mode::Free || turned || (mode == Mode::Stick && w.abs() > stick_speed) {
                     self.terms[k].mode = Mode::at(w, stick_speed);
                     self.terms[k].fresh = self.terms[k].mode == Mode::Stick;
                 }
