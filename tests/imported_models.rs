@@ -202,10 +202,16 @@ fn rod_mjcf(extra: &str) -> String {
 /// A uniform rod of 1 kg and 1 m pinned at one end, released horizontal, in `file` (a URDF or an
 /// MJCF text) written to a temporary file named `name`.
 fn imported_rod(name: &str, file: &str) -> dalembert::output::Table {
+    imported_rod_in(name, file, dalembert::Coordinates::Absolute)
+}
+
+/// [`imported_rod`] integrated in `coordinates`.
+fn imported_rod_in(name: &str, file: &str, coordinates: dalembert::Coordinates) -> dalembert::output::Table {
     let path = std::env::temp_dir().join(format!("{}-{name}", std::process::id()));
     std::fs::write(&path, file).unwrap();
     let mut scene = Scene::from_path(&path).unwrap();
     std::fs::remove_file(&path).ok();
+    scene.settings.coordinates = coordinates;
     scene.settings.end = 1.5;
     scene.settings.method = dalembert::integrators::Method::dopri5(1e-11, 1e-11);
     let rec = scene.record(&std::sync::atomic::AtomicBool::new(false));
@@ -253,12 +259,19 @@ fn urdf_and_mjcf_joint_friction_is_a_constant_friction_torque() {
     // angle stays 0 within 1e-12 rad, the friction column is the weight's torque within 1e-9
     // N·m); one of 4 N·m lets it fall, and at 1.5 s its energy has fallen by the friction's
     // work, 4 N·m times the angle it turned through (the balance E − W, dopri5 at 1e-11: 1e-8 J).
+    // In absolute and in joint coordinates alike.
     let (m, g, half) = (1.0, 9.81, 0.5);
-    for f0 in [5.0, 4.0] {
+    for (f0, coordinates) in [5.0, 4.0].into_iter().flat_map(|f0| {
+        [
+            (f0, dalembert::Coordinates::Absolute),
+            (f0, dalembert::Coordinates::Joint),
+        ]
+    }) {
         let urdf = rod_urdf("continuous", &format!(r#"<dynamics friction="{f0}"/>"#));
         let mjcf = rod_mjcf(&format!(r#"frictionloss="{f0}""#));
-        for (name, file) in [("rod-friction.urdf", urdf), ("rod-friction.xml", mjcf)] {
-            let table = imported_rod(name, &file);
+        for (file_name, file) in [("rod-friction.urdf", urdf), ("rod-friction.xml", mjcf)] {
+            let table = imported_rod_in(file_name, &file, coordinates);
+            let name = format!("{file_name} in {coordinates:?} coordinates");
             let angle = table.column("pin.q").unwrap();
             let friction = table.column("pin.friction").unwrap();
             let energy = table.column("energy").unwrap();
