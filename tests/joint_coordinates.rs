@@ -649,3 +649,85 @@ fn a_state_set_in_joint_coordinates_moves_the_tree() {
     let stats = joint.statistics();
     assert_eq!(stats.steps, steps_before + 500, "300 steps of 1 ms, then 500");
 }
+
+#[test]
+fn the_loads_a_tree_computes_are_the_norms_of_the_joints_multipliers() {
+    // Joint friction's load in joint coordinates is the force each joint transmits, from the
+    // tree's recursive Newton–Euler pass (`JointSpace::reaction_loads`, (F6) of
+    // `docs/friction.md`); in absolute coordinates the norm of the joint's own multipliers (a
+    // pin's three force rows, a guide's two lateral rows). On the branched tree (tilted axes,
+    // rotated frames, full inertia tensors, a prismatic joint), at random joint states with
+    // velocities and with a torque or force along one joint (a friction's, which must not load
+    // it), each joint's load by both, within 1e-10 of the largest load (round-off of forces of
+    // about 30 N).
+    let specs = |model: &Model| {
+        model
+            .joint_names()
+            .map(|j| dalembert::spatial::friction::SpatialFriction {
+                joint: j.into(),
+                coefficient: 1.0,
+                radius: 1.0,
+                viscous: 0.0,
+                constant: 0.0,
+                stick_speed: 1e-6,
+            })
+            .collect::<Vec<_>>()
+    };
+    let plain = branched();
+    let model = Arc::new((*plain).clone().with_frictions(specs(&plain)).expect("frictions"));
+    let jc = model.joint_coordinates().expect("a tree");
+    let space = jc.system();
+    let (n, bodies) = (space.tree().len(), model.bodies().len());
+    let m = model.num_equations();
+    let loads_len = space.num_reaction_loads();
+    assert_eq!(loads_len, 3 * n);
+    let mut worst = 0.0f64;
+    for seed in 0..6u64 {
+        let mut rng = Rng::new(300 + seed);
+        let q: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -1.5, 1.5)).collect();
+        let qd: Vec<f64> = (0..n).map(|_| uniform(&mut rng, -3.0, 3.0)).collect();
+        let (qa, va, _) = mapped(&jc, bodies, &q, &qd);
+        // A force of 7 along friction element `pushed` (none for the first seeds).
+        let pushed = (seed >= 2).then_some(seed as usize % n);
+        let mut row = dalembert::system::SlipRow::default();
+        let (mut extra_joint, mut extra_model) = (vec![0.0; n], vec![0.0; va.len()]);
+        if let Some(k) = pushed {
+            space.slip_row(k, 0.0, &q, &qd, &mut row);
+            row.entries().iter().for_each(|&(i, g)| extra_joint[i] += 7.0 * g);
+            model.slip_row(k, 0.0, &qa, &va, &mut row);
+            row.entries().iter().for_each(|&(i, g)| extra_model[i] += 7.0 * g);
+        }
+        // Joint coordinates: the articulated-body accelerations with the force, then the loads.
+        let space_dyn: Arc<dyn MultibodySystem> = space.clone();
+        let mut tree = Augmented::with_defaults(space_dyn).expect("augmented on the tree");
+        tree.set_extra_force(Some(&extra_joint));
+        let mut qdd = vec![0.0; n];
+        tree.accelerations(0.0, &q, &qd, None, &mut qdd, &mut [])
+            .expect("evaluation");
+        let mut loads = vec![0.0; loads_len];
+        space.reaction_loads(0.0, &q, &qd, &qdd, false, &mut loads);
+        // Absolute coordinates: the multipliers with the same force.
+        let model_dyn: Arc<dyn MultibodySystem> = model.clone();
+        let mut absolute = Augmented::with_defaults(model_dyn).expect("augmented");
+        absolute.set_extra_force(Some(&extra_model));
+        let (mut vdot, mut lambda) = (vec![0.0; va.len()], vec![0.0; m]);
+        absolute
+            .accelerations(0.0, &qa, &va, None, &mut vdot, &mut lambda)
+            .expect("evaluation");
+        let norm = |rows: &[usize], x: &[f64]| rows.iter().map(|&r| x[r] * x[r]).sum::<f64>().sqrt();
+        let pairs: Vec<(f64, f64)> = (model.friction_specs().iter())
+            .zip(space.frictions())
+            .map(|(a, b)| (norm(&a.load_rows, &lambda), norm(&b.load_rows, &loads)))
+            .collect();
+        let scale = pairs.iter().fold(0.0f64, |s, p| s.max(p.0));
+        assert!(scale > 1.0, "seed {seed}: loads of {scale} N");
+        for (k, (a, b)) in pairs.iter().enumerate() {
+            worst = worst.max((a - b).abs() / scale);
+            assert!(
+                (a - b).abs() < 1e-10 * scale,
+                "seed {seed}, joint {k} (pushed {pushed:?}): multipliers {a}, tree {b}"
+            );
+        }
+    }
+    println!("largest load difference, relative: {worst:e}");
+}
