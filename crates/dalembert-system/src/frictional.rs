@@ -36,6 +36,11 @@ pub struct Frictional {
     /// Each limit's coordinate at its last evaluation: a coordinate measured within a turn
     /// ([`crate::JointLimit::within_turn`]) is followed from it across half turns.
     coordinates: Vec<f64>,
+    /// Per limit, what its event function is raised by since it last left a bound (rebounding
+    /// from an impact, or let go): the function there, zero within round-off, may be just below
+    /// zero, and a return within one step would then show no change of sign
+    /// ([`Frictional::leave_bound`]).
+    raised: Vec<f64>,
     /// True when an evaluation past a free limit's bound is an error
     /// ([`Frictional::refusing_impacts`]).
     refuse_impacts: bool,
@@ -138,6 +143,7 @@ impl Frictional {
             frictions,
             impact_loss: 0.0,
             coordinates: vec![0.0; count - frictions],
+            raised: vec![0.0; count - frictions],
             refuse_impacts: false,
             refusal: String::new(),
             impact_set: Vec::with_capacity(count),
@@ -427,6 +433,19 @@ impl Frictional {
         }
     }
 
+    /// Limit element `k` leaves its bound at `(t, q, v)` (it rebounds, or is let go): its event
+    /// function is raised by what it lacks of [`LIMIT_SLACK`] there, so that it starts above zero
+    /// and a return to the bound within the next step changes its sign. The function at the
+    /// located event is zero to the location's round-off (measured −7e-15 to +4e-15 rad on a
+    /// chain with pin friction), so the bound moves by as little; raised by at most
+    /// [`STRIKE_TOGETHER`].
+    fn leave_bound(&mut self, k: usize, t: f64, q: &[f64], v: &[f64]) {
+        let l = k - self.frictions;
+        let s = self.fill_row(k, t, q, v);
+        let below = LIMIT_SLACK - self.inner.system().limits()[l].free_event(s);
+        self.raised[l] = below.clamp(0.0, STRIKE_TOGETHER);
+    }
+
     /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
     /// reaction loads (`m + loads` of them).
     fn evaluate(
@@ -645,6 +664,8 @@ impl Formulation for Frictional {
             };
             self.coordinates[k] = s;
             self.times = (f64::NAN, f64::NAN);
+            // A start at a bound to round-off, as where it leaves one ([`Frictional::leave_bound`]).
+            self.raised[k] = (LIMIT_SLACK - limit.free_event(s)).clamp(0.0, STRIKE_TOGETHER);
             let sign = limit.nearer_bound(s);
             let at_bound = limit.free_event(s) <= 2.0 * LIMIT_SLACK;
             // Not moving away (to round-off: a cam's surface slides along the follower).
@@ -698,7 +719,7 @@ impl Formulation for Frictional {
                 Mode::Held(sign) => *slot = sign * term.hold + self.work.adhesion,
                 _ => {
                     let raw = system.limit_row(k, t, q, v, &mut term.row);
-                    *slot = limit.free_event(follow(limit, &mut self.coordinates[k], raw));
+                    *slot = limit.free_event(follow(limit, &mut self.coordinates[k], raw)) + self.raised[k];
                 }
             }
         }
@@ -753,6 +774,7 @@ impl Formulation for Frictional {
                     // Its force reached zero: the joint leaves the bound (a contact's friction
                     // with it).
                     self.terms[k].mode = Mode::Free;
+                    self.leave_bound(k, t, q, v);
                     self.follow_contacts(t, q, v);
                     changed = true;
                     continue;
@@ -781,6 +803,13 @@ impl Formulation for Frictional {
                 }
             }
             let struck = self.impact(t, q, v);
+            for i in 0..self.striking.len() {
+                let k = self.striking[i];
+                if self.terms[k].mode == Mode::Free {
+                    // It rebounds.
+                    self.leave_bound(k, t, q, v);
+                }
+            }
             self.striking.clear();
             changed |= struck?;
         }
