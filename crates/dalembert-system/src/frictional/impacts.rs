@@ -2,9 +2,9 @@
 //! contacts' friction ((L3), (L5), (L6), (L9) of `docs/limits.md`), and the slips that stop at an
 //! event (`docs/friction.md`, "Events"), each one set of impulses solved together.
 
-use super::Frictional;
+use super::{Frictional, STRIKE_TOGETHER};
 use crate::friction::{least_norm, solve_dense, Mode, RELEASE_SHARE};
-use crate::limit::{impact_impulse, impact_loss};
+use crate::limit::{impact_impulse, impact_loss, LIMIT_SLACK};
 use crate::{DynamicsError, Formulation};
 
 impl Frictional {
@@ -43,6 +43,24 @@ impl Frictional {
         if strikes == 0 {
             return Ok(false);
         }
+        // The others at their bounds (within `STRIKE_TOGETHER`), not moving towards them: held
+        // through the impact, their rates kept at zero where the strikes' impulses would drive
+        // them in (their impulses then push); the pull check lets go of the others (L9). Without
+        // it two stops that a chain rests near strike one after the other ever faster (each
+        // strike drives the other in), until a crossing falls within the location's round-off
+        // and is missed.
+        for i in 0..self.striking.len() {
+            let k = self.striking[i];
+            if self.strike[k].is_none() {
+                let s = self.fill_row(k, t, q, v);
+                let limit = &self.inner.system().limits()[k - self.frictions];
+                if limit.free_event(s) <= LIMIT_SLACK + STRIKE_TOGETHER {
+                    self.impact_target[k] = 0.0;
+                    self.strike[k] = Some((limit.nearer_bound(s), true));
+                    self.impact_set.push(k);
+                }
+            }
+        }
         for j in self.frictions..self.terms.len() {
             if matches!(self.terms[j].mode, Mode::Held(_)) && self.strike[j].is_none() {
                 self.impact_set.push(j);
@@ -56,7 +74,8 @@ impl Frictional {
         for a in 0..limits {
             let contact = self.impact_set[a] - self.frictions;
             let friction = (self.inner.system().frictions().iter()).position(|f| f.load_limit == Some(contact));
-            if let Some(f) = friction.filter(|&f| a < strikes || self.terms[f].mode != Mode::Free) {
+            let pressed = self.strike[self.impact_set[a]].is_some();
+            if let Some(f) = friction.filter(|&f| pressed || self.terms[f].mode != Mode::Free) {
                 self.impact_set.push(f);
                 self.impact_target[f] = 0.0;
                 self.impact_frictions.push((f, self.impact_set[a], None));
@@ -84,6 +103,7 @@ impl Frictional {
             }
             if std::mem::take(&mut self.released[k]) && struck {
                 self.terms[k].mode = Mode::Free;
+                self.leave_bound(k, t, q, v);
             }
         }
         outcome?;
