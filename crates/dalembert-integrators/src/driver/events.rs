@@ -18,6 +18,12 @@ use dalembert_system::{Baumgarte, DynamicsError, Formulation};
 /// Bisection steps on `θ ∈ [0, 1]`: `2⁻⁴⁰ ≈ 10⁻¹²` of the step.
 const BISECTIONS: usize = 40;
 
+/// How far from zero, in multiples of its [`Formulation::event_tolerance`], the function a step
+/// was shortened for may end and still count as crossed ([`Events::settle`]): the round-off of a
+/// step taken to the located fraction (a stop's function there is within 10⁻¹³ rad of zero, a
+/// slip's rate within a hundredth of its margin), far below an interpolant's error.
+const AIMED_SLACK: f64 = 1e3;
+
 /// The event functions of a run and the state at the start of the step in progress.
 #[derive(Default)]
 pub(super) struct Events {
@@ -250,7 +256,13 @@ impl Events {
         let (q, v) = y.split_at_mut(n_q);
         f.events(t, q, v, &mut self.g);
         for (i, ((c, &a), &b)) in self.crossed.iter_mut().zip(&self.g0).zip(&self.g).enumerate() {
-            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0) || self.aimed == Some(i);
+            // The aimed function counts where the step fell short of its zero by round-off
+            // (within `AIMED_SLACK` times its tolerance), not where it stopped short of it: an
+            // interpolant off by more (a law that changed inside the step it came from) must
+            // not put the event where the function is not zero (a stop struck 6.7e-6 rad before
+            // it was reached); the next step finds the crossing.
+            let aimed = self.aimed == Some(i) && b.abs() <= AIMED_SLACK * f.event_tolerance(i);
+            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0) || aimed;
         }
         if !self.crossed.iter().any(|&c| c) {
             return Ok(false);
