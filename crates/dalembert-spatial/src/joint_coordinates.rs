@@ -296,9 +296,11 @@ impl Model {
                 _ => None,
             })
             .map(|((k, law), offset)| JointAxisLaw {
-                joint: tree_joint[k],
-                sign: sign(k),
-                offset,
+                coordinate: TreeCoordinate {
+                    joint: tree_joint[k],
+                    sign: sign(k),
+                    offset,
+                },
                 law: law.clone(),
             })
             .collect();

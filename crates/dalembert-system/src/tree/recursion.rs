@@ -97,31 +97,17 @@ impl KinematicTree {
     }
 
     /// `out = τ(q, q̇) − (C(q, q̇) q̇ + g(q))`: joint forces minus the recursive Newton–Euler
-    /// inverse dynamics at `q̈ = 0` (Featherstone table 5.1): the seam's `Q`.
+    /// inverse dynamics at `q̈ = 0` (Featherstone table 5.1): the seam's `Q`. Each joint's part
+    /// of the force it transmits at `q̈ = 0` ([`KinematicTree::joint_wrenches`]).
     pub(crate) fn bias_forces(&self, q: &[f64], qd: &[f64], p: &mut Pass, out: &mut [f64]) {
-        self.velocities(q, qd, p);
-        let a0 = self.base_acceleration();
-        for i in 0..self.links.len() {
-            let a_parent = self.links[i].parent.map_or(a0, |k| p.f[k]);
-            // p.f holds accelerations on the way out, then forces on the way back.
-            p.f[i] = p.x[i].motion(&a_parent) + p.c[i];
-        }
-        for i in 0..self.links.len() {
-            let inertia = &self.links[i].inertia;
-            let a = p.f[i];
-            p.f[i] = inertia.mul(&a) + p.v[i].cross_force(&inertia.mul(&p.v[i]));
-        }
-        for i in (0..self.links.len()).rev() {
-            out[i] = self.joint_force(i, q[i], qd[i]) - self.subspace(i).dot(&p.f[i]);
-            if let Some(k) = self.links[i].parent {
-                let back = p.x[i].force_back(&p.f[i]);
-                p.f[k] += back;
-            }
+        self.joint_wrenches((q, qd, None), false, false, p);
+        for (i, o) in out.iter_mut().enumerate().take(self.links.len()) {
+            *o = self.joint_force(i, q[i], qd[i]) - self.subspace(i).dot(&p.f[i]);
         }
     }
 
     /// The force each joint transmits to its body's subtree at `(q, q̇)` under the
-    /// accelerations `q̈`, `[n; f]` in the body's axes at its origin (on the joint), into `p.f`:
+    /// accelerations `q̈` (`None`: zero), `[n; f]` in the body's axes at its origin (on the joint), into `p.f`:
     /// the recursive Newton–Euler algorithm's backward pass (Featherstone table 5.1), gravity as
     /// the base's acceleration `[0; −g]`. It holds the joint's reaction and its own force along
     /// its motion subspace. With `response`, only the part linear in `q̈` (no velocities, no
@@ -129,7 +115,7 @@ impl KinematicTree {
     /// taken as it is where `transforms` says it holds `q`'s transforms already.
     pub(crate) fn joint_wrenches(
         &self,
-        (q, qd, qdd): (&[f64], &[f64], &[f64]),
+        (q, qd, qdd): (&[f64], &[f64], Option<&[f64]>),
         response: bool,
         transforms: bool,
         p: &mut Pass,
@@ -145,7 +131,10 @@ impl KinematicTree {
         let a0 = if response { Sv::ZERO } else { self.base_acceleration() };
         for i in 0..n {
             let a_parent = self.links[i].parent.map_or(a0, |k| p.f[k]);
-            let mut a = p.x[i].motion(&a_parent) + self.subspace(i).scale(qdd[i]);
+            let mut a = p.x[i].motion(&a_parent);
+            if let Some(qdd) = qdd {
+                a += self.subspace(i).scale(qdd[i]);
+            }
             if !response {
                 a += p.c[i];
             }

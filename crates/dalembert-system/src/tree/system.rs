@@ -37,12 +37,9 @@ pub struct JointSpace {
 /// law measures the joint's parent turning relative to its child.
 #[derive(Debug, Clone)]
 pub struct JointAxisLaw {
-    /// The joint (tree index).
-    pub joint: usize,
-    /// ±1.
-    pub sign: f64,
-    /// The law's angle at the tree's zero configuration (rad).
-    pub offset: f64,
+    /// The law's angle on the tree: its joint, sign, and its angle at the tree's zero
+    /// configuration (rad).
+    pub coordinate: TreeCoordinate,
     /// The law.
     pub law: AxisLaw,
 }
@@ -51,11 +48,11 @@ impl JointAxisLaw {
     /// The deflection `θ − θ₀ − θ*(t)` and the rate at joint coordinates `q`, `q̇` (the angle is
     /// the coordinate: no turn is lost).
     fn state(&self, t: f64, q: &[f64], v: &[f64]) -> (f64, f64) {
-        (self.deflection(t, q), self.sign * v[self.joint])
+        (self.deflection(t, q), self.coordinate.rate(v))
     }
 
     fn deflection(&self, t: f64, q: &[f64]) -> f64 {
-        self.offset + self.sign * q[self.joint] - self.law.free(t)
+        self.coordinate.value(q) - self.law.free(t)
     }
 }
 
@@ -70,6 +67,24 @@ pub struct TreeCoordinate {
     pub sign: f64,
     /// The model's coordinate at the tree's zero configuration (rad or m).
     pub offset: f64,
+}
+
+impl TreeCoordinate {
+    /// The model's coordinate at joint coordinates `q`: `offset + sign q`.
+    fn value(&self, q: &[f64]) -> f64 {
+        self.offset + self.sign * q[self.joint]
+    }
+
+    /// Its rate at joint rates `q̇`.
+    fn rate(&self, v: &[f64]) -> f64 {
+        self.sign * v[self.joint]
+    }
+
+    /// Its row (`sign` on the joint's rate, no bias) into `row`.
+    fn row_into(&self, row: &mut SlipRow) {
+        row.clear();
+        row.push(self.joint, self.sign);
+    }
 }
 
 #[derive(Debug)]
@@ -126,9 +141,9 @@ impl JointSpace {
     /// sign is not ±1.
     pub fn with_axis_laws(mut self, laws: Vec<JointAxisLaw>) -> Result<Self, ModelError> {
         for l in &laws {
-            if l.joint >= self.tree.len() || l.sign.abs() != 1.0 || !l.offset.is_finite() {
+            if !self.holds(&l.coordinate) {
                 return Err(ModelError::InvalidParameter {
-                    element: format!("axis law on joint {}", l.joint),
+                    element: format!("axis law on joint {}", l.coordinate.joint),
                     what: "needs a joint of the tree, a sign of ±1 and a finite offset".into(),
                 });
             }
@@ -265,7 +280,7 @@ impl MultibodySystem for JointSpace {
     fn add_joint_forces(&self, t: f64, q: &[f64], v: &[f64], out: &mut [f64]) {
         for l in &self.laws {
             let (deflection, rate) = l.state(t, q, v);
-            out[l.joint] += l.sign * l.law.torque(t, deflection, rate).0;
+            out[l.coordinate.joint] += l.coordinate.sign * l.law.torque(t, deflection, rate).0;
         }
     }
 
@@ -305,9 +320,9 @@ impl MultibodySystem for JointSpace {
 
     /// The joint's own rate as the model reads it: `±1` on its coordinate, with no bias.
     fn slip_row(&self, k: usize, _t: f64, _q: &[f64], _v: &[f64], row: &mut SlipRow) {
-        row.clear();
-        if let Some(c) = self.friction_joints.get(k) {
-            row.push(c.joint, c.sign);
+        match self.friction_joints.get(k) {
+            Some(c) => c.row_into(row),
+            None => row.clear(),
         }
     }
 
@@ -333,7 +348,7 @@ impl MultibodySystem for JointSpace {
         let s = &mut *guard;
         let transforms = s.loads_q == q;
         self.tree
-            .joint_wrenches((q, v, qdd), response, transforms, &mut s.loads);
+            .joint_wrenches((q, v, Some(qdd)), response, transforms, &mut s.loads);
         if !transforms {
             s.loads_q.copy_from_slice(q);
         }
@@ -348,12 +363,12 @@ impl MultibodySystem for JointSpace {
 
     /// The joint's own coordinate as the model reads it: the row is `±1` on it, with no bias.
     fn limit_row(&self, k: usize, _t: f64, q: &[f64], _v: &[f64], row: &mut SlipRow) -> f64 {
-        row.clear();
         let Some(c) = self.limited.get(k) else {
+            row.clear();
             return 0.0;
         };
-        row.push(c.joint, c.sign);
-        c.offset + c.sign * q[c.joint]
+        c.row_into(row);
+        c.value(q)
     }
 
     fn kinetic_energy(&self, q: &[f64], v: &[f64]) -> f64 {
