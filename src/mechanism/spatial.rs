@@ -138,11 +138,12 @@ impl ColumnWriter for SpatialColumns {
         // Joint limits: the stop's torque or force on the second body along the joint
         // (`docs/limits.md`); joint friction: its torque or force likewise (`docs/friction.md`).
         // Both are in the joint's reaction columns too.
+        // A rigid contact's friction cone: one column, the size of its force in the tangent
+        // plane (the force itself is in the contact's fx, fy, fz).
         names.extend(
-            self.model
-                .friction_specs()
-                .iter()
-                .map(|f| format!("{}.friction", f.name)),
+            (self.model.friction_specs().iter().enumerate())
+                .filter(|(k, f)| f.cone.is_none_or(|p| p > *k))
+                .map(|(_, f)| format!("{}.friction", f.name)),
         );
         // Rigid contacts: the gap (m), the normal force on the body (N), that force (global) and
         // the contact point, as a compliant contact's columns.
@@ -189,13 +190,16 @@ impl ColumnWriter for SpatialColumns {
         let first = s.lambda.len() - self.drivers;
         row.extend(s.lambda[first..].iter().map(|l| -l));
         row.extend(self.model.coupling_efforts(s.lambda));
-        let frictions = self.model.friction_specs().len();
-        if s.friction.len() == frictions {
-            row.extend_from_slice(s.friction);
-        } else {
-            row.extend(std::iter::repeat_n(0.0, frictions));
+        let specs = self.model.friction_specs();
+        for (k, f) in specs.iter().enumerate() {
+            let force = |k: usize| s.friction.get(k).copied().unwrap_or(0.0);
+            match f.cone {
+                None => row.push(force(k)),
+                Some(p) if p > k => row.push(force(k).hypot(force(p))),
+                Some(_) => {}
+            }
         }
-        self.model.rigid_contact_resultants_into(s.q, s.limit, &mut self.rigid);
+        (self.model).rigid_contact_resultants_into(s.q, (s.limit, s.friction), &mut self.rigid);
         let mut rigid = self.rigid.iter();
         for (k, l) in self.model.limit_specs().iter().enumerate() {
             let force = s.limit.get(k).copied().unwrap_or(0.0);

@@ -538,9 +538,17 @@ pub(crate) fn rigid_sphere_plane(
             d.kind
         )));
     }
-    refuse_rigid_friction(d).map_err(|m| err(&m))?;
-    d.only(&["body", "at", "radius", "plane", "rigid", "restitution", "rest_speed"])
-        .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
+    d.only(&[
+        "body",
+        "at",
+        "radius",
+        "plane",
+        "rigid",
+        "restitution",
+        "rest_speed",
+        "friction",
+    ])
+    .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
     let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
     let BodyRef::Body(body) = body else {
         return Err(err("the sphere must be on a moving body"));
@@ -562,6 +570,7 @@ pub(crate) fn rigid_sphere_plane(
         plane_body,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
+        friction: d.friction,
     })
 }
 
@@ -588,13 +597,13 @@ fn sphere_on_plane<'a>(
     Ok((body, centre, d.radius.ok_or_else(|| err("needs 'radius' (m)"))?, plane))
 }
 
-/// Friction on a rigid spatial contact, refused: its force lies in the tangent plane, bounded by
-/// a cone, which the stick–slip law of one slip rate per element does not hold (the planar rigid
-/// contacts take it, `docs/limits.md`, "Friction in rigid contact").
+/// Friction on a rigid sphere–sphere contact, refused: its tangent plane turns with the line of
+/// centres, whose rows are not built (a sphere on a plane takes it, `docs/limits.md`, "Friction
+/// in spatial rigid contact").
 fn refuse_rigid_friction(d: &ForceDef) -> Result<(), String> {
     match d.friction {
         Some(_) => Err(
-            "friction in a rigid spatial contact is not built (its force lies in the tangent plane, within a cone): use the compliant law, or a planar scene"
+            "friction in a rigid sphere-sphere contact is not built (its tangent plane turns with the line of centres): use the compliant law, or a rigid sphere-plane contact"
                 .into(),
         ),
         None => Ok(()),

@@ -180,6 +180,7 @@ impl Friction {
             load_rows,
             load_limit: None,
             stick_speed: self.stick_speed,
+            cone: None,
         }
     }
 

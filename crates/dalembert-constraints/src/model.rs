@@ -98,6 +98,7 @@ impl Model {
                 load_rows: Vec::new(),
                 load_limit: Some(self.limits.len() + k),
                 stick_speed: crate::STICK_SPEED,
+                cone: None,
             }
         });
         joints.chain(contacts).collect()

@@ -80,11 +80,13 @@ impl Model {
                 load_rows,
                 load_limit: None,
                 stick_speed: f.stick_speed,
+                cone: None,
             });
             joints.push(index);
         }
         self.frictions = specs;
         self.friction_joints = joints;
+        self.add_contact_frictions();
         Ok(self)
     }
 
@@ -95,6 +97,11 @@ impl Model {
 
     /// The slip row of friction element `k` at `(q, v)`.
     pub(crate) fn slip_row_into(&self, k: usize, q: &[f64], v: &[f64], row: &mut SlipRow) {
-        self.joint_row_into(self.friction_joints[k], q, v, row);
+        match self.friction_joints.get(k) {
+            Some(&joint) => {
+                self.joint_row_into(joint, q, v, row);
+            }
+            None => self.tangent_row_into(k - self.friction_joints.len(), q, v, row),
+        }
     }
 }

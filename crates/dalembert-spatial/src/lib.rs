@@ -28,6 +28,7 @@
 //! ```
 
 pub mod body;
+pub mod contact_friction;
 pub mod couplings;
 pub mod drivers;
 pub mod euler_parameters;

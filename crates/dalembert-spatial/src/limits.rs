@@ -56,6 +56,8 @@ impl Model {
         self.limits = limits;
         self.limited_joints = joints;
         self.contacts.clear();
+        self.friction_contacts.clear();
+        self.add_contact_frictions();
         Ok(self)
     }
 
@@ -128,6 +130,9 @@ pub struct SpherePlaneContact {
     pub restitution: f64,
     /// The rebound speed below which the sphere rests on the plane (m/s).
     pub rest_speed: f64,
+    /// Coulomb's coefficient `μ ≥ 0` of the friction in the plane of contact
+    /// ([`crate::contact_friction`]); `None`: frictionless.
+    pub friction: Option<f64>,
 }
 
 /// Two spheres on two bodies (one may be the ground) in rigid (unilateral) contact, without
@@ -165,6 +170,11 @@ pub(crate) enum ContactData {
         plane_body: Option<usize>,
         point: Vector3<f64>,
         normal: Vector3<f64>,
+        /// Two unit tangents of the plane, with the normal a right-handed frame, in the plane's
+        /// body's frame: the rows of its friction ([`crate::contact_friction`]).
+        tangents: [Vector3<f64>; 2],
+        /// Coulomb's coefficient, where the contact has friction.
+        friction: Option<f64>,
     },
     Spheres {
         bodies: [Option<usize>; 2],
@@ -204,9 +214,13 @@ impl Model {
             }
             let spec = JointLimit::contact(&c.name, c.restitution, c.rest_speed);
             spec.check().map_err(bad)?;
+            if let Some(mu) = c.friction.filter(|mu| !(mu.is_finite() && *mu >= 0.0)) {
+                return Err(bad(format!("friction must be a coefficient ≥ 0, got {mu}")));
+            }
             let f = self.frame(Some(c.body), &q0, &[]);
             let normal = normal / length;
             let fp = self.frame(c.plane_body, &q0, &[]);
+            let tangents = crate::contact_friction::tangents(&normal).map(|t| fp.a.transpose() * t);
             let data = ContactData::Plane {
                 body: c.body,
                 centre: f.a.transpose() * (Vector3::from(c.centre) - f.r),
@@ -214,14 +228,20 @@ impl Model {
                 plane_body: c.plane_body,
                 point: fp.a.transpose() * (Vector3::from(c.point) - fp.r),
                 normal: fp.a.transpose() * normal,
+                tangents,
+                friction: c.friction,
             };
             let gap = normal.dot(&(Vector3::from(c.centre) - Vector3::from(c.point))) - c.radius;
             if gap < -1e-12 {
                 return Err(bad(format!("the sphere starts {:e} m into the plane", -gap)));
             }
+            if c.friction.is_some() {
+                self.friction_contacts.push(self.contacts.len());
+            }
             self.limits.push(spec);
             self.contacts.push(data);
         }
+        self.add_contact_frictions();
         Ok(self)
     }
 
@@ -303,10 +323,16 @@ impl Model {
     }
 
     /// Each rigid contact's resultant at `q` into `out` (one per rigid contact, in order), with
-    /// `limit_forces` the run's force of every limit (the joints' first, then the contacts'):
-    /// its gap, normal force, force on its body (`force · n`) and contact point
+    /// `limit_forces` the run's force of every limit (the joints' first, then the contacts') and
+    /// `friction` its friction forces (the joints' first, then each cone's two): its gap, normal
+    /// force, force on its body (`force · n` and the friction `F₁ t₁ + F₂ t₂`) and contact point
     /// ([`dalembert_system::ContactResultant`]).
-    pub fn rigid_contact_resultants_into(&self, q: &[f64], limit_forces: &[f64], out: &mut [ContactResultant<3>]) {
+    pub fn rigid_contact_resultants_into(
+        &self,
+        q: &[f64],
+        (limit_forces, friction): (&[f64], &[f64]),
+        out: &mut [ContactResultant<3>],
+    ) {
         let first = self.limits.len() - self.contacts.len();
         let mut row = SlipRow::default();
         for (k, slot) in out.iter_mut().enumerate().take(self.contacts.len()) {
@@ -318,6 +344,13 @@ impl Model {
                 r.add((force * n).into(), force, point.into());
             }
             *slot = r.finish(point.into());
+        }
+        let first = self.friction_joints.len();
+        for (i, &c) in self.friction_contacts.iter().enumerate() {
+            if let (Some(f), Some(slot)) = (friction.get(first + 2 * i..first + 2 * i + 2), out.get_mut(c)) {
+                let force = self.contact_friction_force(i, q, (f[0], f[1]));
+                slot.force.iter_mut().zip(force.iter()).for_each(|(x, y)| *x += y);
+            }
         }
     }
 
@@ -341,6 +374,7 @@ impl Model {
                 plane_body,
                 point,
                 normal,
+                ..
             } => {
                 // The gap is the centre's coordinate along the plane's normal less the radius:
                 // the prismatic joint's value with the plane's body as `i` (its formulas above).

@@ -179,6 +179,7 @@ impl ModelBuilder {
             contacts: Vec::new(),
             frictions: Vec::new(),
             friction_joints: Vec::new(),
+            friction_contacts: Vec::new(),
         })
     }
 }
@@ -209,6 +210,9 @@ pub struct Model {
     /// Joint friction (`docs/friction.md`), and the index of each element's joint.
     pub(crate) frictions: Vec<dalembert_system::JointFriction>,
     pub(crate) friction_joints: Vec<usize>,
+    /// The rigid contacts with friction (indices into `contacts`), in the order of their friction
+    /// cones: two elements each, after the joints' ([`crate::contact_friction`]).
+    pub(crate) friction_contacts: Vec<usize>,
 }
 
 /// Most rows a joint primitive has.

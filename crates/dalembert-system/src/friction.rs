@@ -59,6 +59,11 @@ pub struct JointFriction {
     pub load_limit: Option<usize>,
     /// `w_s`: the slip rate below which the joint counts as at rest (m/s or rad/s).
     pub stick_speed: f64,
+    /// The other element of a friction cone, where this one is one of the two tangent rows of a
+    /// spatial rigid contact's friction (`docs/limits.md`, "Friction in spatial rigid contact"):
+    /// the two forces are then bounded together, `|(F_k, F_cone)| ≤ μ N`, and slip against the
+    /// slip velocity's direction in the tangent plane. `None` for a scalar element.
+    pub cone: Option<usize>,
 }
 
 /// The slip row of one friction element at a state: `w = Σ g_i v_i` and the bias `b` of
@@ -125,7 +130,11 @@ pub const SLIP_END: f64 = 1e-3;
 pub enum Mode {
     /// At rest (its slip rate within the stick speed): (F2), or (F3) where (F2) cannot hold it.
     Stick,
-    /// Slipping in the direction of the sign (±1): (F1).
+    /// Slipping in the direction of the sign (±1): (F1). For an element of a friction cone
+    /// ([`JointFriction::cone`]), the component along its row of the cone's reference direction
+    /// `d`, a unit vector in the tangent plane set where the slip begins or turns: the slip's
+    /// event is `d·w` passing zero, and the force follows the slip velocity itself
+    /// ([`FrictionTerms::along`]).
     Slip(f64),
     /// A joint limit's element away from its bounds: no force (`docs/limits.md`, (L1)).
     Free,
@@ -180,6 +189,10 @@ pub struct FrictionTerms {
     /// True for an element that has just come to stick (at the start, where its slip stopped, or
     /// where its contact came to rest), held at the first Newton iterate of the next evaluation.
     pub fresh: bool,
+    /// For an element of a slipping friction cone, the component along its row of the direction
+    /// (F1) opposes at this evaluation (the slip velocity's, `docs/limits.md`, "Friction in
+    /// spatial rigid contact"), used instead of the mode's; `None` otherwise.
+    pub along: Option<f64>,
     /// True when the element's force is given: already in the `a` and `λ` that
     /// [`solve_friction`] starts from, which leaves it as it is and reads neither its row's
     /// coupling nor its response (a slipping element in [`crate::Frictional`]'s iteration on the
@@ -200,6 +213,7 @@ impl FrictionTerms {
             direction: 0.0,
             hold: 0.0,
             fresh: false,
+            along: None,
             given: false,
         }
     }
@@ -239,6 +253,11 @@ pub struct FrictionWork {
     scratch: Vec<f64>,
     /// The slip direction of each element in the last iteration (0 where held).
     direction: Vec<f64>,
+    /// `ẇ` of each element at the iterate.
+    alpha: Vec<f64>,
+    /// The position in `active` of each active element's cone partner ([`JointFriction::cone`]),
+    /// `usize::MAX` for a scalar element.
+    partner: Vec<usize>,
     /// The pull a held limit may take and stay held (N or N·m): [`RELEASE_SHARE`] of the
     /// evaluation's largest force, so that a stop whose force is zero to round-off (a gripper's
     /// two fingers pushed alike) is not let go and struck again at every step.
@@ -267,6 +286,8 @@ impl FrictionWork {
             start: vec![0.0; k],
             scratch: vec![0.0; k],
             direction: vec![0.0; k],
+            alpha: vec![0.0; k],
+            partner: Vec::with_capacity(k),
             adhesion: 0.0,
         }
     }
@@ -393,6 +414,12 @@ pub fn solve_friction(
         // Nothing to solve (what the iteration below would find, without its two solves).
         return Ok(());
     }
+    work.partner.clear();
+    for a in 0..n {
+        let cone = frictions.get(work.active[a]).and_then(|f| f.cone);
+        let at = cone.and_then(|p| work.active.iter().position(|&j| j == p));
+        work.partner.push(at.unwrap_or(usize::MAX));
+    }
     for a in 0..n {
         let term = &terms[work.active[a]];
         work.alpha0[a] = term.row.dot(acc) + term.row.bias;
@@ -436,14 +463,40 @@ pub fn solve_friction(
         let mut changed = false;
         let mut linear = true;
         let mut scale = 0.0f64;
+        // Each element's slip acceleration at the iterate, and the force that would hold it with
+        // the others' kept; a cone's two elements are held together (the 2 × 2 block of their
+        // coupling).
         for a in 0..n {
-            let k = work.active[a];
             let row = a * n;
-            let alpha: f64 = work.alpha0[a]
+            work.alpha[a] = work.alpha0[a]
                 + (0..n)
                     .map(|b| work.coupling[row + b] * terms[work.active[b]].force)
                     .sum::<f64>();
-            let hold = terms[k].force - alpha / work.coupling[row + a];
+            terms[work.active[a]].hold = terms[work.active[a]].force - work.alpha[a] / work.coupling[row + a];
+        }
+        for a in 0..n {
+            let b = work.partner[a];
+            if b < n && b > a {
+                let (w_aa, w_ab, w_ba, w_bb) = (
+                    work.coupling[a * n + a],
+                    work.coupling[a * n + b],
+                    work.coupling[b * n + a],
+                    work.coupling[b * n + b],
+                );
+                let det = w_aa * w_bb - w_ab * w_ba;
+                if det > 0.0 {
+                    let (ra, rb) = (work.alpha[a], work.alpha[b]);
+                    let (ka, kb) = (work.active[a], work.active[b]);
+                    terms[ka].hold = terms[ka].force - (w_bb * ra - w_ab * rb) / det;
+                    terms[kb].hold = terms[kb].force - (w_aa * rb - w_ba * ra) / det;
+                }
+            }
+        }
+        for a in 0..n {
+            let k = work.active[a];
+            let row = a * n;
+            let alpha = work.alpha[a];
+            let hold = terms[k].hold;
             // After `SETTLING` iterations an element found unable to hold stays so: the laws
             // then change only one way and the iteration ends (a joint grazing the limit of its
             // friction can make the laws cycle).
@@ -457,7 +510,7 @@ pub fn solve_friction(
                         Law::Zero
                     }
                 }
-                Mode::Slip(sign) => Law::Slip(sign),
+                Mode::Slip(sign) => Law::Slip(terms[k].along.unwrap_or(sign)),
                 Mode::Stick => {
                     let (limit, _) = limit_load(&frictions[k], terms, frictions.len());
                     let bound = Load::at(&frictions[k], &work.lambda, limit).bound;
@@ -466,10 +519,20 @@ pub fn solve_friction(
                     // redundant (two corners of a block on a floor) each one's holding force with
                     // the others' left as they were is not its share, and would leave them
                     // pulling against each other at their bounds.
-                    if ((iteration == 0 && terms[k].fresh) || hold.abs() <= bound) && !stays_loose {
+                    // A cone's bound is on the norm of its two forces, and it slips against
+                    // their direction.
+                    let partner = work.partner[a];
+                    let size = if partner < n {
+                        hold.hypot(terms[work.active[partner]].hold)
+                    } else {
+                        hold.abs()
+                    };
+                    if ((iteration == 0 && terms[k].fresh) || size <= bound) && !stays_loose {
                         Law::Hold
                     } else if stays_loose && work.direction[a] != 0.0 {
                         Law::Slip(work.direction[a])
+                    } else if partner < n {
+                        Law::Slip(-hold / size)
                     } else {
                         Law::Slip(-hold.signum())
                     }
@@ -480,7 +543,6 @@ pub fn solve_friction(
             work.direction[a] = if let Law::Slip(sign) = law { sign } else { 0.0 };
             changed |= holding != work.holding[a];
             work.holding[a] = holding;
-            terms[k].hold = hold;
             let term = &terms[k];
             match law {
                 Law::Hold => {

@@ -8,6 +8,7 @@ use crate::friction::{slip_force, solve_friction, FrictionTerms, FrictionWork, M
 use crate::limit::{unwrap_angle, LIMIT_SLACK};
 use crate::{Baumgarte, DynamicsError, Formulation, FormulationStats, MultibodySystem};
 
+mod cones;
 mod impacts;
 
 /// A formulation whose system has joint friction ([`MultibodySystem::frictions`]) or joint
@@ -365,6 +366,7 @@ impl Frictional {
             for (k, term) in self.terms[..self.frictions].iter().enumerate() {
                 scale = scale.max(term.force.abs());
                 if let (true, Mode::Slip(sign)) = (term.given, term.mode) {
+                    let sign = term.along.unwrap_or(sign);
                     let limit = frictions[k]
                         .load_limit
                         .map_or(0.0, |l| self.terms[self.frictions + l].force);
@@ -486,6 +488,7 @@ impl Frictional {
                 self.response(k, (t, q, qd), baumgarte, (qdd, lambda))?;
             }
         }
+        self.steer_cones(qd);
         self.base_qdd.copy_from_slice(qdd);
         self.base_lambda.copy_from_slice(lambda);
         let slipping = self.terms[..self.frictions]
@@ -652,6 +655,12 @@ impl Formulation for Frictional {
             term.mode = Mode::at(term.row.dot(v), spec.stick_speed);
             term.fresh = term.mode == Mode::Stick;
         }
+        for k in 0..self.frictions {
+            if let Some(p) = self.cone_of(k).filter(|&p| p > k) {
+                self.set_cone((k, p), self.cone_rate((k, p), v));
+            }
+        }
+        let system = self.inner.system();
         let limits = &mut self.terms[self.frictions..];
         for (k, (term, limit)) in limits.iter_mut().zip(system.limits()).enumerate() {
             // The start is where a coordinate measured within a turn is followed from: the turn
@@ -694,6 +703,7 @@ impl Formulation for Frictional {
                 *slot = term.mode.event(term.row.dot(v), spec.stick_speed);
             }
         }
+        self.cone_events(v, out);
         let held = self.terms[self.frictions..]
             .iter()
             .any(|t| matches!(t.mode, Mode::Held(_)));
@@ -730,7 +740,12 @@ impl Formulation for Frictional {
     /// its rate leaves the stick speed.
     fn event_needs_location(&self, i: usize) -> bool {
         match self.terms.get(i) {
-            Some(term) if i < self.frictions => !(term.mode == Mode::Stick && !term.sticks && term.direction != 0.0),
+            Some(term) if i < self.frictions => {
+                // A cone slips along both rows: either may carry its direction.
+                let direction =
+                    term.direction != 0.0 || self.cone_of(i).is_some_and(|p| self.terms[p].direction != 0.0);
+                !(term.mode == Mode::Stick && !term.sticks && direction)
+            }
             _ => true,
         }
     }
@@ -781,13 +796,32 @@ impl Formulation for Frictional {
                 }
                 Mode::Stick | Mode::Slip(_) => changed = true,
             }
-            match self.terms[k].mode {
-                Mode::Stick => {
+            let cone = self.cone_of(k).map(|p| (k, p));
+            match (self.terms[k].mode, cone) {
+                (Mode::Stick, Some(pair)) => {
+                    self.fill_row(k, t, q, v);
+                    self.fill_row(pair.1, t, q, v);
+                    self.set_cone(pair, self.cone_rate(pair, v));
+                }
+                (Mode::Stick, None) => {
                     self.inner.system().slip_row(k, t, q, v, &mut self.terms[k].row);
                     self.terms[k].mode = Mode::Slip(self.terms[k].row.dot(v).signum());
                 }
-                Mode::Slip(sign) => self.stopping.push((k, sign)),
-                Mode::Free | Mode::Held(_) => {}
+                (Mode::Slip(sign), Some(pair)) => {
+                    // Stopped (its slip velocity within the stick speed), or turned past a right
+                    // angle from its reference direction, which then turns with it.
+                    self.fill_row(k, t, q, v);
+                    self.fill_row(pair.1, t, q, v);
+                    let w = self.cone_rate(pair, v);
+                    if w.0.hypot(w.1) > self.inner.system().frictions()[k].stick_speed {
+                        self.set_cone(pair, w);
+                    } else if let Mode::Slip(other) = self.terms[pair.1].mode {
+                        self.stopping.push((k, sign));
+                        self.stopping.push((pair.1, other));
+                    }
+                }
+                (Mode::Slip(sign), None) => self.stopping.push((k, sign)),
+                (Mode::Free | Mode::Held(_), _) => {}
             }
         }
         if !self.striking.is_empty() {
@@ -818,7 +852,11 @@ impl Formulation for Frictional {
             // floor stop at once).
             self.stop_slips(t, q, v)?;
             for &(k, sign) in &self.stopping {
-                if !self.terms[k].sticks {
+                // A cone its friction cannot hold stays stuck: (F3) slips it against the force
+                // that would hold it, and its event turns it to slip along the slip velocity
+                // once that leaves the stick speed (a direction from a rate of zero would be
+                // round-off).
+                if !self.terms[k].sticks && self.inner.system().frictions()[k].cone.is_none() {
                     // It slips on where (F3) says: nearly always back (−σ).
                     let direction = self.terms[k].direction;
                     self.terms[k].mode = Mode::Slip(if direction != 0.0 { direction } else { -sign });

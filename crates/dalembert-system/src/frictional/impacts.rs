@@ -73,12 +73,15 @@ impl Frictional {
         let limits = self.impact_set.len();
         for a in 0..limits {
             let contact = self.impact_set[a] - self.frictions;
-            let friction = (self.inner.system().frictions().iter()).position(|f| f.load_limit == Some(contact));
             let pressed = self.strike[self.impact_set[a]].is_some();
-            if let Some(f) = friction.filter(|&f| pressed || self.terms[f].mode != Mode::Free) {
-                self.impact_set.push(f);
-                self.impact_target[f] = 0.0;
-                self.impact_frictions.push((f, self.impact_set[a], None));
+            // One element, or a cone's two.
+            for f in 0..self.frictions {
+                let loaded = self.inner.system().frictions()[f].load_limit == Some(contact);
+                if loaded && (pressed || self.terms[f].mode != Mode::Free) {
+                    self.impact_set.push(f);
+                    self.impact_target[f] = 0.0;
+                    self.impact_frictions.push((f, self.impact_set[a], None));
+                }
             }
         }
         let mut qdd = std::mem::take(&mut self.event_qdd);
@@ -155,19 +158,38 @@ impl Frictional {
                 else {
                     continue;
                 };
-                let mu = system.frictions()[f].coefficient;
-                let (p_n, p_t) = (self.impact_p[b], self.impact_p[a]);
-                if p_t.abs() > mu * p_n.abs() {
+                let spec = &system.frictions()[f];
+                // A cone's two impulses are bounded together (by its first element).
+                let cone = match spec.cone {
+                    Some(p) if p < f => continue,
+                    Some(p) => self.impact_frictions.iter().position(|e| e.0 == p),
+                    None => None,
+                };
+                let other = cone.and_then(|j| position(&self.impact_set, self.impact_frictions[j].0));
+                let (p_n, p_t) = (
+                    self.impact_p[b],
+                    (self.impact_p[a], other.map_or(0.0, |c| self.impact_p[c])),
+                );
+                let size = p_t.0.hypot(p_t.1);
+                if size > spec.coefficient * p_n.abs() {
                     let sign = self.pushing_sign(normal).unwrap_or(1.0);
                     // It slips against its slip before the impact; from rest, against the
                     // impulse that would have held it.
-                    let slip_before = self.terms[f].row.dot(v);
-                    let direction = if slip_before.abs() > system.frictions()[f].stick_speed {
-                        slip_before.signum()
+                    let w = (
+                        self.terms[f].row.dot(v),
+                        cone.map_or(0.0, |j| self.terms[self.impact_frictions[j].0].row.dot(v)),
+                    );
+                    let speed = w.0.hypot(w.1);
+                    let direction = if speed > spec.stick_speed {
+                        (w.0 / speed, w.1 / speed)
                     } else {
-                        -p_t.signum()
+                        (-p_t.0 / size, -p_t.1 / size)
                     };
-                    self.impact_frictions[i].2 = Some(direction * mu * sign);
+                    let mu = spec.coefficient * sign;
+                    self.impact_frictions[i].2 = Some(direction.0 * mu);
+                    if let Some(j) = cone {
+                        self.impact_frictions[j].2 = Some(direction.1 * mu);
+                    }
                     switched = true;
                 }
             }
@@ -188,7 +210,7 @@ impl Frictional {
             if self.strike[k].take().is_none() {
                 self.released[k] = true;
             }
-            if let Some(i) = self.impact_frictions.iter().position(|&(_, normal, _)| normal == k) {
+            while let Some(i) = self.impact_frictions.iter().position(|&(_, normal, _)| normal == k) {
                 let (f, _, _) = self.impact_frictions.remove(i);
                 self.impact_set.retain(|&j| j != f);
             }
@@ -229,6 +251,12 @@ impl Frictional {
             }
             let stick_speed = spec.stick_speed;
             let mode = self.terms[k].mode;
+            if let Some(p) = spec.cone {
+                if p > k {
+                    self.follow_cone((k, p), (t, q, v));
+                }
+                continue;
+            }
             if matches!(mode, Mode::Free | Mode::Stick | Mode::Slip(_)) {
                 system.slip_row(k, t, q, v, &mut self.terms[k].row);
                 let w = self.terms[k].row.dot(v);
@@ -237,6 +265,28 @@ impl Frictional {
                     self.terms[k].mode = Mode::at(w, stick_speed);
                     self.terms[k].fresh = self.terms[k].mode == Mode::Stick;
                 }
+            }
+        }
+    }
+
+    /// [`Frictional::follow_contacts`] for the cone `(k, p)` of a held contact: from free, or where
+    /// an impulse stopped or turned its slip (its slip velocity now within the stick speed along
+    /// the slip's direction), or took a stuck one beyond the stick speed, the modes of its slip
+    /// velocity.
+    fn follow_cone(&mut self, (k, p): (usize, usize), (t, q, v): (f64, &[f64], &[f64])) {
+        self.fill_row(k, t, q, v);
+        self.fill_row(p, t, q, v);
+        let w = self.cone_rate((k, p), v);
+        let stick_speed = self.inner.system().frictions()[k].stick_speed;
+        let reset = match (self.terms[k].mode, self.terms[p].mode) {
+            (Mode::Slip(a), Mode::Slip(b)) => a * w.0 + b * w.1 <= stick_speed,
+            (Mode::Stick, _) => w.0.hypot(w.1) > stick_speed,
+            _ => true,
+        };
+        if reset {
+            self.set_cone((k, p), w);
+            for j in [k, p] {
+                self.terms[j].fresh = self.terms[j].mode == Mode::Stick;
             }
         }
     }
