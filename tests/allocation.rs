@@ -835,7 +835,27 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
         vertices = [[-0.2, 0.1], [0.2, 0.1], [0.2, 0.3], [-0.2, 0.3]]\n\
         line = { point = [0.0, 0.0], normal = [0.0, 1.0] }\nrigid = true\nfriction = 0.4\nrestitution = 1.0\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
-    let failures = switching_runs_growing(&[text, spatial, ball, disk, pushed, landing, &joint], "impact");
+    // A spinning ball bouncing on a rigid floor with friction (e = 1, μ = 0.3): a friction cone's
+    // two-dimensional impulse at each bounce.
+    let spinning = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"ball\"\nmass = 1.0\nshape = { sphere = 0.1 }\nposition = [0.0, 0.0, 0.4]\n\
+        velocity = [1.0, 0.5, 0.0]\nangular_velocity = [10.0, -20.0, 5.0]\n\
+        [[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\n\
+        plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\nrigid = true\nrestitution = 1.0\nfriction = 0.3\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    // A ball on a rigid floor with friction pushed to and fro at 1 Hz (20 N along x, 4 N along
+    // y): its cone sticks and slips in a turning direction each cycle.
+    let rolled = "[scene]\ngravity = [0.0, 0.0, -9.81]\n\
+        [[bodies]]\nname = \"ball\"\nmass = 1.0\nshape = { sphere = 0.1 }\nposition = [0.0, 0.0, 0.1]\n\
+        [[forces]]\nname = \"floor\"\ntype = \"sphere-plane\"\nbody = \"ball\"\nradius = 0.1\n\
+        plane = { point = [0.0, 0.0, 0.0], normal = [0.0, 0.0, 1.0] }\nrigid = true\nfriction = 0.3\n\
+        [[forces]]\nname = \"push\"\ntype = \"force\"\nbody = \"ball\"\n\
+        fx = { kind = \"harmonic\", amplitude = 20.0, frequency = 1.0 }\nfy = 4.0\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    let failures = switching_runs_growing(
+        &[text, spatial, ball, disk, pushed, landing, &joint, spinning, rolled],
+        "impact",
+    );
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
