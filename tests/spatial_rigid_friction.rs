@@ -490,3 +490,27 @@ fn the_tangent_rows_are_the_slip_velocity_and_their_bias_its_rate() {
         }
     }
 }
+
+#[test]
+fn the_shipped_ball_slides_then_rolls_at_its_closed_form() {
+    // `scenes/ball-slides-then-rolls.toml`: thrown at (2, 1, 0) m/s spinning at (3, −4, 2)
+    // rad/s, μ = 0.3: it rolls on at `v₀ − (2/7) w₀` from `t* = 2 |w₀| / (7 μ g)`, its friction
+    // zero; bars 1e-9 m/s and N (measured 5e-13 m/s).
+    let scene = Scene::from_path("scenes/ball-slides-then-rolls.toml").unwrap();
+    let table = run(&scene);
+    let col = |name: &str| column(&table, name);
+    let (t, vx, vy, friction) = (col("t"), col("ball.vx"), col("ball.vy"), col("floor.friction"));
+    let slip = add([2.0, 1.0, 0.0], cross([3.0, -4.0, 2.0], [0.0, 0.0, -R]), 1.0);
+    let t_star = 2.0 * norm(slip) / (7.0 * 0.3 * G);
+    let rolling = add([2.0, 1.0, 0.0], slip, -2.0 / 7.0);
+    for k in (0..t.len()).filter(|&k| t[k] > t_star) {
+        assert!(
+            (vx[k] - rolling[0]).abs() < 1e-9 && (vy[k] - rolling[1]).abs() < 1e-9,
+            "v({}) = ({}, {})",
+            t[k],
+            vx[k],
+            vy[k]
+        );
+        assert!(friction[k].abs() < 1e-9, "friction({}) = {}", t[k], friction[k]);
+    }
+}
