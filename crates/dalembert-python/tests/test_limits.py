@@ -74,3 +74,25 @@ def test_the_shipped_stop_scene_rests_against_its_stop_as_the_cli_says(scenes, t
     header = out.read_text().splitlines()[0].split(",")
     assert header == list(run.columns)
     assert np.array_equal(data, run.data)
+
+
+def test_a_ball_on_a_rigid_floor_with_friction_rolls_at_its_closed_form(scenes):
+    """scenes/ball-slides-then-rolls.toml (docs/limits.md, "Friction in spatial rigid contact"): a
+    ball thrown spinning on a floor with mu = 0.3 slides against its slip w0 = v0 + omega0 x (-R n)
+    until t* = 2 |w0| / (7 mu g), its friction mu m g, then rolls at v0 - (2/7) w0 with no friction;
+    the contact's force columns hold the friction with the normal force. Bars 1e-9 m/s and N: the
+    slip stops at an event located to 1e-9 m/s (measured 5e-13 m/s)."""
+    run = dalembert.Scene.load(scenes / "ball-slides-then-rolls.toml").simulate()
+    t = run["t"]
+    v0, w0, r, mu, m = np.array([2.0, 1.0, 0.0]), np.array([3.0, -4.0, 2.0]), 0.1, 0.3, 2.0
+    slip = v0 + np.cross(w0, [0.0, 0.0, -r])
+    t_star = 2.0 * np.linalg.norm(slip) / (7.0 * mu * G)
+    rolling = v0 - 2.0 / 7.0 * slip
+    after, before = t > t_star + 1e-6, t < t_star - 1e-6
+    assert np.max(np.abs(run["ball.vx"][after] - rolling[0])) < 1e-9
+    assert np.max(np.abs(run["ball.vy"][after] - rolling[1])) < 1e-9
+    assert np.max(np.abs(run["floor.friction"][after])) < 1e-9
+    assert np.max(np.abs(run["floor.friction"][before] - mu * m * G)) < 1e-9
+    tangential = np.hypot(run["floor.fx"][before], run["floor.fy"][before])
+    assert np.max(np.abs(tangential - mu * m * G)) < 1e-9
+    assert np.max(np.abs(run["floor.fz"] - m * G)) < 1e-9

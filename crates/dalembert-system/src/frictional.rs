@@ -849,7 +849,10 @@ impl Formulation for Frictional {
         }
         if !self.stopping.is_empty() {
             // The slips that stop at this event, together (two corners of a block sliding on a
-            // floor stop at once).
+            // floor stop at once), with every other slip already within its stick speed: the
+            // impulse that stops one moves the others' contact points too, and one left just past
+            // its stop would start the next step with its event already passed.
+            self.join_stopping(t, q, v);
             self.stop_slips(t, q, v)?;
             for &(k, sign) in &self.stopping {
                 // A cone its friction cannot hold stays stuck: (F3) slips it against the force

@@ -291,6 +291,36 @@ impl Frictional {
         }
     }
 
+    /// Adds to `stopping` every slipping element not in it whose slip (a cone's: its two rows')
+    /// is within its stick speed at `(t, q, v)` ([`Frictional::at_event`]).
+    pub(super) fn join_stopping(&mut self, t: f64, q: &[f64], v: &[f64]) {
+        for k in 0..self.frictions {
+            let Mode::Slip(sign) = self.terms[k].mode else { continue };
+            if self.stopping.iter().any(|&(j, _)| j == k) {
+                continue;
+            }
+            let stick_speed = self.inner.system().frictions()[k].stick_speed;
+            match self.cone_of(k) {
+                Some(p) if p < k => {}
+                Some(p) => {
+                    self.fill_row(k, t, q, v);
+                    self.fill_row(p, t, q, v);
+                    let w = self.cone_rate((k, p), v);
+                    if let (true, Mode::Slip(other)) = (w.0.hypot(w.1) <= stick_speed, self.terms[p].mode) {
+                        self.stopping.push((k, sign));
+                        self.stopping.push((p, other));
+                    }
+                }
+                None => {
+                    self.fill_row(k, t, q, v);
+                    if self.terms[k].row.dot(v).abs() <= stick_speed {
+                        self.stopping.push((k, sign));
+                    }
+                }
+            }
+        }
+    }
+
     /// The slips that stop at an event (`stopping`): the impulse that sets each one's rate to
     /// zero, `v ← v + Σ A P`, together with the impulses that keep every held limit on its bound
     /// and every stuck element stuck (a block whose corners rest on a floor turns about neither),
