@@ -509,6 +509,10 @@ fn body_position(body: BodyRef, positions: &[[f64; 3]]) -> [f64; 3] {
     }
 }
 
+/// One rigid sphere–plane contact of a shape on a plane, with the box's edges where it stands
+/// for a box's corners ([`rigid_on_plane`]).
+pub(crate) type RigidOnPlane = (dalembert_spatial::limits::SpherePlaneContact, Option<[f64; 3]>);
+
 /// A `sphere-plane`, `box-plane` or `capsule-plane` element with `rigid = true`
 /// (`docs/limits.md`, "Rigid contact", "Rigid boxes and capsules on a plane"): the shape and plane
 /// as for the compliant element, `restitution` (0), `rest_speed` (1e-3) and `friction`; the
@@ -523,7 +527,7 @@ pub(crate) fn rigid_on_plane(
     span: &Range<usize>,
     owner: &str,
     positions: &[[f64; 3]],
-) -> Result<Vec<(dalembert_spatial::limits::SpherePlaneContact, Option<[f64; 3]>)>, SceneError> {
+) -> Result<Vec<RigidOnPlane>, SceneError> {
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
     let only = |extra: &str| {
         let mut keys = vec!["body", "at", "plane", "rigid", "restitution", "rest_speed", "friction"];
