@@ -590,11 +590,11 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             continue;
         }
         if d.rigid == Some(true) {
-            let contacts = spatial_forces::rigid_on_plane(d, &names, &ctx, &span, &owner, &positions)?;
-            if let Some((contact, _)) = contacts.first().filter(|(c, _)| c.plane_body.is_none()) {
+            let contact = spatial_forces::rigid_sphere_plane(d, &names, &ctx, &span, &owner, &positions)?;
+            if contact.plane_body.is_none() {
                 floors.push(spatial_forces::floor_visual(&contact.point, &contact.normal, &owner));
             }
-            rigid.extend(contacts.into_iter().map(|c| (c, span.clone())));
+            rigid.push((contact, span.clone()));
             continue;
         }
         let f = spatial_forces::force(d, &names, &ctx, &span, &owner, &positions)?;
@@ -639,18 +639,6 @@ pub(crate) fn build(file: SpatialFile, text: &str, origin: &str) -> Result<Scene
             .find(|(l, _)| message.contains(&format!("'{}'", l.name)));
         ctx.err(at.map(|(_, s)| s.clone()), message)
     })?;
-    // A box's corners, from its body's frame in the file's configuration.
-    let rigid: Vec<_> = rigid
-        .into_iter()
-        .flat_map(|((contact, size), span)| match size {
-            Some(size) => model
-                .box_corner_contacts(&contact, size)
-                .into_iter()
-                .map(|c| (c, span.clone()))
-                .collect(),
-            None => vec![(contact, span)],
-        })
-        .collect();
     let mut spans: Vec<(String, Range<usize>)> = rigid_pairs
         .iter()
         .map(

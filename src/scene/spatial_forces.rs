@@ -509,83 +509,23 @@ fn body_position(body: BodyRef, positions: &[[f64; 3]]) -> [f64; 3] {
     }
 }
 
-/// One rigid sphere–plane contact of a shape on a plane, with the box's edges where it stands
-/// for a box's corners ([`rigid_on_plane`]).
-pub(crate) type RigidOnPlane = (dalembert_spatial::limits::SpherePlaneContact, Option<[f64; 3]>);
-
-/// A `sphere-plane`, `box-plane` or `capsule-plane` element with `rigid = true`
-/// (`docs/limits.md`, "Rigid contact", "Rigid boxes and capsules on a plane"): the shape and plane
-/// as for the compliant element, `restitution` (0), `rest_speed` (1e-3) and `friction`; the
-/// compliant law's keys are refused. A sphere is one rigid contact; a capsule one per end (a
-/// sphere of its radius, named `<name>.0` and `<name>.1`); a box one per corner (a sphere of
-/// radius 0), returned once with its size, its corners found from the built model
-/// ([`dalembert_spatial::Model::box_corner_contacts`]).
-pub(crate) fn rigid_on_plane(
+/// A `sphere-plane` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the sphere
+/// and plane as for the compliant element, `restitution` (0) and `rest_speed` (1e-3); the
+/// compliant law's keys are refused.
+pub(crate) fn rigid_sphere_plane(
     d: &ForceDef,
     names: &Names<BodyRef>,
     ctx: &Ctx<'_>,
     span: &Range<usize>,
     owner: &str,
     positions: &[[f64; 3]],
-) -> Result<Vec<RigidOnPlane>, SceneError> {
+) -> Result<dalembert_spatial::limits::SpherePlaneContact, SceneError> {
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
-    let only = |extra: &str| {
-        let mut keys = vec!["body", "at", "plane", "rigid", "restitution", "rest_speed", "friction"];
-        keys.push(extra);
-        d.only(&keys)
-            .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))
-    };
     if d.kind == "box-plane" || d.kind == "capsule-plane" {
-        only(if d.kind == "box-plane" { "size" } else { "radius" })?;
-        let (body, at, plane) = shape_on_plane(d, names, ctx, span, owner)?;
-        let BodyRef::Body(body) = body else {
-            return Err(err(&format!(
-                "the {} must be on a moving body",
-                &d.kind[..d.kind.len() - 6]
-            )));
-        };
-        let plane_body = match &plane.body {
-            None => None,
-            Some(name) => match names.body(ctx, name, span, owner)? {
-                BodyRef::Body(b) => Some(b),
-                BodyRef::Ground => None,
-            },
-        };
-        let contact = |name: String, centre: [f64; 3], radius: f64| dalembert_spatial::limits::SpherePlaneContact {
-            name,
-            body,
-            centre,
-            radius,
-            point: plane.point,
-            normal: plane.normal,
-            plane_body,
-            restitution: d.restitution.unwrap_or(0.0),
-            rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
-            friction: d.friction,
-        };
-        if d.kind == "box-plane" {
-            let centre = match at {
-                Some(Points3::One(p)) => p,
-                None => positions[body],
-                Some(Points3::Two(_)) => return Err(err("'at' is the box's centre, one point [x, y, z] (global)")),
-            };
-            let size = d
-                .size
-                .ok_or_else(|| err("needs 'size = [a, b, c]' (m: its edges along the body's axes)"))?;
-            if !size.iter().all(|s| s.is_finite() && *s > 0.0) {
-                return Err(err(&format!("size must be three edges > 0 m, got {size:?}")));
-            }
-            return Ok(vec![(contact(d.name.clone(), centre, 0.0), Some(size))]);
-        }
-        let Some(Points3::Two(ends)) = at else {
-            return Err(err(
-                "needs 'at = [[x1, y1, z1], [x2, y2, z2]]' (its segment's ends, global)",
-            ));
-        };
-        let radius = d.radius.ok_or_else(|| err("needs 'radius' (m)"))?;
-        return Ok((0..2)
-            .map(|k| (contact(format!("{}.{k}", d.name), ends[k], radius), None))
-            .collect());
+        return Err(err(&format!(
+            "a rigid {} contact is not built (its corners or caps strike at once, and simultaneous impacts are not resolved): use the compliant law",
+            d.kind
+        )));
     }
     if d.kind == "capsule-capsule" {
         return Err(err(
@@ -594,11 +534,21 @@ pub(crate) fn rigid_on_plane(
     }
     if d.kind != "sphere-plane" {
         return Err(err(&format!(
-            "'rigid' is for sphere-plane, box-plane, capsule-plane and sphere-sphere contacts, this element is '{}'",
+            "'rigid' is for sphere-plane and sphere-sphere contacts, this element is '{}'",
             d.kind
         )));
     }
-    only("radius")?;
+    d.only(&[
+        "body",
+        "at",
+        "radius",
+        "plane",
+        "rigid",
+        "restitution",
+        "rest_speed",
+        "friction",
+    ])
+    .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
     let (body, centre, radius, plane) = sphere_on_plane(d, names, ctx, span, owner, positions)?;
     let BodyRef::Body(body) = body else {
         return Err(err("the sphere must be on a moving body"));
@@ -610,7 +560,7 @@ pub(crate) fn rigid_on_plane(
             BodyRef::Ground => None,
         },
     };
-    let contact = dalembert_spatial::limits::SpherePlaneContact {
+    Ok(dalembert_spatial::limits::SpherePlaneContact {
         name: d.name.clone(),
         body,
         centre,
@@ -621,8 +571,7 @@ pub(crate) fn rigid_on_plane(
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
         friction: d.friction,
-    };
-    Ok(vec![(contact, None)])
+    })
 }
 
 /// The sphere and plane of a `sphere-plane` element, compliant or rigid: the sphere's body, its

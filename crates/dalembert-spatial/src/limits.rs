@@ -233,12 +233,7 @@ impl Model {
             };
             let gap = normal.dot(&(Vector3::from(c.centre) - Vector3::from(c.point))) - c.radius;
             if gap < -1e-12 {
-                let what = if c.radius == 0.0 {
-                    "point (a box's corner)"
-                } else {
-                    "sphere"
-                };
-                return Err(bad(format!("the {what} starts {:e} m into the plane", -gap)));
+                return Err(bad(format!("the sphere starts {:e} m into the plane", -gap)));
             }
             if c.friction.is_some() {
                 self.friction_contacts.push(self.contacts.len());
@@ -248,28 +243,6 @@ impl Model {
         }
         self.add_contact_frictions();
         Ok(self)
-    }
-
-    /// The rigid contacts of a box's eight corners with a plane (`docs/limits.md`, "Rigid boxes
-    /// and capsules on a plane"): `contact` with the box's centre (global, in the file's
-    /// configuration) for the sphere's, and its edges `size` along its body's axes there; each
-    /// corner a sphere of radius 0 named `<name>.<k>`, `k` from 0 with its signs along the body's
-    /// `x`, `y`, `z` as the bits of `k` (clear: negative).
-    pub fn box_corner_contacts(&self, contact: &SpherePlaneContact, size: [f64; 3]) -> Vec<SpherePlaneContact> {
-        let (q0, _) = self.initial_state();
-        let a = self.frame(Some(contact.body), &q0, &[]).a;
-        (0..8)
-            .map(|k| {
-                let sign = |bit: usize| if k >> bit & 1 == 1 { 0.5 } else { -0.5 };
-                let arm = Vector3::new(sign(0) * size[0], sign(1) * size[1], sign(2) * size[2]);
-                SpherePlaneContact {
-                    name: format!("{}.{k}", contact.name),
-                    centre: (Vector3::from(contact.centre) + a * arm).into(),
-                    radius: 0.0,
-                    ..contact.clone()
-                }
-            })
-            .collect()
     }
 
     /// The model with rigid sphere–sphere contacts too (after [`Model::with_rigid_contacts`]).
