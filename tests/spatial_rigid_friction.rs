@@ -27,6 +27,9 @@ const STEP: f64 = 2.5e-4;
 
 type V3 = [f64; 3];
 
+/// A run's columns by name.
+type Columns<'a> = &'a dyn Fn(&str) -> Vec<f64>;
+
 fn add(a: V3, b: V3, s: f64) -> V3 {
     [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]
 }
@@ -77,6 +80,19 @@ fn vector(c: &dyn Fn(&str) -> Vec<f64>, names: [&str; 3], k: usize) -> V3 {
     [c(names[0])[k], c(names[1])[k], c(names[2])[k]]
 }
 
+/// The ball's position, velocity and angular velocity at row `k` (time `t`) against `exact`:
+/// within 1e-10 m, 1e-9 m/s and 2.5e-8 rad/s (the spin changes by `5 / (2 R)` = 25 /m times the
+/// centre's velocity).
+fn assert_ball(what: &str, (t, col, k): (f64, Columns<'_>, usize), exact: (V3, V3, V3)) {
+    let (xe, ve, we) = exact;
+    let x = vector(col, ["ball.x", "ball.y", "ball.z"], k);
+    let v = vector(col, ["ball.vx", "ball.vy", "ball.vz"], k);
+    let w = vector(col, ["ball.wx", "ball.wy", "ball.wz"], k);
+    assert!(norm(add(x, xe, -1.0)) < 1e-10, "{what}: x({t}) = {x:?} against {xe:?}");
+    assert!(norm(add(v, ve, -1.0)) < 1e-9, "{what}: v({t}) = {v:?} against {ve:?}");
+    assert!(norm(add(w, we, -1.0)) < 2.5e-8, "{what}: ω({t}) = {w:?} against {we:?}");
+}
+
 #[test]
 fn a_ball_thrown_on_a_floor_slides_against_its_slip_then_rolls() {
     // The slip velocity `w = v + ω × (−R n)` decelerates at `(7/2) μ g` along its own direction
@@ -123,24 +139,7 @@ fn a_ball_thrown_on_a_floor_slides_against_its_slip_then_rolls() {
                 let (friction, normal) = (col("floor.friction"), col("floor.normal"));
                 for k in 0..t.len() {
                     let (xe, ve, we) = exact(t[k]);
-                    let x = vector(&col, ["ball.x", "ball.y", "ball.z"], k);
-                    let v = vector(&col, ["ball.vx", "ball.vy", "ball.vz"], k);
-                    let w = vector(&col, ["ball.wx", "ball.wy", "ball.wz"], k);
-                    assert!(
-                        norm(add(x, xe, -1.0)) < 1e-10,
-                        "{what}: x({}) = {x:?} against {xe:?}",
-                        t[k]
-                    );
-                    assert!(
-                        norm(add(v, ve, -1.0)) < 1e-9,
-                        "{what}: v({}) = {v:?} against {ve:?}",
-                        t[k]
-                    );
-                    assert!(
-                        norm(add(w, we, -1.0)) < 2.5e-8,
-                        "{what}: ω({}) = {w:?} against {we:?}",
-                        t[k]
-                    );
+                    assert_ball(&what, (t[k], &col, k), (xe, ve, we));
                     let f = if t[k] < t_star - 1e-9 { mu * M * G } else { 0.0 };
                     if (t[k] - t_star).abs() > 1e-6 {
                         assert!(
@@ -258,24 +257,7 @@ fn a_ball_thrown_across_an_incline_turns_downhill_then_rolls_down() {
             let (friction, normal) = (col("floor.friction"), col("floor.normal"));
             for k in 0..t.len() {
                 let (xe, ve, we, fe) = exact(t[k]);
-                let x = vector(&col, ["ball.x", "ball.y", "ball.z"], k);
-                let v = vector(&col, ["ball.vx", "ball.vy", "ball.vz"], k);
-                let w = vector(&col, ["ball.wx", "ball.wy", "ball.wz"], k);
-                assert!(
-                    norm(add(x, xe, -1.0)) < 1e-10,
-                    "{what}: x({}) = {x:?} against {xe:?}",
-                    t[k]
-                );
-                assert!(
-                    norm(add(v, ve, -1.0)) < 1e-9,
-                    "{what}: v({}) = {v:?} against {ve:?}",
-                    t[k]
-                );
-                assert!(
-                    norm(add(w, we, -1.0)) < 2.5e-8,
-                    "{what}: ω({}) = {w:?} against {we:?}",
-                    t[k]
-                );
+                assert_ball(&what, (t[k], &col, k), (xe, ve, we));
                 if (t[k] - t_star).abs() > 1e-6 {
                     assert!(
                         (friction[k] - fe).abs() < 1e-9,
