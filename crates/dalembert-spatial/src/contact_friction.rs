@@ -65,12 +65,6 @@ impl Model {
         }
     }
 
-    /// The rigid contacts with friction, in the order of their cones (indices among the rigid
-    /// contacts, [`Model::rigid_contact_count`]).
-    pub fn friction_contacts(&self) -> &[usize] {
-        &self.friction_contacts
-    }
-
     /// The contact point, the sphere's body, its arm `a_j` and the unit tangents of cone `i`'s
     /// contact at `q` (global), with the plane's frame.
     fn cone_geometry(&self, i: usize, q: &[f64], v: &[f64]) -> Option<ConeGeometry> {
