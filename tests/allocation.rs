@@ -852,8 +852,22 @@ fn a_run_with_joint_limits_allocates_nothing_per_step() {
         [[forces]]\nname = \"push\"\ntype = \"force\"\nbody = \"ball\"\n\
         fx = { kind = \"harmonic\", amplitude = 20.0, frequency = 1.0 }\nfy = 4.0\n\
         [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
+    // Two spinning balls tied by a spring, without gravity, striking each other obliquely again
+    // and again (e = 1, μ = 0.3): a sphere–sphere friction cone's impulses, its tangent rows
+    // turning with the line of centres.
+    let pair = "[scene]\ngravity = [0.0, 0.0, 0.0]\n\
+        [[bodies]]\nname = \"a\"\nmass = 1.0\nshape = { sphere = 0.1 }\nposition = [0.0, 0.0, 0.0]\nangular_velocity = [0.0, 0.0, 10.0]\n\
+        [[bodies]]\nname = \"b\"\nmass = 1.0\nshape = { sphere = 0.1 }\nposition = [0.3, 0.0, 0.0]\n\
+        velocity = [-2.0, 0.3, 0.0]\nangular_velocity = [3.0, -2.0, 0.0]\n\
+        [[forces]]\nname = \"touch\"\ntype = \"sphere-sphere\"\nbodies = [\"a\", \"b\"]\nradii = [0.1, 0.1]\n\
+        rigid = true\nrestitution = 1.0\nfriction = 0.3\n\
+        [[forces]]\nname = \"tie\"\ntype = \"spring-damper\"\nbodies = [\"a\", \"b\"]\n\
+        at = [[0.0, 0.0, 0.0], [0.3, 0.0, 0.0]]\nstiffness = 50.0\nfree_length = 0.3\n\
+        [simulation]\nstep = 1e-3\noutput_every = 0.01\n";
     let failures = switching_runs_growing(
-        &[text, spatial, ball, disk, pushed, landing, &joint, spinning, rolled],
+        &[
+            text, spatial, ball, disk, pushed, landing, &joint, spinning, rolled, pair,
+        ],
         "impact",
     );
     assert!(failures.is_empty(), "{failures:#?}");

@@ -597,21 +597,9 @@ fn sphere_on_plane<'a>(
     Ok((body, centre, d.radius.ok_or_else(|| err("needs 'radius' (m)"))?, plane))
 }
 
-/// Friction on a rigid sphere–sphere contact, refused: its tangent plane turns with the line of
-/// centres, whose rows are not built (a sphere on a plane takes it, `docs/limits.md`, "Friction
-/// in spatial rigid contact").
-fn refuse_rigid_friction(d: &ForceDef) -> Result<(), String> {
-    match d.friction {
-        Some(_) => Err(
-            "friction in a rigid sphere-sphere contact is not built (its tangent plane turns with the line of centres): use the compliant law, or a rigid sphere-plane contact"
-                .into(),
-        ),
-        None => Ok(()),
-    }
-}
-
 /// A `sphere-sphere` element with `rigid = true` (`docs/limits.md`, "Rigid contact"): the two
-/// spheres as for the compliant element, `restitution` (0) and `rest_speed` (1e-3).
+/// spheres as for the compliant element, `restitution` (0), `rest_speed` (1e-3) and `friction`
+/// (Coulomb's coefficient; none by default).
 pub(crate) fn rigid_sphere_pair(
     d: &ForceDef,
     names: &Names<BodyRef>,
@@ -621,9 +609,16 @@ pub(crate) fn rigid_sphere_pair(
     positions: &[[f64; 3]],
 ) -> Result<dalembert_spatial::limits::SphereSphereContact, SceneError> {
     let err = |m: &str| ctx.err(Some(span.clone()), format!("{owner}: {m}"));
-    refuse_rigid_friction(d).map_err(|m| err(&m))?;
-    d.only(&["bodies", "at", "radii", "rigid", "restitution", "rest_speed"])
-        .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
+    d.only(&[
+        "bodies",
+        "at",
+        "radii",
+        "rigid",
+        "restitution",
+        "rest_speed",
+        "friction",
+    ])
+    .map_err(|m| err(&format!("{m} (a rigid contact has no compliant law)")))?;
     let (bodies, centres, radii) = two_spheres(d, names, ctx, span, owner, positions)?;
     let index = |b: BodyRef| match b {
         BodyRef::Body(i) => Some(i),
@@ -636,6 +631,7 @@ pub(crate) fn rigid_sphere_pair(
         radii,
         restitution: d.restitution.unwrap_or(0.0),
         rest_speed: d.rest_speed.unwrap_or(dalembert_system::REST_SPEED),
+        friction: d.friction,
     })
 }
 

@@ -135,8 +135,8 @@ pub struct SpherePlaneContact {
     pub friction: Option<f64>,
 }
 
-/// Two spheres on two bodies (one may be the ground) in rigid (unilateral) contact, without
-/// friction (`docs/limits.md`, "Rigid contact"): a limit on the gap
+/// Two spheres on two bodies (one may be the ground) in rigid (unilateral) contact, with or
+/// without friction (`docs/limits.md`, "Rigid contact"): a limit on the gap
 /// `s = |c_j − c_i| − R_i − R_j ≥ 0`, with `n = (c_j − c_i)/|c_j − c_i|`,
 ///
 /// ```text
@@ -157,6 +157,9 @@ pub struct SphereSphereContact {
     pub restitution: f64,
     /// The rebound speed below which the spheres rest on each other (m/s).
     pub rest_speed: f64,
+    /// Coulomb's coefficient `μ ≥ 0` of the friction in the plane of contact
+    /// ([`crate::contact_friction`]); `None`: frictionless.
+    pub friction: Option<f64>,
 }
 
 /// A rigid contact as the model keeps it: centres in their body frames, a unit normal.
@@ -180,6 +183,11 @@ pub(crate) enum ContactData {
         bodies: [Option<usize>; 2],
         centres: [Vector3<f64>; 2],
         radii: [f64; 2],
+        /// The axis, in the first sphere's body's frame, across which the line of centres gives
+        /// the tangents of the friction's rows ([`crate::contact_friction`]).
+        helper: Vector3<f64>,
+        /// Coulomb's coefficient, where the contact has friction.
+        friction: Option<f64>,
     },
 }
 
@@ -268,6 +276,9 @@ impl Model {
             }
             let spec = JointLimit::contact(&c.name, c.restitution, c.rest_speed);
             spec.check().map_err(bad)?;
+            if let Some(mu) = c.friction.filter(|mu| !(mu.is_finite() && *mu >= 0.0)) {
+                return Err(bad(format!("friction must be a coefficient ≥ 0, got {mu}")));
+            }
             let local = |b: Option<usize>, p: [f64; 3]| {
                 let f = self.frame(b, &q0, &[]);
                 f.a.transpose() * (Vector3::from(p) - f.r)
@@ -277,14 +288,23 @@ impl Model {
             if gap < -1e-12 {
                 return Err(bad(format!("the spheres start {:e} m into each other", -gap)));
             }
+            // The line of centres in the first body's frame (any direction where they coincide).
+            let line = self.frame(c.bodies[0], &q0, &[]).a.transpose() * (cj - ci);
+            let line = if line.norm() > 0.0 { line } else { Vector3::z() };
             let data = ContactData::Spheres {
                 bodies: c.bodies,
                 centres: [local(c.bodies[0], c.centres[0]), local(c.bodies[1], c.centres[1])],
                 radii: c.radii,
+                helper: crate::contact_friction::least_along(&line),
+                friction: c.friction,
             };
+            if c.friction.is_some() {
+                self.friction_contacts.push(self.contacts.len());
+            }
             self.limits.push(spec);
             self.contacts.push(data);
         }
+        self.add_contact_frictions();
         Ok(self)
     }
 
@@ -305,7 +325,9 @@ impl Model {
                 let n = fi.a * normal;
                 (n, fj.point(centre) - *radius * n)
             }
-            ContactData::Spheres { bodies, centres, radii } => {
+            ContactData::Spheres {
+                bodies, centres, radii, ..
+            } => {
                 let (ci, cj) = (
                     self.frame(bodies[0], q, &[]).point(&centres[0]),
                     self.frame(bodies[1], q, &[]).point(&centres[1]),
@@ -390,7 +412,9 @@ impl Model {
                 row.bias = fi.w.cross(&n_dot).dot(&d) + 2.0 * n_dot.dot(&d_dot) + n.dot(&centripetal);
                 n.dot(&d) - radius
             }
-            ContactData::Spheres { bodies, centres, radii } => {
+            ContactData::Spheres {
+                bodies, centres, radii, ..
+            } => {
                 let reach = radii[0] + radii[1];
                 let fi = self.frame(bodies[0], q, v);
                 let fj = self.frame(bodies[1], q, v);

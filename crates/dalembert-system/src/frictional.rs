@@ -799,9 +799,11 @@ impl Formulation for Frictional {
             let cone = self.cone_of(k).map(|p| (k, p));
             match (self.terms[k].mode, cone) {
                 (Mode::Stick, Some(pair)) => {
+                    // Its slip left the stick speed: it slips along the slip velocity, whose
+                    // size is the stick speed to the location's round-off (either side of it).
                     self.fill_row(k, t, q, v);
                     self.fill_row(pair.1, t, q, v);
-                    self.set_cone(pair, self.cone_rate(pair, v));
+                    self.slip_cone(pair, self.cone_rate(pair, v));
                 }
                 (Mode::Stick, None) => {
                     self.inner.system().slip_row(k, t, q, v, &mut self.terms[k].row);

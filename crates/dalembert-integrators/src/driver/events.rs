@@ -56,6 +56,8 @@ pub(super) struct Events {
     /// The fraction tried before the last one and the aimed function's value there (the step's
     /// start at first): the secant through it and the last ([`Events::refine`]).
     previous: (f64, f64),
+    /// True while [`Events::settle_at_start`] settles: the aimed function counts as crossed.
+    at_start: bool,
 }
 
 impl Events {
@@ -83,6 +85,7 @@ impl Events {
             bracket: ((0.0, 0.0), (1.0, 0.0)),
             last_side: None,
             previous: (0.0, 0.0),
+            at_start: false,
         }
     }
 
@@ -100,7 +103,10 @@ impl Events {
 
     /// A step from `t` crossed an event so near its start (`θ h` below the smallest step) that
     /// it cannot end there: the event is settled at the start instead ([`Events::settle`] on the
-    /// state kept by [`Events::mark`]). Where the formulation changed the state or its law, `y`
+    /// state kept by [`Events::mark`]), the function located counting as crossed there whatever
+    /// its value (the step that ended short of its zero, an interpolant's error away, ended
+    /// within the smallest step of it: a limit's force 3.6e-11 N short of zero, measured, where
+    /// its tolerance is 10⁻¹⁴; left unsettled, the crossing would be stepped over and lost). Where the formulation changed the state or its law, `y`
     /// is that state, its functions start the step again, and the result is true (the step is
     /// to be taken again); otherwise `y` is left as the step ended.
     pub fn settle_at_start(
@@ -111,7 +117,9 @@ impl Events {
         n_q: usize,
     ) -> Result<bool, DynamicsError> {
         let mut start = std::mem::take(&mut self.start);
+        self.at_start = true;
         let settled = self.settle(f, t, &mut start, n_q);
+        self.at_start = false;
         self.start = start;
         self.aimed = None;
         if !settled? {
@@ -261,7 +269,7 @@ impl Events {
             // interpolant off by more (a law that changed inside the step it came from) must
             // not put the event where the function is not zero (a stop struck 6.7e-6 rad before
             // it was reached); the next step finds the crossing.
-            let aimed = self.aimed == Some(i) && b.abs() <= AIMED_SLACK * f.event_tolerance(i);
+            let aimed = self.aimed == Some(i) && (self.at_start || b.abs() <= AIMED_SLACK * f.event_tolerance(i));
             *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0) || aimed;
         }
         if !self.crossed.iter().any(|&c| c) {

@@ -81,6 +81,14 @@ impl Frictional {
         self.terms[p].mode = b;
     }
 
+    /// Sets cone `(k, p)` slipping along the slip velocity `w` (stuck where it is zero): where
+    /// its stuck slip left the stick speed, at a location that may end just short of it.
+    pub(super) fn slip_cone(&mut self, (k, p): (usize, usize), w: (f64, f64)) {
+        let (a, b) = modes_at(w, 0.0);
+        self.terms[k].mode = a;
+        self.terms[p].mode = b;
+    }
+
     /// Each slipping cone's force direction at the slip velocity at `v` (rows filled at the
     /// evaluation's state), [`slip_direction`], into its elements' [`FrictionTerms::along`]:
     /// (F1) then opposes the slip at every stage of a step.
