@@ -296,3 +296,68 @@ fn a_ball_leaving_a_sphere_at_a_tight_tolerance_is_let_go_where_its_normal_force
     let drift = balance_drift(&scene);
     assert!(drift < 1e-8, "E − W moved by {drift:e} J");
 }
+
+#[test]
+fn a_ball_wedged_among_three_spheres_stays_there_pushed_to_and_fro() {
+    // A ball (2 kg, r = 0.3 m) resting on three fixed spheres (R = 0.5 m, centres 0.6 m from
+    // the vertical through the ball's, 120° apart; each contact's normal 48.6° from the
+    // vertical), pushed by a harmonic 8 N along x at 1 Hz and 2 N along y, with friction μ = 0.3:
+    // the normal forces alone hold it (it stays without friction), so it stays at rest. The
+    // three cones and the three contacts hold 9 rows on its 6 velocities; their forces are
+    // not determined, and the split the solver takes must be one the cones admit (the plain
+    // least-norm split asked 1.13 N of friction per newton of normal force, beyond μ: the cones
+    // slid by (F3) and the ball left its pocket, `E` changed by 3 J). Every formulation, RK4
+    // and dopri5, 2 s: the ball within 1e-12 m and m/s of rest, the contacts' forces balancing
+    // the weight and the push along y within 1e-9 N at every sample, each friction within
+    // `μ N`.
+    let d = 0.6f64;
+    let z = (0.8f64 * 0.8 - d * d).sqrt();
+    for formulation in FORMULATIONS {
+        for integrator in METHODS {
+            let mut text = format!(
+                "[scene]\ngravity = [0.0, 0.0, {}]\n\
+                 [[bodies]]\nname = \"ball\"\nmass = {M}\nshape = {{ sphere = 0.3 }}\nposition = [0.0, 0.0, {z}]\n",
+                -G
+            );
+            for k in 0..3 {
+                let a = 2.0 * std::f64::consts::PI * k as f64 / 3.0;
+                text += &format!(
+                    "[[forces]]\nname = \"s{k}\"\ntype = \"sphere-sphere\"\nbodies = [\"ground\", \"ball\"]\n\
+                     at = [[{}, {}, 0.0], [0.0, 0.0, {z}]]\nradii = [0.5, 0.3]\nrigid = true\nfriction = 0.3\n",
+                    d * a.cos(),
+                    d * a.sin()
+                );
+            }
+            text += &format!(
+                "[[forces]]\nname = \"push\"\ntype = \"force\"\nbody = \"ball\"\n\
+                 fx = {{ kind = \"harmonic\", amplitude = 8.0, frequency = 1.0 }}\nfy = 2.0\n\
+                 [simulation]\nend = 2.0\nformulation = \"{formulation}\"\nintegrator = \"{integrator}\"\n\
+                 step = 1e-3\nrtol = 1e-10\natol = 1e-10\noutput_every = 0.01\n"
+            );
+            let what = format!("{formulation} {integrator}");
+            let table = run(&Scene::from_toml(&text, "pocket").unwrap());
+            let col = |name: &str| column(&table, name);
+            let rows = col("t").len();
+            assert!(rows == 201, "{what}: {rows} rows");
+            for k in 0..rows {
+                let off = (col("ball.x")[k]).hypot(col("ball.y")[k]).hypot(col("ball.z")[k] - z);
+                let speed = col("ball.vx")[k].hypot(col("ball.vy")[k]).hypot(col("ball.vz")[k]);
+                assert!(
+                    off < 1e-12 && speed < 1e-12,
+                    "{what}: moved by {off:e} m, at {speed:e} m/s"
+                );
+                let sum = |axis: &str| (0..3).map(|c| col(&format!("s{c}.f{axis}"))[k]).sum::<f64>();
+                assert!((sum("z") - M * G).abs() < 1e-9, "{what}: Σ fz = {}", sum("z"));
+                assert!((sum("y") + 2.0).abs() < 1e-9, "{what}: Σ fy = {}", sum("y"));
+                for c in 0..3 {
+                    let (f, n) = (col(&format!("s{c}.friction"))[k], col(&format!("s{c}.normal"))[k]);
+                    assert!(
+                        f <= 0.3 * n + 1e-12,
+                        "{what}: contact {c}: friction {f} N over μ N = {}",
+                        0.3 * n
+                    );
+                }
+            }
+        }
+    }
+}

@@ -593,7 +593,7 @@ pub fn solve_friction(
         }
         let solved = solve_dense(&mut work.jacobian[..n * n], &mut work.residual[..n], n);
         exact = linear && solved;
-        if !solved && !minimum_norm_step(work, n) {
+        if !solved && !minimum_norm_step(work, n, frictions.len()) {
             let what = "the friction and limit forces of these joints are not determined (their joints move together)";
             // Name the elements that hold (a stop or a sticking joint): theirs are the forces in
             // question; when only stops hold, say so.
@@ -650,27 +650,57 @@ pub fn solve_friction(
 /// The Newton step from forces `F₀` (`work.start`) where the Newton matrix `J` is singular (`J`
 /// and the residuals `r` in `work.copy`, `work.rhs`; the step into `work.residual`, as
 /// [`solve_dense`] leaves it): the forces `F` of the linearized equations `J F = J F₀ − r` of least
-/// norm, `F = Jᵀ (J Jᵀ + δ I)⁻¹ (J F₀ − r)` with `δ` 10⁻¹³ of `J Jᵀ`'s largest diagonal entry,
-/// the step `F₀ − F`. `J` is singular where elements that hold are redundant: two corners of a
+/// weighted norm ((L8) of `docs/limits.md`), `F = D (J D)⁺ (J F₀ − r)` with `D` the weights
+/// ([`FRICTION_WEIGHT`] on the elements below `frictions`, 1 on the limits) and the
+/// pseudo-inverse by [`least_norm`], the step `F₀ − F`. `J` is singular where elements that hold are redundant: two corners of a
 /// block stuck on a floor hold one motion, so only the sum of their friction forces is
 /// determined (two stops held on one motion, only the sum of theirs); the least-norm split is the
 /// one redundant joints' reactions get (`docs/sign-conventions.md`), and it does not depend on
 /// the forces the iteration starts from. `δ` leaves the forces `J` determines exact to `δ / s²`
 /// of a singular value `s`, which the Newton iteration takes back. False where even that fails.
-fn minimum_norm_step(work: &mut FrictionWork, n: usize) -> bool {
-    let j = &work.copy[..n * n];
+fn minimum_norm_step(work: &mut FrictionWork, n: usize, frictions: usize) -> bool {
     for a in 0..n {
-        work.rhs[a] = (0..n).map(|c| j[a * n + c] * work.start[c]).sum::<f64>() - work.rhs[a];
+        let j = &work.copy[a * n..(a + 1) * n];
+        work.rhs[a] = (0..n).map(|c| j[c] * work.start[c]).sum::<f64>() - work.rhs[a];
+    }
+    // Friction forces weigh `1 / FRICTION_WEIGHT` times a limit's: the columns of the friction
+    // elements scaled by it, `F = D y` with `y` of least norm.
+    let weight = |c: usize| {
+        if work.active[c] < frictions {
+            FRICTION_WEIGHT
+        } else {
+            1.0
+        }
+    };
+    for a in 0..n {
+        for c in 0..n {
+            work.copy[a * n + c] *= weight(c);
+        }
     }
     let scratch = (&mut work.gram[..n * n], &mut work.scratch[..n]);
-    if !least_norm(j, &mut work.rhs[..n], n, scratch, &mut work.residual[..n]) {
+    if !least_norm(
+        &work.copy[..n * n],
+        &mut work.rhs[..n],
+        n,
+        scratch,
+        &mut work.residual[..n],
+    ) {
         return false;
     }
-    for (step, start) in work.residual[..n].iter_mut().zip(&work.start[..n]) {
-        *step = start - *step;
+    for c in 0..n {
+        work.residual[c] = work.start[c] - weight(c) * work.residual[c];
     }
     true
 }
+
+/// The weight of a friction force against a limit's in [`minimum_norm_step`]'s split where the
+/// elements that hold are redundant (`docs/limits.md`, "Friction in spatial rigid contact"): the
+/// split minimizes `Σ F_limit² + Σ (F_friction / FRICTION_WEIGHT)²`, so contacts that can hold a
+/// body by their normal forces alone do so, their friction taking a hundredth of the share the
+/// plain least norm would give it (a ball wedged between three spheres: with the plain split its
+/// friction took 1.13 times the normal force, beyond any cone below that, and it slid out of a
+/// pocket that holds it without friction).
+const FRICTION_WEIGHT: f64 = 0.1;
 
 /// The least-norm solution `x` of `A x = b` (`A` row-major `n × n`, singular where rows are
 /// redundant), by iterated Tikhonov regularization: `x ← x + Aᵀ (A Aᵀ + δ I)⁻¹ (b − A x)` from
