@@ -361,3 +361,32 @@ fn a_ball_wedged_among_three_spheres_stays_there_pushed_to_and_fro() {
         }
     }
 }
+
+#[test]
+fn the_shipped_ball_rolls_off_its_sphere_as_the_reference() {
+    // `scenes/ball-rolls-off-sphere.toml` is the first case above (θ₀ = 0.1 rad, μ = 0.3,
+    // dopri5 1e-12): the reference within the same bars.
+    let (theta0, mu) = (0.1, 0.3);
+    let times: Vec<f64> = (0..=120).map(|k| k as f64 * 0.01).collect();
+    let (_, exact) = reference(theta0, mu, &times);
+    let table = run(&Scene::from_path("scenes/ball-rolls-off-sphere.toml").unwrap());
+    let col = |name: &str| column(&table, name);
+    let (x, z, vx, vz, wy) = (
+        col("ball.x"),
+        col("ball.z"),
+        col("ball.vx"),
+        col("ball.vz"),
+        col("ball.wy"),
+    );
+    let (normal, friction) = (col("touch.normal"), col("touch.friction"));
+    assert_eq!(x.len(), exact.len());
+    for (k, (t, e)) in exact.iter().enumerate() {
+        assert!((x[k] - e[0]).hypot(z[k] - e[1]) < 1e-9, "x({t})");
+        assert!((vx[k] - e[2]).hypot(vz[k] - e[3]) < 1e-9, "v({t})");
+        assert!((wy[k] - e[4]).abs() < 2.5e-8, "ω({t})");
+        assert!(
+            (normal[k] - e[5]).abs().max((friction[k] - e[6]).abs()) < 1e-8,
+            "forces({t})"
+        );
+    }
+}

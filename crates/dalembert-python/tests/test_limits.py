@@ -96,3 +96,31 @@ def test_a_ball_on_a_rigid_floor_with_friction_rolls_at_its_closed_form(scenes):
     tangential = np.hypot(run["floor.fx"][before], run["floor.fy"][before])
     assert np.max(np.abs(tangential - mu * m * G)) < 1e-9
     assert np.max(np.abs(run["floor.fz"] - m * G)) < 1e-9
+
+
+def test_a_ball_rolls_off_a_fixed_sphere_with_the_forces_of_its_free_body_diagram(scenes):
+    """scenes/ball-rolls-off-sphere.toml (docs/limits.md, "Friction in spatial rigid contact"): a
+    ball released at rest theta0 = 0.1 rad from the top of a fixed sphere, mu = 0.3. While it rolls
+    (before the slip's onset at 2 sin(theta) = mu (17 cos(theta) - 10 cos(theta0)), 0.738 s), at
+    each sample's angle: its speed from the energy, v^2 = (10/7) g rho (cos(theta0) - cos(theta)),
+    its friction (2/7) m g sin(theta) and normal force (m g / 7)(17 cos(theta) - 10 cos(theta0)), its
+    spin v / r; then, slipping, a friction of mu N; after it leaves (0.853 s) no contact force. Bars 1e-9 m/s, 1e-8 N, 1e-8 rad/s."""
+    run = dalembert.Scene.load(scenes / "ball-rolls-off-sphere.toml").simulate()
+    t = run["t"]
+    m, r, rho, mu, theta0 = 2.0, 0.1, 0.6, 0.3, 0.1
+    theta = np.arctan2(run["ball.x"], run["ball.z"])
+    rolling = t < 0.73
+    speed = np.hypot(run["ball.vx"], run["ball.vz"])
+    energy = np.sqrt(10.0 / 7.0 * G * rho * (np.cos(theta0) - np.cos(theta)))
+    assert np.max(np.abs(speed[rolling] - energy[rolling])) < 1e-9
+    friction = 2.0 / 7.0 * m * G * np.sin(theta)
+    normal = m * G / 7.0 * (17.0 * np.cos(theta) - 10.0 * np.cos(theta0))
+    assert np.max(np.abs(run["touch.friction"][rolling] - friction[rolling])) < 1e-8
+    assert np.max(np.abs(run["touch.normal"][rolling] - normal[rolling])) < 1e-8
+    assert np.max(np.abs(run["ball.wy"][rolling] - speed[rolling] / r)) < 1e-8
+    slipping = (t > 0.74) & (t < 0.85)
+    assert np.max(np.abs(run["touch.friction"][slipping] - mu * run["touch.normal"][slipping])) < 1e-8
+    flying = t > 0.86
+    assert flying.any()
+    assert np.max(np.abs(run["touch.normal"][flying])) == 0.0
+    assert np.max(np.abs(run["touch.friction"][flying])) == 0.0
