@@ -29,7 +29,7 @@
 //! so the tangents turn smoothly unless the line of centres turns to within 10⁻⁹ rad of it.
 
 use crate::frame::NV;
-use crate::limits::ContactData;
+use crate::limits::{ContactData, SpherePair};
 use crate::Model;
 use dalembert_system::{JointFriction, SlipRow};
 use nalgebra::Vector3;
@@ -122,16 +122,20 @@ impl Model {
                 helper,
                 ..
             } => {
-                let (fi, fj) = (self.frame(bodies[0], q, v), self.frame(bodies[1], q, v));
-                let (si, sj) = (fi.a * centres[0], fj.a * centres[1]);
-                let d = fj.r + sj - fi.r - si;
-                let length = d.norm();
+                let SpherePair {
+                    fi,
+                    fj,
+                    si,
+                    d,
+                    d_dot,
+                    length,
+                    ..
+                } = self.sphere_pair(bodies, centres, q, v);
                 if length <= f64::MIN_POSITIVE.sqrt() {
                     // Concentric: no plane of contact.
                     return None;
                 }
                 let n = d / length;
-                let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
                 let n_dot = (d_dot - n * n.dot(&d_dot)) / length;
                 let h = fi.a * helper;
                 let u = h.cross(&n);

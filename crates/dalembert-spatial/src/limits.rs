@@ -162,6 +162,20 @@ pub struct SphereSphereContact {
     pub friction: Option<f64>,
 }
 
+/// What [`Model::sphere_pair`] finds.
+pub(crate) struct SpherePair {
+    /// The first and second sphere's bodies' frames.
+    pub fi: crate::frame::Frame,
+    pub fj: crate::frame::Frame,
+    /// The centres' global arms from their bodies' centres of mass.
+    pub si: Vector3<f64>,
+    pub sj: Vector3<f64>,
+    /// `d = c_j − c_i`, `ḋ`, `|d|`.
+    pub d: Vector3<f64>,
+    pub d_dot: Vector3<f64>,
+    pub length: f64,
+}
+
 /// A rigid contact as the model keeps it: centres in their body frames, a unit normal.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) enum ContactData {
@@ -308,6 +322,29 @@ impl Model {
         Ok(self)
     }
 
+    /// Two spheres (centres in their bodies' frames) at `(q, v)`: their bodies' frames, the
+    /// centres' global arms, the line of centres `d = c_j − c_i`, its rate and length.
+    pub(crate) fn sphere_pair(
+        &self,
+        bodies: &[Option<usize>; 2],
+        centres: &[Vector3<f64>; 2],
+        q: &[f64],
+        v: &[f64],
+    ) -> SpherePair {
+        let (fi, fj) = (self.frame(bodies[0], q, v), self.frame(bodies[1], q, v));
+        let (si, sj) = (fi.a * centres[0], fj.a * centres[1]);
+        let d = fj.r + sj - fi.r - si;
+        SpherePair {
+            d_dot: fj.point_velocity(&sj) - fi.point_velocity(&si),
+            length: d.norm(),
+            d,
+            si,
+            sj,
+            fi,
+            fj,
+        }
+    }
+
     /// Rigid contact `k`'s unit normal (the direction in which it pushes its body: a plane's
     /// sphere, or the second of two spheres) and its contact point at `q`, global: the sphere's
     /// point nearest the plane, or the first sphere's point towards the second.
@@ -328,13 +365,13 @@ impl Model {
             ContactData::Spheres {
                 bodies, centres, radii, ..
             } => {
-                let (ci, cj) = (
-                    self.frame(bodies[0], q, &[]).point(&centres[0]),
-                    self.frame(bodies[1], q, &[]).point(&centres[1]),
-                );
-                let d = cj - ci;
-                let n = if d.norm() > 0.0 { d / d.norm() } else { Vector3::zeros() };
-                (n, ci + radii[0] * n)
+                let p = self.sphere_pair(bodies, centres, q, &[]);
+                let n = if p.length > 0.0 {
+                    p.d / p.length
+                } else {
+                    Vector3::zeros()
+                };
+                (n, p.fi.r + p.si + radii[0] * n)
             }
         }
     }
@@ -416,11 +453,15 @@ impl Model {
                 bodies, centres, radii, ..
             } => {
                 let reach = radii[0] + radii[1];
-                let fi = self.frame(bodies[0], q, v);
-                let fj = self.frame(bodies[1], q, v);
-                let (si, sj) = (fi.a * centres[0], fj.a * centres[1]);
-                let d = fj.r + sj - fi.r - si;
-                let length = d.norm();
+                let SpherePair {
+                    fi,
+                    fj,
+                    si,
+                    sj,
+                    d,
+                    d_dot,
+                    length,
+                } = self.sphere_pair(bodies, centres, q, v);
                 if length <= f64::MIN_POSITIVE.sqrt() {
                     // Concentric: no direction to part along.
                     return -reach;
@@ -428,7 +469,6 @@ impl Model {
                 let n = d / length;
                 push(bodies[1], n, fj.a.transpose() * sj.cross(&n));
                 push(bodies[0], -n, -(fi.a.transpose() * si.cross(&n)));
-                let d_dot = fj.point_velocity(&sj) - fi.point_velocity(&si);
                 let along = n.dot(&d_dot);
                 row.bias = n.dot(&(fj.centripetal(&sj) - fi.centripetal(&si)))
                     + (d_dot.norm_squared() - along * along) / length;
