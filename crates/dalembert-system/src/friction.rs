@@ -650,50 +650,65 @@ pub fn solve_friction(
 /// The Newton step from forces `F₀` (`work.start`) where the Newton matrix `J` is singular (`J`
 /// and the residuals `r` in `work.copy`, `work.rhs`; the step into `work.residual`, as
 /// [`solve_dense`] leaves it): the forces `F` of the linearized equations `J F = J F₀ − r` of least
-/// weighted norm ((L8) of `docs/limits.md`), `F = D (J D)⁺ (J F₀ − r)` with `D` the weights
-/// ([`FRICTION_WEIGHT`] on the elements below `frictions`, 1 on the limits) and the
-/// pseudo-inverse by [`least_norm`], the step `F₀ − F`. `J` is singular where elements that hold are redundant: two corners of a
-/// block stuck on a floor hold one motion, so only the sum of their friction forces is
-/// determined (two stops held on one motion, only the sum of theirs); the least-norm split is the
-/// one redundant joints' reactions get (`docs/sign-conventions.md`), and it does not depend on
-/// the forces the iteration starts from. `δ` leaves the forces `J` determines exact to `δ / s²`
-/// of a singular value `s`, which the Newton iteration takes back. False where even that fails.
+/// weighted norm ((L8) of `docs/limits.md`, by [`weighted_least_norm`]), the step `F₀ − F`. `J`
+/// is singular where elements that hold are redundant: two corners of a block stuck on a floor
+/// hold one motion, so only the sum of their friction forces is determined (two stops held on
+/// one motion, only the sum of theirs); the least-norm split is the one redundant joints'
+/// reactions get (`docs/sign-conventions.md`), and it does not depend on the forces the
+/// iteration starts from. False where even that fails.
 fn minimum_norm_step(work: &mut FrictionWork, n: usize, frictions: usize) -> bool {
     for a in 0..n {
         let j = &work.copy[a * n..(a + 1) * n];
         work.rhs[a] = (0..n).map(|c| j[c] * work.start[c]).sum::<f64>() - work.rhs[a];
     }
-    // Friction forces weigh `1 / FRICTION_WEIGHT` times a limit's: the columns of the friction
-    // elements scaled by it, `F = D y` with `y` of least norm.
-    let weight = |c: usize| {
-        if work.active[c] < frictions {
-            FRICTION_WEIGHT
-        } else {
-            1.0
-        }
-    };
-    for a in 0..n {
-        for c in 0..n {
-            work.copy[a * n + c] *= weight(c);
-        }
-    }
+    let active = &work.active;
     let scratch = (&mut work.gram[..n * n], &mut work.scratch[..n]);
-    if !least_norm(
-        &work.copy[..n * n],
+    if !weighted_least_norm(
+        &mut work.copy[..n * n],
         &mut work.rhs[..n],
-        n,
+        (n, |c| active[c] < frictions),
         scratch,
         &mut work.residual[..n],
     ) {
         return false;
     }
     for c in 0..n {
-        work.residual[c] = work.start[c] - weight(c) * work.residual[c];
+        work.residual[c] = work.start[c] - work.residual[c];
     }
     true
 }
 
-/// The weight of a friction force against a limit's in [`minimum_norm_step`]'s split where the
+/// The solution `x` of `A x = b` (`A` row-major `n × n`, singular where the elements that hold
+/// are redundant) of least weighted norm, `Σ x_limit² + Σ (x_friction / FRICTION_WEIGHT)²` over
+/// the unknowns `c` for which `friction(c)` holds and the others ((L8) of `docs/limits.md`): the
+/// columns of the friction elements scaled by [`FRICTION_WEIGHT`], `x = D y` with `y` of least
+/// norm by [`least_norm`]. The split of redundant forces ([`minimum_norm_step`]) and of redundant
+/// impulses (an impact or a stopping slip where held contacts are redundant) alike, so that both
+/// leave a body the normal forces can hold by them. `A` is scaled in place; `b`, `gram` (`n × n`)
+/// and `scratch` (`n`) are overwritten. False where it is not finite.
+pub(crate) fn weighted_least_norm(
+    a: &mut [f64],
+    b: &mut [f64],
+    (n, friction): (usize, impl Fn(usize) -> bool),
+    scratch: (&mut [f64], &mut [f64]),
+    x: &mut [f64],
+) -> bool {
+    let weight = |c: usize| if friction(c) { FRICTION_WEIGHT } else { 1.0 };
+    for r in 0..n {
+        for c in 0..n {
+            a[r * n + c] *= weight(c);
+        }
+    }
+    if !least_norm(&a[..n * n], b, n, scratch, x) {
+        return false;
+    }
+    for (c, out) in x.iter_mut().enumerate().take(n) {
+        *out *= weight(c);
+    }
+    true
+}
+
+/// The weight of a friction force against a limit's in [`weighted_least_norm`]'s split where the
 /// elements that hold are redundant (`docs/limits.md`, "Friction in spatial rigid contact"): the
 /// split minimizes `Σ F_limit² + Σ (F_friction / FRICTION_WEIGHT)²`, so contacts that can hold a
 /// body by their normal forces alone do so, their friction taking a hundredth of the share the
@@ -709,13 +724,7 @@ const FRICTION_WEIGHT: f64 = 0.1;
 /// 10⁴ of the largest), and adds nothing along the directions of zero singular values, whatever
 /// the round-off in `b`: it converges to `A⁺ b`. `b`, `gram` (`n × n`) and `scratch` (`n`) are
 /// overwritten. False where it is not finite.
-pub(crate) fn least_norm(
-    a: &[f64],
-    b: &mut [f64],
-    n: usize,
-    (gram, scratch): (&mut [f64], &mut [f64]),
-    x: &mut [f64],
-) -> bool {
+fn least_norm(a: &[f64], b: &mut [f64], n: usize, (gram, scratch): (&mut [f64], &mut [f64]), x: &mut [f64]) -> bool {
     scratch[..n].copy_from_slice(&b[..n]);
     x[..n].iter_mut().for_each(|v| *v = 0.0);
     for _ in 0..3 {

@@ -3,7 +3,7 @@
 //! event (`docs/friction.md`, "Events"), each one set of impulses solved together.
 
 use super::{Frictional, STRIKE_TOGETHER};
-use crate::friction::{least_norm, solve_dense, Mode, RELEASE_SHARE};
+use crate::friction::{solve_dense, weighted_least_norm, Mode, RELEASE_SHARE};
 use crate::limit::{impact_impulse, impact_loss, LIMIT_SLACK};
 use crate::{DynamicsError, Formulation};
 
@@ -409,12 +409,14 @@ impl Frictional {
             return Ok(());
         }
         // Redundant: two corners of a block held on a floor, or stuck on it, hold one motion; the
-        // least-norm impulses (as `solve_friction`'s least-norm forces).
+        // impulses of least weighted norm, as `solve_friction`'s forces (friction impulses weigh
+        // more than the limits', so a body the normal impulses can hold is held by them).
         equations(&mut self.impact_lu, &mut self.impact_rhs);
-        if least_norm(
-            &self.impact_lu[..n * n],
+        let frictions = self.frictions;
+        if weighted_least_norm(
+            &mut self.impact_lu[..n * n],
             &mut self.impact_rhs[..n],
-            n,
+            (n, |c| set[c] < frictions),
             (&mut self.impact_gram[..n * n], &mut self.impact_scratch[..n]),
             &mut self.impact_p[..n],
         ) {
