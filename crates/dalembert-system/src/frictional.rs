@@ -68,6 +68,9 @@ pub struct Frictional {
     /// Per element: a held limit whose impulse would pull in the impact under way (it lets go
     /// where some limit strikes).
     released: Vec<bool>,
+    /// Per element: a held limit the impact under way keeps on its bound though its impulse
+    /// pulls: let go, it would leave slower than its rest speed ([`Frictional::keep_slow_releases`]).
+    kept: Vec<bool>,
     /// Work space of the impulses' least-norm solution where their set is redundant.
     impact_gram: Vec<f64>,
     impact_rhs: Vec<f64>,
@@ -156,6 +159,7 @@ impl Frictional {
             striking: Vec::with_capacity(count),
             strike: vec![None; count],
             released: vec![false; count],
+            kept: vec![false; count],
             impact_gram: vec![0.0; count * count],
             impact_rhs: vec![0.0; count],
             impact_scratch: vec![0.0; count],
@@ -439,13 +443,17 @@ impl Frictional {
     /// function is raised by what it lacks of [`LIMIT_SLACK`] there, so that it starts above zero
     /// and a return to the bound within the next step changes its sign. The function at the
     /// located event is zero to the location's round-off (measured −7e-15 to +4e-15 rad on a
-    /// chain with pin friction), so the bound moves by as little; raised by at most
-    /// [`STRIKE_TOGETHER`].
+    /// chain with pin friction), so the bound moves by as little; a limit held for a while has
+    /// drifted past its bound by the integration's error (its rate is held, not its position:
+    /// 2e-12 m, measured on a box's corner), by which it is raised, up to [`RAISED_MOST`]. A
+    /// function left below zero would cross it at the start of the next step, as the corner
+    /// rises, and take the location from a crossing the step holds after it (two other corners
+    /// of the box landing: they went through the floor).
     fn leave_bound(&mut self, k: usize, t: f64, q: &[f64], v: &[f64]) {
         let l = k - self.frictions;
         let s = self.fill_row(k, t, q, v);
         let below = LIMIT_SLACK - self.inner.system().limits()[l].free_event(s);
-        self.raised[l] = below.clamp(0.0, STRIKE_TOGETHER);
+        self.raised[l] = below.clamp(0.0, RAISED_MOST);
     }
 
     /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
@@ -536,6 +544,11 @@ const SLIP_TOLERANCE: f64 = 1e-13;
 /// ([`Frictional::at_event`], (L9) of `docs/limits.md`): far above the round-off of a coordinate
 /// (a block's corners listed level to 10⁻¹⁵ m land together), far below any gap a run resolves.
 const STRIKE_TOGETHER: f64 = 1e-12;
+
+/// The most a limit's event function is raised by where it leaves its bound
+/// ([`Frictional::leave_bound`]), m or rad: far above a held limit's drift off its bound, far
+/// below any gap a run resolves.
+const RAISED_MOST: f64 = 1e-9;
 
 /// The rate (m/s or rad/s) below which a limit that starts at its bound and moves away from it
 /// starts held: round-off of a rate that is zero (a cam's surface sliding along its follower).

@@ -72,17 +72,7 @@ impl Frictional {
         // impulse (its slip stopped where that suffices, else slowed by `μ P_n`).
         let limits = self.impact_set.len();
         for a in 0..limits {
-            let contact = self.impact_set[a] - self.frictions;
-            let pressed = self.strike[self.impact_set[a]].is_some();
-            // One element, or a cone's two.
-            for f in 0..self.frictions {
-                let loaded = self.inner.system().frictions()[f].load_limit == Some(contact);
-                if loaded && (pressed || self.terms[f].mode != Mode::Free) {
-                    self.impact_set.push(f);
-                    self.impact_target[f] = 0.0;
-                    self.impact_frictions.push((f, self.impact_set[a], None));
-                }
-            }
+            self.add_contact_friction(self.impact_set[a]);
         }
         let mut qdd = std::mem::take(&mut self.event_qdd);
         let mut lambda = std::mem::take(&mut self.event_lambda);
@@ -104,6 +94,7 @@ impl Frictional {
             if let Some((sign, held)) = self.strike[k].take() {
                 self.terms[k].mode = if held { Mode::Held(sign) } else { Mode::Free };
             }
+            self.kept[k] = false;
             if std::mem::take(&mut self.released[k]) && struck {
                 self.terms[k].mode = Mode::Free;
                 self.leave_bound(k, t, q, v);
@@ -114,6 +105,55 @@ impl Frictional {
             self.follow_contacts(t, q, v);
         }
         Ok(struck)
+    }
+
+    /// Adds to the impact under way the friction elements of limit element `k`'s contact (one
+    /// element, or a cone's two) where `k` strikes or its friction is not free, their rates to
+    /// stop (L6).
+    fn add_contact_friction(&mut self, k: usize) {
+        let (contact, pressed) = (k - self.frictions, self.strike[k].is_some());
+        for f in 0..self.frictions {
+            let loaded = self.inner.system().frictions()[f].load_limit == Some(contact);
+            if loaded && (pressed || self.terms[f].mode != Mode::Free) {
+                self.impact_set.push(f);
+                self.impact_target[f] = 0.0;
+                self.impact_frictions.push((f, k, None));
+            }
+        }
+    }
+
+    /// The held limits the impact under way let go of (their impulses would pull) that would
+    /// leave their bounds slower than their rest speeds, or not at all, under the impulses found
+    /// without them: each is kept on its bound with its contact's friction (its impulse may then
+    /// pull) and true is returned, for the impulses to be found again. The rule that holds a
+    /// striking limit whose rebound is below its rest speed ((L3)), for a limit the impact would
+    /// lift: a block rocking onto the other corner of an edge lifts the first ever slower (with
+    /// `e = 0`, by the ratio of its angular momenta about the two corners), a sequence of impacts
+    /// without end in finite time; it stops once the lift is below the rest speed. And a held
+    /// limit let go where the impulses drive it into its bound is kept on it.
+    fn keep_slow_releases(&mut self, v: &[f64]) -> bool {
+        let n = self.impact_set.len();
+        let mut kept = false;
+        for k in self.frictions..self.terms.len() {
+            let Mode::Held(sign) = self.terms[k].mode else { continue };
+            if !self.released[k] {
+                continue;
+            }
+            let row = &self.terms[k].row;
+            let rate = row.dot(v)
+                + (0..n)
+                    .map(|b| row.dot(&self.terms[self.impact_set[b]].dv) * self.impact_p[b])
+                    .sum::<f64>();
+            if sign * rate < self.inner.system().limits()[k - self.frictions].rest_speed {
+                self.released[k] = false;
+                self.kept[k] = true;
+                self.impact_set.push(k);
+                self.impact_target[k] = 0.0;
+                self.add_contact_friction(k);
+                kept = true;
+            }
+        }
+        kept
     }
 
     /// The sign `σ` with which limit element `k`'s impulse pushes in the impact under way (its
@@ -202,10 +242,18 @@ impl Frictional {
             let n = self.impact_set.len();
             let largest = self.impact_p[..n].iter().fold(0.0f64, |m, p| m.max(p.abs()));
             let pulling = (0..n).find(|&a| {
-                self.pushing_sign(self.impact_set[a])
-                    .is_some_and(|sign| sign * self.impact_p[a] < -RELEASE_SHARE * largest)
+                let k = self.impact_set[a];
+                !self.kept[k]
+                    && self
+                        .pushing_sign(k)
+                        .is_some_and(|sign| sign * self.impact_p[a] < -RELEASE_SHARE * largest)
             });
-            let Some(a) = pulling else { break };
+            let Some(a) = pulling else {
+                if self.keep_slow_releases(v) {
+                    continue;
+                }
+                break;
+            };
             let k = self.impact_set.remove(a);
             if self.strike[k].take().is_none() {
                 self.released[k] = true;
