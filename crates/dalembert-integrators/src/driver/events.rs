@@ -58,6 +58,8 @@ pub(super) struct Events {
     previous: (f64, f64),
     /// True while [`Events::settle_at_start`] settles: the aimed function counts as crossed.
     at_start: bool,
+    /// The functions [`Events::crossing`] passes over ([`Events::skip_start`]).
+    skip: Vec<bool>,
 }
 
 impl Events {
@@ -86,6 +88,7 @@ impl Events {
             last_side: None,
             previous: (0.0, 0.0),
             at_start: false,
+            skip: vec![false; m],
         }
     }
 
@@ -153,8 +156,9 @@ impl Events {
         }
         let (q, v) = y.split_at(n_q);
         f.events(t + h, q, v, &mut self.g);
-        let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
-        if !(self.g0.iter().zip(&self.g)).any(|(&a, &b)| changed(a, b)) {
+        let skip = &self.skip;
+        let changed = |(i, (&a, &b)): (usize, (&f64, &f64))| !skip[i] && ((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0));
+        if !(self.g0.iter().zip(&self.g)).enumerate().any(changed) {
             return None;
         }
         // The first θ where any function that changed over the step has changed: bisection on
@@ -165,7 +169,7 @@ impl Events {
             stepper.interpolate(mid, &mut self.y);
             let (q, v) = self.y.split_at(n_q);
             f.events(t + mid * h, q, v, &mut self.g);
-            if (self.g0.iter().zip(&self.g)).any(|(&a, &b)| changed(a, b)) {
+            if (self.g0.iter().zip(&self.g)).enumerate().any(changed) {
                 hi = mid;
             } else {
                 lo = mid;
@@ -176,8 +180,35 @@ impl Events {
         stepper.interpolate(hi, &mut self.y);
         let (q, v) = self.y.split_at(n_q);
         f.events(t + hi * h, q, v, &mut self.g);
-        self.aimed = (self.g0.iter().zip(&self.g)).position(|(&a, &b)| changed(a, b));
+        self.aimed = (self.g0.iter().zip(&self.g)).enumerate().position(changed);
         Some(hi)
+    }
+
+    /// A step from `t` of size `h` (its dense output in `stepper`) crossed an event within its
+    /// first fraction `theta` (the smallest step), and settling it at the start
+    /// ([`Events::settle_at_start`]) changed nothing, or was done already: the functions that
+    /// changed sign by `theta` are passed over by the next [`Events::crossing`], which then finds
+    /// the first crossing after them. Without it the whole step was taken with every later
+    /// crossing in it lost: a corner let go from a floor a little below it, its function
+    /// crossing zero as it rose, and two other corners of the box landing within the step went
+    /// through the floor. [`Events::accepted`] clears it.
+    pub fn skip_start(
+        &mut self,
+        f: &mut dyn Formulation,
+        stepper: &dyn Stepper,
+        (t, h, theta): (f64, f64, f64),
+        n_q: usize,
+    ) {
+        if self.is_empty() {
+            return;
+        }
+        let theta = theta.min(1.0);
+        stepper.interpolate(theta, &mut self.y);
+        let (q, v) = self.y.split_at(n_q);
+        f.events(t + theta * h, q, v, &mut self.g);
+        for ((s, &a), &b) in self.skip.iter_mut().zip(&self.g0).zip(&self.g) {
+            *s = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+        }
     }
 
     /// After a fixed step from `t` of size `h` ending at `y`: the fraction `θ ∈ (0, 1)` of the
@@ -366,5 +397,6 @@ impl Events {
         f.events(t, q, v, &mut self.g0);
         self.located = false;
         self.aimed = None;
+        self.skip.iter_mut().for_each(|s| *s = false);
     }
 }

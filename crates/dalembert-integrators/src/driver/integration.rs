@@ -845,6 +845,17 @@ impl Integration {
                         mon.stats.events += 1;
                         continue;
                     }
+                    // Settled, or nothing to settle: the first crossing after the start's.
+                    events.skip_start(f, stepper.as_ref(), (*t, a.h, opts.min_step / a.h), n_q);
+                    if let Some(theta) = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q) {
+                        if theta * a.h > opts.min_step {
+                            events.restore(y);
+                            stepper.state_changed();
+                            a.h *= theta;
+                            events.located = true;
+                            continue;
+                        }
+                    }
                 }
             }
             let collapse = a
