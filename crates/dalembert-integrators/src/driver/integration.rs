@@ -830,14 +830,8 @@ impl Integration {
             let outcome = tangents.step(stepper.as_mut(), f, *t, a.h, y)?;
             if outcome.accepted && !events.located {
                 // A contact beginning or ending inside the step: the step again, to end there.
-                if let Some(theta) = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q) {
-                    if theta * a.h > opts.min_step {
-                        events.restore(y);
-                        stepper.state_changed();
-                        a.h *= theta;
-                        events.located = true;
-                        continue;
-                    }
+                let mut found = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q);
+                if found.is_some_and(|theta| theta * a.h <= opts.min_step) {
                     // At the step's start: settled there (once), and the step taken again.
                     if !settled && events.settle_at_start(f, *t, y, n_q)? {
                         settled = true;
@@ -847,15 +841,14 @@ impl Integration {
                     }
                     // Settled, or nothing to settle: the first crossing after the start's.
                     events.skip_start(f, stepper.as_ref(), (*t, a.h, opts.min_step / a.h), n_q);
-                    if let Some(theta) = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q) {
-                        if theta * a.h > opts.min_step {
-                            events.restore(y);
-                            stepper.state_changed();
-                            a.h *= theta;
-                            events.located = true;
-                            continue;
-                        }
-                    }
+                    found = events.crossing(f, stepper.as_ref(), *t, a.h, y, n_q);
+                }
+                if let Some(theta) = found.filter(|theta| theta * a.h > opts.min_step) {
+                    events.restore(y);
+                    stepper.state_changed();
+                    a.h *= theta;
+                    events.located = true;
+                    continue;
                 }
             }
             let collapse = a
