@@ -24,6 +24,12 @@ const BISECTIONS: usize = 40;
 /// slip's rate within a hundredth of its margin), far below an interpolant's error.
 const AIMED_SLACK: f64 = 1e3;
 
+/// True where an event function went from `a` to `b` across zero (from or to zero exactly does
+/// not count).
+fn changed_sign(a: f64, b: f64) -> bool {
+    (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)
+}
+
 /// The event functions of a run and the state at the start of the step in progress.
 #[derive(Default)]
 pub(super) struct Events {
@@ -157,7 +163,7 @@ impl Events {
         let (q, v) = y.split_at(n_q);
         f.events(t + h, q, v, &mut self.g);
         let skip = &self.skip;
-        let changed = |(i, (&a, &b)): (usize, (&f64, &f64))| !skip[i] && ((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0));
+        let changed = |(i, (&a, &b)): (usize, (&f64, &f64))| !skip[i] && changed_sign(a, b);
         if !(self.g0.iter().zip(&self.g)).enumerate().any(changed) {
             return None;
         }
@@ -207,7 +213,7 @@ impl Events {
         let (q, v) = self.y.split_at(n_q);
         f.events(t + theta * h, q, v, &mut self.g);
         for ((s, &a), &b) in self.skip.iter_mut().zip(&self.g0).zip(&self.g) {
-            *s = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
+            *s = changed_sign(a, b);
         }
     }
 
@@ -222,7 +228,7 @@ impl Events {
         let (q, v) = y.split_at(n_q);
         f.events(t + h, q, v, &mut self.g);
         let first = (self.g0.iter().zip(&self.g).enumerate())
-            .filter(|&(i, (&a, &b))| ((a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0)) && f.event_needs_location(i))
+            .filter(|&(i, (&a, &b))| changed_sign(a, b) && f.event_needs_location(i))
             .map(|(i, (&a, &b))| (i, a / (a - b)))
             .min_by(|x, y| x.1.total_cmp(&y.1));
         if let Some((i, _)) = first {
@@ -301,7 +307,7 @@ impl Events {
             // not put the event where the function is not zero (a stop struck 6.7e-6 rad before
             // it was reached); the next step finds the crossing.
             let aimed = self.aimed == Some(i) && (self.at_start || b.abs() <= AIMED_SLACK * f.event_tolerance(i));
-            *c = (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0) || aimed;
+            *c = changed_sign(a, b) || aimed;
         }
         if !self.crossed.iter().any(|&c| c) {
             return Ok(false);
@@ -331,9 +337,8 @@ impl Events {
         }
         let (q, v) = self.y.split_at(n_q);
         f.events(t + eps, q, v, &mut self.ahead);
-        let changed = |a: f64, b: f64| (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0);
         let first = (self.g0.iter().zip(&self.g).zip(&self.ahead).enumerate())
-            .filter(|&(i, ((&a, &b), _))| changed(a, b) && f.event_needs_location(i))
+            .filter(|&(i, ((&a, &b), _))| changed_sign(a, b) && f.event_needs_location(i))
             .map(|(i, ((&a, _), &c))| (i, -a * eps / ((c - a) * h)))
             .filter(|(_, th)| *th > 0.0 && *th <= 1.0)
             .min_by(|x, y| x.1.total_cmp(&y.1));
