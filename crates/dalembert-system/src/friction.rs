@@ -18,7 +18,9 @@
 //! the mode changes only at an event, at the end of a step shortened to end there: a slip whose
 //! rate reaches zero sticks (if (F2) can hold it) or reverses, and a stuck joint whose rate
 //! leaves its stick speed `w_s` slips ([`Mode::event`]). (F3) is continuous with (F1), so a
-//! joint begins to slip within a step without a jump in its force.
+//! joint begins to slip within a step without a jump in its force. A friction cone's two elements
+//! (a spatial rigid contact's) begin to slip together by maximal dissipation, their force on the
+//! bound and anti-parallel to the slip acceleration it leaves ((L14) of `docs/limits.md`).
 //!
 //! Accelerations and multipliers are affine in the friction forces: `v̇ = v̇₀ + Σ A_k F_k`,
 //! `λ = λ₀ + Σ Λ_k F_k`, with `A_k`, `Λ_k` the response of the formulation to a unit generalized
@@ -450,6 +452,8 @@ pub fn solve_friction(
     // True when the last step solved linear equations exactly (every law `ẇ = 0` or `F = 0`,
     // by the LU): if the laws stay, the forces are their solution, without another solve.
     let mut exact = false;
+    // The last Newton step's size (the iteration's rate, below).
+    let mut last_step = f64::INFINITY;
     for iteration in 0..MAX_ITERATIONS {
         // λ(F) and the residuals and Newton matrix at F.
         work.lambda.copy_from_slice(lambda);
@@ -529,6 +533,17 @@ pub fn solve_friction(
                     };
                     if ((iteration == 0 && terms[k].fresh) || size <= bound) && !stays_loose {
                         Law::Hold
+                    } else if partner < n
+                        && onset_ready(
+                            (terms[k].force, terms[work.active[partner]].force),
+                            (alpha, work.alpha[partner]),
+                            (
+                                bound,
+                                work.coupling[a * n + a].max(work.coupling[partner * n + partner]),
+                            ),
+                        )
+                    {
+                        Law::Onset(partner)
                     } else if stays_loose && work.direction[a] != 0.0 {
                         Law::Slip(work.direction[a])
                     } else if partner < n {
@@ -539,8 +554,15 @@ pub fn solve_friction(
                 }
             };
             let holding = law == Law::Hold;
-            linear &= !matches!(law, Law::Slip(_));
-            work.direction[a] = if let Law::Slip(sign) = law { sign } else { 0.0 };
+            linear &= matches!(law, Law::Hold | Law::Zero);
+            work.direction[a] = match law {
+                Law::Slip(sign) => sign,
+                Law::Onset(b) => {
+                    let (fa, fb) = (terms[k].force, terms[work.active[b]].force);
+                    -fa / fa.hypot(fb)
+                }
+                _ => 0.0,
+            };
             changed |= holding != work.holding[a];
             work.holding[a] = holding;
             let term = &terms[k];
@@ -554,6 +576,48 @@ pub fn solve_friction(
                     work.residual[a] = term.force;
                     for b in 0..n {
                         work.jacobian[row + b] = if b == a { 1.0 } else { 0.0 };
+                    }
+                }
+                Law::Onset(b) => {
+                    // (F3) of a cone by maximal dissipation: the force on the cone's bound and
+                    // anti-parallel to the slip acceleration it leaves (`docs/limits.md`, (L14)).
+                    // The first of the two rows is the bound, the second the cross product.
+                    let spec = &frictions[k];
+                    let (limit, at) = limit_load(spec, terms, frictions.len());
+                    let load = Load::at(spec, &work.lambda, limit);
+                    let (fa, fb) = (term.force, terms[work.active[b]].force);
+                    let size = fa.hypot(fb);
+                    scale = scale.max(size).max(load.bound);
+                    if a < b {
+                        work.residual[a] = size - load.bound;
+                        for c in 0..n {
+                            let other = &terms[work.active[c]];
+                            let own = if work.active[c] == at { 1.0 } else { 0.0 };
+                            let norm = if c == a {
+                                fa / size
+                            } else if c == b {
+                                fb / size
+                            } else {
+                                0.0
+                            };
+                            work.jacobian[row + c] =
+                                norm - load.change(spec, &work.lambda, &other.dlambda, (limit, own));
+                        }
+                    } else {
+                        // Row `a` is the cone's second: `ẇ_b F_a − ẇ_a F_b = 0` (here `b` is the
+                        // first row).
+                        let first = work.alpha[b];
+                        work.residual[a] = first * fa - alpha * fb;
+                        for c in 0..n {
+                            let mut j = work.coupling[b * n + c] * fa - work.coupling[row + c] * fb;
+                            if c == a {
+                                j += first;
+                            }
+                            if c == b {
+                                j -= alpha;
+                            }
+                            work.jacobian[row + c] = j;
+                        }
                     }
                 }
                 Law::Slip(sign) => {
@@ -614,7 +678,15 @@ pub fn solve_friction(
             terms[work.active[a]].force -= d;
             step = step.max(d.abs());
         }
-        if iteration > 0 && !changed && step <= 1e-13 * scale.max(f64::MIN_POSITIVE) {
+        // Ended at round-off; or where the steps stop shrinking (by less than half) below 10⁻⁹
+        // of the largest force, which Newton's method does only where its matrix is nearly
+        // singular (redundant holds beside a cone at the bound it just cannot hold, (L14) of
+        // `docs/limits.md`): its residuals are then at round-off and the steps are that
+        // round-off over the matrix's smallest singular value.
+        let scale = scale.max(f64::MIN_POSITIVE);
+        let stalled = step <= 1e-9 * scale && step > 0.5 * last_step;
+        last_step = step;
+        if iteration > 0 && !changed && (step <= 1e-13 * scale || stalled) {
             break;
         }
         if iteration + 1 == MAX_ITERATIONS {
@@ -773,6 +845,24 @@ enum Law {
     Zero,
     /// (F1) in the direction of the sign.
     Slip(f64),
+    /// A cone's (F3) where it cannot hold, with its other element at the given position of the
+    /// active ones: the two forces on the bound `μ N`, anti-parallel to the slip acceleration
+    /// they leave (maximal dissipation; `docs/limits.md`, (L14)).
+    Onset(usize),
+}
+
+/// True where a cone's forces `f` are near enough its bound to be iterated by [`Law::Onset`]
+/// (whose first row, `|F| − μ N`, has no direction at `F = 0`), from half the bound, and do not
+/// feed the slip acceleration `alpha` they leave: `ẇ = −s F` with `s ≥ 0` at the solution, where
+/// `s = −ẇ·F / |F|²`; the cross product's other root, `s < 0`, would. Iterates near a bound the
+/// cone just cannot hold (`s` near zero) scatter around it by their error, so `s` down to
+/// `−10⁻³` of the cone's largest self-coupling `w` (`(bound, w)`) is taken; otherwise (F3)
+/// along the holding force (the Euclidean projection on the bound) brings the forces there
+/// first.
+fn onset_ready(f: (f64, f64), alpha: (f64, f64), (bound, w): (f64, f64)) -> bool {
+    let size = f.0.hypot(f.1);
+    let s = -(alpha.0 * f.0 + alpha.1 * f.1) / (size * size);
+    bound > 0.0 && size >= 0.5 * bound && s >= -1e-3 * w
 }
 
 /// Solves `A x = b` in place (`A` row-major `n × n`, overwritten by its LU factors; `b` by `x`)
