@@ -545,6 +545,15 @@ const SLIP_TOLERANCE: f64 = 1e-13;
 /// (a block's corners listed level to 10⁻¹⁵ m land together), far below any gap a run resolves.
 const STRIKE_TOGETHER: f64 = 1e-12;
 
+/// How near its bound (m or rad) a free limit moving towards it strikes with another that
+/// strikes ([`Frictional::at_event`], (L9) of `docs/limits.md`): the ends of a bar dropped level
+/// land together, though a run's state holds them level only to its integration's error (at
+/// dopri5 1e-11, 10⁻¹¹ of a metre); struck one after the other, the first end's friction
+/// impulse turns the bar, and runs whose states differ at that level (the formulations) do not
+/// agree on the order. Far below any gap a run resolves; a limit struck this early is held
+/// where it is, at most this far off its bound.
+const LAND_TOGETHER: f64 = 1e-10;
+
 /// The most a limit's event function is raised by where it leaves its bound
 /// ([`Frictional::leave_bound`]), m or rad: far above a held limit's drift off its bound, far
 /// below any gap a run resolves.
@@ -840,13 +849,14 @@ impl Formulation for Frictional {
             }
         }
         if !self.striking.is_empty() {
-            // The free limits within `STRIKE_TOGETHER` of their bounds strike with them (where
-            // they move towards them): corners that land together at round-off.
+            // The free limits within `LAND_TOGETHER` of their bounds strike with them (where
+            // they move towards them): corners that land together to within the integration's
+            // error.
             for k in self.frictions..self.terms.len() {
                 if self.terms[k].mode == Mode::Free && !self.striking.contains(&k) {
                     let s = self.fill_row(k, t, q, v);
                     let limit = &self.inner.system().limits()[k - self.frictions];
-                    if limit.free_event(s) <= LIMIT_SLACK + STRIKE_TOGETHER {
+                    if limit.free_event(s) <= LIMIT_SLACK + LAND_TOGETHER {
                         self.striking.push(k);
                     }
                 }
