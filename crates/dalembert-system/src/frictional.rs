@@ -71,6 +71,9 @@ pub struct Frictional {
     /// Per element: a held limit the impact under way keeps on its bound though its impulse
     /// pulls: let go, it would leave slower than its rest speed ([`Frictional::keep_slow_releases`]).
     kept: Vec<bool>,
+    /// The friction elements' `fresh` flags, kept across [`Frictional::release_pulling`]'s
+    /// evaluation.
+    fresh_kept: Vec<bool>,
     /// Work space of the impulses' least-norm solution where their set is redundant.
     impact_gram: Vec<f64>,
     impact_rhs: Vec<f64>,
@@ -160,6 +163,7 @@ impl Frictional {
             strike: vec![None; count],
             released: vec![false; count],
             kept: vec![false; count],
+            fresh_kept: vec![false; count],
             impact_gram: vec![0.0; count * count],
             impact_rhs: vec![0.0; count],
             impact_scratch: vec![0.0; count],
@@ -458,6 +462,54 @@ impl Frictional {
 
     /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
     /// reaction loads (`m + loads` of them).
+    /// Lets go, after an event, of the held limits whose holding force pulls at the state it
+    /// leaves ((L2) of `docs/limits.md`): their event function, `σ F_hold + adhesion`, starts
+    /// the next step negative, so no crossing would end the hold, and a limit whose law gives
+    /// it no force while it pulls would stay held however far its body moved off the bound
+    /// (a box's corner lifted 8 cm was held there once another corner landed). Released
+    /// together, then the holds found again, until none pulls. True where one was let go.
+    fn release_pulling(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<bool, DynamicsError> {
+        let mut released = false;
+        for _ in self.frictions..self.terms.len() {
+            if !self.terms[self.frictions..]
+                .iter()
+                .any(|term| matches!(term.mode, Mode::Held(_)))
+            {
+                break;
+            }
+            // The evaluation here must not take the first iterate of an element that has just
+            // come to stick from the step that follows.
+            for k in 0..self.frictions {
+                self.fresh_kept[k] = self.terms[k].fresh;
+            }
+            let mut qdd = std::mem::take(&mut self.event_qdd);
+            let mut lambda = std::mem::take(&mut self.event_lambda);
+            let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
+            self.event_qdd = qdd;
+            self.event_lambda = lambda;
+            for k in 0..self.frictions {
+                self.terms[k].fresh = self.fresh_kept[k];
+            }
+            result?;
+            let mut any = false;
+            for k in self.frictions..self.terms.len() {
+                if let Mode::Held(sign) = self.terms[k].mode {
+                    if sign * self.terms[k].hold + self.work.adhesion < 0.0 {
+                        self.terms[k].mode = Mode::Free;
+                        self.leave_bound(k, t, q, v);
+                        any = true;
+                    }
+                }
+            }
+            if !any {
+                break;
+            }
+            self.follow_contacts(t, q, v);
+            released = true;
+        }
+        Ok(released)
+    }
+
     fn evaluate(
         &mut self,
         (t, q, qd): (f64, &[f64], &[f64]),
@@ -892,6 +944,7 @@ impl Formulation for Frictional {
             }
             self.stopping.clear();
         }
+        changed |= self.release_pulling(t, q, v)?;
         Ok(changed)
     }
 
