@@ -462,6 +462,17 @@ impl Frictional {
 
     /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
     /// reaction loads (`m + loads` of them).
+    /// Evaluates at `(t, q, v)` into the event buffers, for the elements' holding forces
+    /// (`terms[k].hold`).
+    fn evaluate_holds(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), DynamicsError> {
+        let mut qdd = std::mem::take(&mut self.event_qdd);
+        let mut lambda = std::mem::take(&mut self.event_lambda);
+        let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
+        self.event_qdd = qdd;
+        self.event_lambda = lambda;
+        result
+    }
+
     /// Lets go, after an event, of the held limits whose holding force pulls at the state it
     /// leaves ((L2) of `docs/limits.md`): their event function, `σ F_hold + adhesion`, starts
     /// the next step negative, so no crossing would end the hold, and a limit whose law gives
@@ -482,11 +493,7 @@ impl Frictional {
             for k in 0..self.frictions {
                 self.fresh_kept[k] = self.terms[k].fresh;
             }
-            let mut qdd = std::mem::take(&mut self.event_qdd);
-            let mut lambda = std::mem::take(&mut self.event_lambda);
-            let result = self.accelerations(t, q, v, None, &mut qdd, &mut lambda);
-            self.event_qdd = qdd;
-            self.event_lambda = lambda;
+            let result = self.evaluate_holds(t, q, v);
             for k in 0..self.frictions {
                 self.terms[k].fresh = self.fresh_kept[k];
             }
@@ -782,14 +789,9 @@ impl Formulation for Frictional {
             .iter()
             .any(|t| matches!(t.mode, Mode::Held(_)));
         if held {
-            let mut qdd = std::mem::take(&mut self.event_qdd);
-            let mut lambda = std::mem::take(&mut self.event_lambda);
             // An evaluation that fails leaves the held limits' functions as they were; the
             // step's own evaluation reports the failure.
-            let solved = self.accelerations(t, q, v, None, &mut qdd, &mut lambda).is_ok();
-            self.event_qdd = qdd;
-            self.event_lambda = lambda;
-            if !solved {
+            if self.evaluate_holds(t, q, v).is_err() {
                 return;
             }
         }
