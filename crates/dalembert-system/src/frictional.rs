@@ -599,9 +599,11 @@ const SLIP_ITERATIONS: usize = 40;
 /// which [`Frictional::slipping`] keeps `F` (its error is within twice that).
 const SLIP_TOLERANCE: f64 = 1e-13;
 
-/// How near its bound (m or rad) a free limit strikes with another that strikes
-/// ([`Frictional::at_event`], (L9) of `docs/limits.md`): far above the round-off of a coordinate
-/// (a block's corners listed level to 10⁻¹⁵ m land together), far below any gap a run resolves.
+/// How near its bound (m or rad) a limit counts as at it, to round-off: a free limit this near
+/// that does not move towards it is held through an impact where the strikes would drive it in
+/// ((L9) of `docs/limits.md`), and a limit that starts this near is raised by what it lacks of
+/// the slack. Far above the round-off of a coordinate, far below any gap a run resolves. (Free
+/// limits moving towards their bounds join a strike from [`LAND_TOGETHER`].)
 const STRIKE_TOGETHER: f64 = 1e-12;
 
 /// How near its bound (m or rad) a free limit moving towards it strikes with another that
