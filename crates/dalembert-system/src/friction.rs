@@ -224,8 +224,12 @@ impl FrictionTerms {
 /// The largest number of Newton iterations of [`solve_friction`].
 const MAX_ITERATIONS: usize = 60;
 
-/// The iterations after which a stuck element's law may change only from holding to slipping.
+/// The iterations after which a stuck element's law may change only from holding to slipping,
+/// and a cone's flips between (L14) and the projection on its bound are damped.
 const SETTLING: usize = 12;
+
+/// The share of its bound by which a cone that followed (L14) must be inside it to hold again.
+const ONSET_MARGIN: f64 = 1e-9;
 
 /// Work space of [`solve_friction`] for `K` elements and `m` multipliers.
 #[derive(Debug, Clone)]
@@ -245,6 +249,8 @@ pub struct FrictionWork {
     lambda: Vec<f64>,
     /// Each element's law in the last iteration: true where (F2) holds it.
     holding: Vec<bool>,
+    /// True where a cone's element followed (L14) in the last iteration ([`Law::Onset`]).
+    onset: Vec<bool>,
     /// The Newton matrix and residuals kept for [`minimum_norm_step`], and its `J Jᵀ`.
     copy: Vec<f64>,
     rhs: Vec<f64>,
@@ -282,6 +288,7 @@ impl FrictionWork {
             alpha0: vec![0.0; k],
             lambda: vec![0.0; m],
             holding: vec![false; k],
+            onset: vec![false; k],
             copy: vec![0.0; k * k],
             rhs: vec![0.0; k],
             gram: vec![0.0; k * k],
@@ -444,6 +451,7 @@ pub fn solve_friction(
         }
     }
     work.holding.iter_mut().for_each(|h| *h = false);
+    work.onset.iter_mut().for_each(|o| *o = false);
     let largest = lambda
         .iter()
         .chain(terms.iter().map(|t| &t.force))
@@ -465,6 +473,8 @@ pub fn solve_friction(
                 .for_each(|(l, d)| *l += d * term.force);
         }
         let mut changed = false;
+        // True where a cone's law changed between (L14) and the projection on its bound.
+        let mut flipped = false;
         let mut linear = true;
         let mut scale = 0.0f64;
         // Each element's slip acceleration at the iterate, and the force that would hold it with
@@ -531,7 +541,16 @@ pub fn solve_friction(
                     } else {
                         hold.abs()
                     };
-                    if ((iteration == 0 && terms[k].fresh) || size <= bound) && !stays_loose {
+                    // A cone that followed (L14) holds again only where its holding force is
+                    // inside the bound by more than round-off: on the bound with its slip
+                    // acceleration at round-off, either law is a solution, and the holding one's
+                    // least-norm step leaves the bound (with redundant holds, by far).
+                    let inside = if work.onset[a] {
+                        size <= bound * (1.0 - ONSET_MARGIN)
+                    } else {
+                        size <= bound
+                    };
+                    if ((iteration == 0 && terms[k].fresh) || inside) && !stays_loose {
                         Law::Hold
                     } else if partner < n
                         && onset_ready(
@@ -565,6 +584,9 @@ pub fn solve_friction(
             };
             changed |= holding != work.holding[a];
             work.holding[a] = holding;
+            let onset = matches!(law, Law::Onset(_));
+            flipped |= onset != work.onset[a];
+            work.onset[a] = onset;
             let term = &terms[k];
             match law {
                 Law::Hold => {
@@ -672,10 +694,15 @@ pub fn solve_friction(
             }
             return Err(all(what.into(), &work.active));
         }
+        // After `SETTLING` iterations, a step on which a cone's law flipped between (L14) and
+        // the projection on its bound is halved: each law's Newton step can lead to the other's
+        // side, and the full steps then cycle between two iterates (two cones of a box's edge
+        // beginning to slip, measured).
+        let damping = if iteration >= SETTLING && flipped { 0.5 } else { 1.0 };
         let mut step = 0.0f64;
         for a in 0..n {
             let d = work.residual[a];
-            terms[work.active[a]].force -= d;
+            terms[work.active[a]].force -= damping * d;
             step = step.max(d.abs());
         }
         // Ended at round-off; or where the steps stop shrinking (by less than half) below 10⁻⁹
