@@ -460,8 +460,6 @@ impl Frictional {
         self.raised[l] = below.clamp(0.0, RAISED_MOST);
     }
 
-    /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
-    /// reaction loads (`m + loads` of them).
     /// Evaluates at `(t, q, v)` into the event buffers, for the elements' holding forces
     /// (`terms[k].hold`).
     fn evaluate_holds(&mut self, t: f64, q: &[f64], v: &[f64]) -> Result<(), DynamicsError> {
@@ -501,7 +499,7 @@ impl Frictional {
             let mut any = false;
             for k in self.frictions..self.terms.len() {
                 if let Mode::Held(sign) = self.terms[k].mode {
-                    if sign * self.terms[k].hold + self.work.adhesion < 0.0 {
+                    if self.held_event(k, sign) < 0.0 {
                         self.terms[k].mode = Mode::Free;
                         self.leave_bound(k, t, q, v);
                         any = true;
@@ -517,6 +515,14 @@ impl Frictional {
         Ok(released)
     }
 
+    /// A held limit's event function ((L2) of `docs/limits.md`): its holding force along the
+    /// bound's push, less the pull it may take and stay held; negative where it pulls.
+    fn held_event(&self, k: usize, sign: f64) -> f64 {
+        sign * self.terms[k].hold + self.work.adhesion
+    }
+
+    /// [`Formulation::accelerations`] with `lambda` the multipliers extended by the system's
+    /// reaction loads (`m + loads` of them).
     fn evaluate(
         &mut self,
         (t, q, qd): (f64, &[f64], &[f64]),
@@ -800,13 +806,11 @@ impl Formulation for Frictional {
         let system = self.inner.system();
         let first = self.frictions;
         for (k, limit) in system.limits().iter().enumerate() {
-            let term = &mut self.terms[first + k];
             let Some(slot) = out.get_mut(first + k) else { break };
-            match term.mode {
-                // Its force, less the pull it may take and stay held.
-                Mode::Held(sign) => *slot = sign * term.hold + self.work.adhesion,
+            match self.terms[first + k].mode {
+                Mode::Held(sign) => *slot = self.held_event(first + k, sign),
                 _ => {
-                    let raw = system.limit_row(k, t, q, v, &mut term.row);
+                    let raw = system.limit_row(k, t, q, v, &mut self.terms[first + k].row);
                     *slot = limit.free_event(follow(limit, &mut self.coordinates[k], raw)) + self.raised[k];
                 }
             }
