@@ -614,6 +614,7 @@ impl Integration {
             y,
             tangents,
             events,
+            work,
             ..
         } = self
         else {
@@ -651,7 +652,11 @@ impl Integration {
                     if theta * full <= opts.min_step {
                         if tries == 0 && !restarted && events.settle_at_start(f, ts, y, mon.n)? {
                             // The event at the step's start changed the law: the step again,
-                            // and its events looked for anew.
+                            // and its events looked for anew; the work's quadrature starts
+                            // there again.
+                            if let Some(w) = work.as_mut() {
+                                w.restart(f, (ts, y, mon.n), mon.baumgarte)?;
+                            }
                             stepper.state_changed();
                             tangents.discard();
                             f.begin_step();
@@ -754,6 +759,7 @@ impl Integration {
             y,
             tangents,
             events,
+            work,
             ..
         } = self
         else {
@@ -834,6 +840,10 @@ impl Integration {
                 if found.is_some_and(|theta| theta * a.h <= opts.min_step) {
                     // At the step's start: settled there (once), and the step taken again.
                     if !settled && events.settle_at_start(f, *t, y, n_q)? {
+                        // The power may jump there too: the work's quadrature starts again.
+                        if let Some(w) = work.as_mut() {
+                            w.restart(f, (*t, y, n_q), mon.baumgarte)?;
+                        }
                         settled = true;
                         stepper.state_changed();
                         mon.stats.events += 1;
