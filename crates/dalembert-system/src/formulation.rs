@@ -390,8 +390,9 @@ pub trait Formulation: Send {
         &[]
     }
 
-    /// The kinetic energy the impacts at joint limits took from the motion since the run began
-    /// (J; `docs/limits.md`, (L4)). Default 0.
+    /// The kinetic energy the impulses at events took from the motion since the run began: the
+    /// impacts at joint limits and rigid contacts, and the impulses that stop slips at their
+    /// events (J; `docs/limits.md`, (L4)). Default 0.
     fn impact_loss(&self) -> f64 {
         0.0
     }

@@ -32,7 +32,7 @@ pub struct Frictional {
     started: bool,
     /// The number of friction elements (the limits follow them in `terms`).
     frictions: usize,
-    /// The kinetic energy the impacts took so far (J).
+    /// The kinetic energy the impulses at events (impacts, slips stopped) took so far (J).
     impact_loss: f64,
     /// Each limit's coordinate at its last evaluation: a coordinate measured within a turn
     /// ([`crate::JointLimit::within_turn`]) is followed from it across half turns.
