@@ -21,23 +21,25 @@
 //! And seed 69's balance checks the impulses that stop slips: their kinetic energy counts in the
 //! balance, and the LU's impulses of an edge's two corners, level to round-off, had taken 8e4 N·s
 //! along the direction the corners hold together (`E − W` then 2.1e-6 J, augmented; now the
-//! least-norm split decides where `|P| |G|` exceeds 1e8 of the rates it sets).
+//! least-norm split decides where `|P| |G|` exceeds 1e8 of the rates it sets). A fifth (seed 93,
+//! no rebound) stopped in embedding with "did not settle in 60 iterations", a corner's cone
+//! slipping on a held normal force near zero.
 //!
 //! What is checked, against numbers that come from elsewhere:
 //! - the run ends, in all three formulations;
 //! - no sphere is ever below the floor by more than 1e-9 m (held contacts are kept at the
 //!   acceleration level, so their gap is the integration's error at 1e-10; measured at most
 //!   1.8e-12 m);
-//! - the box ends at rest, speeds below 1e-9 (measured at most 4.6e-13), with its centre half a
-//!   side above the floor within 1e-9 m (the spheres are inset by their radius, so that is the
-//!   rest height exactly; measured at most 1.2e-13 m);
+//! - the box ends at rest (but for seed 93, below), speeds below 1e-9 (measured at most
+//!   4.6e-13), with its centre half a side above the floor within 1e-9 m (the spheres are inset
+//!   by their radius, so that is the rest height exactly; measured at most 1.2e-13 m);
 //! - the energy balance `E − W` (the impacts' and the friction's losses in `W`) stays within
 //!   1e-6 J of its start, 12.4 to 13.3 J (dopri5 at 1e-10 over 1.5 s with several impacts, each
 //!   located to the integration's tolerance; measured at most 1.4e-7 J, seed 107 in embedding);
-//! - the first throw's three runs end within 1e-9 m of each other (measured 6e-15 m). The
-//!   others' are not compared: a tumbling box's landings branch on which corner strikes first,
-//!   which the integration's error decides where two are level (they end 5.1e-7 m and 4e-9 m
-//!   apart, measured, each at rest on one face in every formulation).
+//! - the first and fifth throws' three runs end within 1e-9 m of each other (measured 6e-15 m
+//!   and 1e-11 m). The others' are not compared: a tumbling box's landings branch on which
+//!   corner strikes first, which the integration's error decides where two are level (they end
+//!   5.1e-7 m and 4e-9 m apart, measured, each at rest on one face in every formulation).
 mod common;
 
 use common::{balance_drift, column, run};
@@ -113,8 +115,9 @@ fn scene(throw: &Throw, formulation: &str) -> Scene {
 }
 
 /// Runs `throw` in every formulation and checks each run; where `agree` is given, the three
-/// runs' final positions agree within it (m).
-fn check(throw: &Throw, agree: Option<f64>) {
+/// runs' final positions agree within it (m); where `rests`, the box is at rest on a face at the
+/// end.
+fn check(throw: &Throw, agree: Option<f64>, rests: bool) {
     let mut ends: Vec<[f64; 3]> = Vec::new();
     for formulation in FORMULATIONS {
         let scene = scene(throw, formulation);
@@ -129,19 +132,21 @@ fn check(throw: &Throw, agree: Option<f64>) {
             );
         }
         let last = |name: &str| *col(name).last().unwrap();
-        for name in ["block.vx", "block.vy", "block.vz", "block.wx", "block.wy", "block.wz"] {
+        let z = last("block.z");
+        if rests {
+            for name in ["block.vx", "block.vy", "block.vz", "block.wx", "block.wy", "block.wz"] {
+                assert!(
+                    last(name).abs() < 1e-9,
+                    "{formulation}: {name} = {:e} at the end",
+                    last(name)
+                );
+            }
+            let off = HALF.iter().map(|h| (z - h).abs()).fold(f64::INFINITY, f64::min);
             assert!(
-                last(name).abs() < 1e-9,
-                "{formulation}: {name} = {:e} at the end",
-                last(name)
+                off < 1e-9,
+                "{formulation}: at rest at z = {z}, not on a face ({off:e} off)"
             );
         }
-        let z = last("block.z");
-        let off = HALF.iter().map(|h| (z - h).abs()).fold(f64::INFINITY, f64::min);
-        assert!(
-            off < 1e-9,
-            "{formulation}: at rest at z = {z}, not on a face ({off:e} off)"
-        );
         let drift = balance_drift(&scene);
         assert!(drift < 1e-6, "{formulation}: E − W changed by {drift:e} J");
         ends.push([last("block.x"), last("block.y"), z]);
@@ -166,6 +171,7 @@ fn a_box_on_corner_spheres_whose_edge_cones_begin_to_slip_together_comes_to_rest
             restitution: 0.3,
         },
         Some(1e-9),
+        true,
     );
 }
 
@@ -181,6 +187,7 @@ fn a_box_on_corner_spheres_held_on_the_bounds_of_its_cones_comes_to_rest() {
             restitution: 0.3,
         },
         None,
+        true,
     );
 }
 
@@ -196,6 +203,7 @@ fn a_box_on_corner_spheres_dropped_spinning_without_rebound_comes_to_rest_on_a_f
             restitution: 0.0,
         },
         None,
+        true,
     );
 }
 
@@ -217,5 +225,30 @@ fn a_box_on_corner_spheres_whose_face_lands_level_while_sliding_keeps_its_energy
             restitution: 0.0,
         },
         None,
+        true,
+    );
+}
+
+/// Seed 93 without rebound: in embedding a corner's cone slips on a held normal force that
+/// Newton's iterates put at 1.7e-8 N and −6.7e-10 N by turns (17 N on another corner), across
+/// the kink of its bound `μ |N|`, and the iteration stopped with "did not settle in 60
+/// iterations" at 0.7255 s (an iterate-by-iterate trace: the held contact's force never left
+/// the band of round-off it may pull with, so the contact was not let go). Now a held contact
+/// whose force changes sign on a step that did not shrink lets go, after 12 iterations. The box
+/// then rocks on an edge past the end of the run (at rest on a face by 3 s), so it is not
+/// checked at rest; the three formulations end within 1e-9 m of each other (measured 1e-11 m).
+#[test]
+fn a_box_on_corner_spheres_sliding_on_a_corner_that_barely_touches_runs_on() {
+    check(
+        &Throw {
+            axis: [0.8246867187194984, -0.011300505399674421, 0.13160290901296068],
+            degrees: 63.593082122237774,
+            velocity: [-0.7727670059828655, -0.28923988122014976, -0.8271573007746045],
+            spin: [-3.7810822734349827, -3.3892533494784316, -4.670299468931987],
+            mu: 0.7,
+            restitution: 0.0,
+        },
+        Some(1e-9),
+        false,
     );
 }

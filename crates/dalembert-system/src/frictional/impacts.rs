@@ -3,15 +3,9 @@
 //! event (`docs/friction.md`, "Events"), each one set of impulses solved together.
 
 use super::{Frictional, STRIKE_TOGETHER};
-use crate::friction::{solve_dense, weighted_least_norm, Mode, RELEASE_SHARE};
+use crate::friction::{determined, solve_dense, weighted_least_norm, Mode, RELEASE_SHARE};
 use crate::limit::{impact_impulse, impact_loss, LIMIT_SLACK};
 use crate::{DynamicsError, Formulation};
-
-/// The largest `|P| |G| / |w⁺ − w⁻|` (largest entries) that [`Frictional::solve_impulses`] takes
-/// from its LU: at most the condition number of `G` for impulses the rates determine (a body
-/// 10⁸ times heavier than another within it), 10¹¹ to 10¹² where the redundant part of nearly
-/// redundant rows took the round-off (an edge level to 10⁻¹⁰ rad).
-const IMPULSE_CONDITION: f64 = 1e8;
 
 impl Frictional {
     /// The impacts of the limits in `striking` (their indices among the elements) at `(t, q, v)`,
@@ -465,10 +459,8 @@ impl Frictional {
         // accepts the matrix, but its impulses carry a large share along the direction the
         // corners hold together (measured: 8e4 N·s, equal and opposite at the two corners of a
         // 2 kg box's edge, to stop slips of 1e-7 m/s), so the least-norm split decides there too.
-        let largest = |x: &[f64]| x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         if solve_dense(&mut self.impact_lu[..n * n], &mut self.impact_p[..n], n)
-            && largest(&self.impact_p[..n]) * largest(&self.impact_g[..n * n])
-                <= IMPULSE_CONDITION * largest(&self.impact_rhs[..n])
+            && determined(&self.impact_p[..n], &self.impact_g[..n * n], &self.impact_rhs[..n])
         {
             return Ok(());
         }
