@@ -30,6 +30,9 @@ pub struct Frictional {
     event_lambda: Vec<f64>,
     /// True once the modes were set ([`Formulation::start_events`]).
     started: bool,
+    /// True once [`Frictional::slipping`] gave up since the last event: Newton's method on every
+    /// element decides until the next one.
+    newton_until_event: bool,
     /// The number of friction elements (the limits follow them in `terms`).
     frictions: usize,
     /// The kinetic energy the impulses at events (impacts, slips stopped) took so far (J).
@@ -147,6 +150,7 @@ impl Frictional {
             event_qdd: vec![0.0; n],
             event_lambda: vec![0.0; m],
             started: false,
+            newton_until_event: false,
             frictions,
             impact_loss: 0.0,
             coordinates: vec![0.0; count - frictions],
@@ -568,7 +572,12 @@ impl Frictional {
             .iter()
             .any(|term| matches!(term.mode, Mode::Slip(_)));
         self.predict(t);
-        let found = slipping && self.slipping((t, q, qd), qdd, lambda)?;
+        let found = slipping && !self.newton_until_event && self.slipping((t, q, qd), qdd, lambda)?;
+        // Once the iteration on the slipping forces gives up, Newton's method decides until the
+        // next event: where redundant holds (four corners of a face) split their forces, the
+        // two ways find different splits, and a right-hand side that changed way from one
+        // evaluation to the next collapsed the adaptive steps (docs/limits.md, (L14)).
+        self.newton_until_event |= slipping && !found;
         if !found {
             // Newton's method on every element: each slipping one's response too.
             for k in 0..self.frictions {
@@ -738,6 +747,7 @@ impl Formulation for Frictional {
     /// speed, otherwise slipping in the rate's direction. Each limit is free, or held where it
     /// starts at a bound (within [`LIMIT_SLACK`]) not moving away from it.
     fn start_events(&mut self, t: f64, q: &[f64], v: &[f64]) {
+        self.newton_until_event = false;
         let system = self.inner.system();
         for (k, (term, spec)) in self.terms.iter_mut().zip(system.frictions()).enumerate() {
             system.slip_row(k, t, q, v, &mut term.row);
@@ -854,6 +864,7 @@ impl Formulation for Frictional {
     fn at_event(&mut self, t: f64, q: &[f64], v: &mut [f64], crossed: &[bool]) -> Result<bool, DynamicsError> {
         // The forces jump at an event: no line through them.
         self.times = (f64::NAN, f64::NAN);
+        self.newton_until_event = false;
         let mut changed = false;
         for k in 0..self.terms.len().min(crossed.len()) {
             if !crossed[k] {
