@@ -717,7 +717,10 @@ pub fn solve_friction(
         // shrinking above that round-off: each law's Newton step can lead to the other's side,
         // and a load `μ |N|` has a kink where a held contact's normal force `N` is zero; the full
         // steps then cycle between two iterates (two cones of a box's edge beginning to slip; a
-        // corner's cone slipping on a normal force of 1e-9 of the box's others, measured).
+        // corner's cone slipping on a normal force of 1e-9 of the box's others, measured). A
+        // held contact whose force changes sign on such a step lets go (it then stays loose):
+        // its force cycled inside the band it may pull with, so the pull never showed
+        // (`docs/limits.md`, (L14)); halving alone left three iterates cycling.
         let cycling = iteration >= SETTLING && !changed && step > 0.5 * last_step && !stalled;
         let damping = if iteration >= SETTLING && (flipped || cycling) {
             0.5
