@@ -722,7 +722,7 @@ pub fn solve_friction(
         // its force cycled inside the band it may pull with, so the pull never showed
         // (`docs/limits.md`, (L14)); halving alone left three iterates cycling.
         let cycling = iteration >= SETTLING && !changed && step > 0.5 * last_step && !stalled;
-        let damping = if iteration >= SETTLING && (flipped || cycling) {
+        let damping = if cycling || (iteration >= SETTLING && flipped) {
             0.5
         } else {
             1.0

@@ -459,6 +459,8 @@ impl Frictional {
         // accepts the matrix, but its impulses carry a large share along the direction the
         // corners hold together (measured: 8e4 N·s, equal and opposite at the two corners of a
         // 2 kg box's edge, to stop slips of 1e-7 m/s), so the least-norm split decides there too.
+        // The test reads `G` where a slipping friction's row replaced its row (entries 1 and
+        // `μ`): the scale it compares is the same.
         if solve_dense(&mut self.impact_lu[..n * n], &mut self.impact_p[..n], n)
             && determined(&self.impact_p[..n], &self.impact_g[..n * n], &self.impact_rhs[..n])
         {
